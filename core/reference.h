@@ -1,0 +1,43 @@
+// rtlab — the CPU reference renderer: the algorithm of core/SHADING.md in double precision with
+// plain recursion, on every core. It is the accuracy oracle for both OpenCL pipelines.
+#pragma once
+
+#include <optional>
+
+#include <glm/glm.hpp>
+
+#include "core/image.h"
+#include "core/scene.h"
+
+namespace rt {
+
+// Renders the scene; threads = 0 uses std::thread::hardware_concurrency().
+Image renderReference(const Scene& scene, const RenderOptions& options, int threads = 0);
+
+// Building blocks, exposed for the unit tests. Directions are unit length.
+namespace ref {
+
+struct Ray {
+    glm::dvec3 origin, dir;
+};
+
+// Nearest t > 0, or nullopt. Plain = report Algorithm 2 with the "behind the ray" check first.
+std::optional<double> intersectSpherePlain(const Ray& ray, glm::dvec3 center, double radius);
+std::optional<double> intersectSphereRobust(const Ray& ray, glm::dvec3 center, double radius);
+
+struct TriangleHit {
+    double t, u, v;  // barycentrics: p = (1-u-v) v0 + u v1 + v v2
+};
+std::optional<TriangleHit> intersectTriangleMT(const Ray& ray, glm::dvec3 v0, glm::dvec3 v1,
+                                               glm::dvec3 v2);
+std::optional<TriangleHit> intersectTriangleWatertight(const Ray& ray, glm::dvec3 v0,
+                                                       glm::dvec3 v1, glm::dvec3 v2);
+
+glm::dvec3 reflect(glm::dvec3 d, glm::dvec3 n);
+// n faces the incoming ray; eta = n1/n2. nullopt on total internal reflection.
+std::optional<glm::dvec3> refract(glm::dvec3 d, glm::dvec3 n, double eta);
+// cosI = -d.n >= 0. Returns 1 on total internal reflection.
+double fresnel(double cosI, double n1, double n2);
+
+}  // namespace ref
+}  // namespace rt

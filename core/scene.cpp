@@ -1,0 +1,18 @@
+#include "core/scene.h"
+
+namespace rt {
+
+int Scene::branching() const {
+    for (const dev::Material& m : materials)
+        if (m.opacity < 1.f) return 2;
+    return 1;
+}
+
+long long treeNodeCount(int branching, int bounces) {
+    if (branching == 1) return bounces + 1;
+    long long n = 0, level = 1;
+    for (int d = 0; d <= bounces; ++d, level *= branching) n += level;
+    return n;
+}
+
+}  // namespace rt

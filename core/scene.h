@@ -1,0 +1,63 @@
+// rtlab — the host-side scene: flat arrays of the device records from types.h, plus what only
+// the host needs (names, the environment's cubemap texels, default render settings).
+// Built by the loader (core/scene_loader.h), consumed unchanged by every pipeline.
+#pragma once
+
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "core/image.h"
+#include "core/types.h"
+
+namespace rt {
+
+// Settings a scene file may default and the command line may override.
+struct RenderOptions {
+    int width = 320, height = 240;
+    int bounces = 3;        // B
+    int shadowSamples = 1;  // per light with radius > 0 (hard shadows use 1)
+    int aa = 1;             // N: N x N sub-pixel samples
+    bool adaptiveAa = false;  // supersample only pixels on edges (report section 2.1.2)
+    float shadowStrength = 1.0f;
+
+    // Accuracy switches (issue 3). Defaults are the robust methods.
+    bool robustSphere = true;   // false: report Algorithm 2 (plain quadratic)
+    bool watertight = true;     // false: report Algorithm 3 (Moller-Trumbore)
+    bool scaledOffset = true;   // false: fixed epsilon for secondary-ray origins
+};
+
+struct Environment {
+    dev::Float3 zenith{0.35f, 0.55f, 0.95f};
+    dev::Float3 horizon{0.85f, 0.9f, 1.0f};
+    dev::Float3 ground{0.3f, 0.27f, 0.25f};
+    // Cubemap faces in the order +x, -x, +y, -y, +z, -z; each cubemapSize^2 RGB texels, row-major,
+    // top row first. Empty = sky gradient.
+    int cubemapSize = 0;
+    std::vector<float> cubemap;
+};
+
+struct Scene {
+    std::string name;                // file stem
+    std::filesystem::path source;    // file it came from (for messages)
+    dev::Camera camera{};
+    std::vector<dev::Material> materials;
+    std::vector<std::string> materialNames;  // parallel to materials
+    std::vector<dev::Sphere> spheres;
+    std::vector<dev::Plane> planes;
+    std::vector<dev::Triangle> triangles;
+    std::vector<dev::MeshInstance> meshes;  // every triangle belongs to exactly one mesh
+    std::vector<dev::Light> lights;
+    Environment environment;
+    RenderOptions defaults;
+
+    // Branching factor C of the ray tree: 2 when any material is transparent, else 1.
+    int branching() const;
+    bool hasTransparency() const { return branching() == 2; }
+};
+
+// Nodes per pixel tree: N = (C^(B+1) - 1) / (C - 1), or B + 1 when C = 1.
+long long treeNodeCount(int branching, int bounces);
+
+}  // namespace rt

@@ -1,0 +1,182 @@
+// rtlab — records shared by the host (C++20) and the device (OpenCL C 1.2).
+//
+// This is the one definition of every struct that crosses the host/device boundary. The host
+// compiles it inside namespace rt::dev; the OpenCL compiler sees it through the kernel-source
+// include resolver (core/kernel_sources.cpp). Rules that keep the two layouts identical:
+//   * only 4-byte scalars, 1/2-byte scalars packed into whole 4-byte words, and Float3;
+//   * Float3 is three floats (12 bytes, 4-byte aligned), never OpenCL's float3 (16 bytes);
+//   * every struct is padded by hand to a multiple of 16 bytes.
+// Sizes are pinned by static_assert below and by tests/types_test.cpp, which asks the OpenCL
+// compiler for the same sizeof and offsetof values.
+#ifndef RTLAB_CORE_TYPES_H
+#define RTLAB_CORE_TYPES_H
+
+#ifdef __OPENCL_C_VERSION__
+typedef int int32_t;
+typedef uint uint32_t;
+typedef ushort uint16_t;
+typedef uchar uint8_t;
+#define RT_DEV_BEGIN
+#define RT_DEV_END
+#else
+#include <cstddef>
+#include <cstdint>
+#define RT_DEV_BEGIN \
+    namespace rt::dev {
+#define RT_DEV_END }
+#endif
+
+RT_DEV_BEGIN
+
+// Limits baked into the records. Scenes past them are rejected by the loader with a clear error.
+#define RT_MAX_LIGHTS 4         // Node keeps one occlusion count per light
+#define RT_MAX_SHADOW_SAMPLES 255  // ... in one byte
+#define RT_MAX_MATERIALS 65535  // Node keeps the material in 16 bits
+
+typedef struct Float3 {
+    float x, y, z;
+} Float3;
+
+// Blinn-Phong material with the report's reflection/transmission terms (section 3.5).
+typedef struct Material {
+    Float3 ambient;     // A, added unshadowed
+    Float3 diffuse;     // D
+    Float3 specular;    // S
+    float exponent;     // E, Blinn-Phong exponent
+    float reflectance;  // r in [0,1]: mirror weight for opaque materials
+    float opacity;      // o in [0,1]: 1 = opaque, < 1 spawns a refraction ray
+    float ior;          // refractive index of the inside of the object
+    float pad[3];
+} Material;
+
+typedef struct Sphere {
+    Float3 center;
+    float radius;
+    int32_t material;
+    int32_t pad[3];
+} Sphere;
+
+// Points p with dot(normal, p) == offset; normal is unit length.
+typedef struct Plane {
+    Float3 normal;
+    float offset;
+    int32_t material;
+    int32_t pad[3];
+} Plane;
+
+// World-space triangle with per-vertex normals (computed by the loader when the OBJ has none).
+typedef struct Triangle {
+    Float3 v0, v1, v2;
+    Float3 n0, n1, n2;
+    int32_t material;
+    int32_t mesh;  // index into the mesh instances; loose triangles share one implicit mesh
+} Triangle;
+
+// A contiguous run of triangles with its bounding volumes (box and sphere, section 2.2.2).
+typedef struct MeshInstance {
+    int32_t firstTriangle;
+    int32_t triangleCount;
+    int32_t bvhRoot;  // first BVH node of this mesh, -1 when none is built
+    int32_t pad0;
+    Float3 boundsLo;
+    Float3 boundsHi;
+    Float3 sphereCenter;
+    float sphereRadius;
+    int32_t pad1[2];
+} MeshInstance;
+
+// Point light; radius > 0 makes it a disk light for soft shadows.
+typedef struct Light {
+    Float3 position;
+    float radius;
+    Float3 color;
+    float pad;
+} Light;
+
+// Report eq. 12: yaw turns toward +x, positive pitch looks up; fovY in radians.
+typedef struct Camera {
+    Float3 position;
+    float yaw;
+    float pitch;
+    float fovY;
+    float pad[2];
+} Camera;
+
+// Everything a kernel needs besides the object arrays. Passed by value as a kernel argument.
+typedef struct RenderSettings {
+    int32_t width, height;
+    int32_t bounces;        // B: the deepest node has depth B
+    int32_t shadowSamples;  // rays per light for lights with radius > 0
+    int32_t aaSamples;      // N: N x N sub-pixel samples
+    int32_t sampleIndex;    // which sub-pixel sample this launch renders (AA in passes)
+    int32_t sphereCount, planeCount, triangleCount, meshCount, lightCount, materialCount;
+    float shadowStrength;   // fully occluded light keeps (1 - shadowStrength) of its contribution
+    int32_t cubemapSize;    // face edge in texels; 0 = sky gradient
+    int32_t rowOffset;      // first image row of this launch (tiling)
+    Float3 skyZenith;
+    Float3 skyHorizon;
+    Float3 skyGround;
+    Camera camera;
+} RenderSettings;
+
+// Node kinds: what the ray hit.
+#define RT_KIND_MISS 0
+#define RT_KIND_SPHERE 1
+#define RT_KIND_PLANE 2
+#define RT_KIND_TRIANGLE 3
+
+// Node flags.
+#define RT_NODE_TRACED 1u  // this slot holds a traced ray (cleared by the reset kernel)
+#define RT_NODE_INSIDE 2u  // the ray hit the surface from inside the object
+
+// One traced ray of a per-pixel ray tree, 48 bytes:
+//   point    12  hit point (unused on a miss)
+//   normal   12  shading normal, flipped to face the incoming ray
+//   dir      12  incoming ray direction (the environment lookup on a miss)
+//   object    4  index of the hit object within its kind
+//   material  2  material index
+//   kind      1  RT_KIND_*
+//   flags     1  RT_NODE_*
+//   occluded  4  occluded shadow samples per light (0..shadowSamples)
+// Children of heap slot i live at i*C + 1 + k: k = 0 reflection, k = 1 refraction.
+typedef struct Node {
+    Float3 point;
+    Float3 normal;
+    Float3 dir;
+    int32_t object;
+    uint16_t material;
+    uint8_t kind;
+    uint8_t flags;
+    uint8_t occluded[RT_MAX_LIGHTS];
+} Node;
+
+// BVH node (issue 5): leaf when count > 0, then [first, first+count) are triangle indices;
+// otherwise first is the left child and the right child follows it.
+typedef struct BvhNode {
+    Float3 lo;
+    int32_t first;
+    Float3 hi;
+    int32_t count;
+} BvhNode;
+
+RT_DEV_END
+
+#ifndef __OPENCL_C_VERSION__
+namespace rt::dev {
+static_assert(sizeof(Float3) == 12 && alignof(Float3) == 4);
+static_assert(sizeof(Material) == 64);
+static_assert(sizeof(Sphere) == 32);
+static_assert(sizeof(Plane) == 32);
+static_assert(sizeof(Triangle) == 80);
+static_assert(sizeof(MeshInstance) == 64);
+static_assert(sizeof(Light) == 32);
+static_assert(sizeof(Camera) == 32);
+static_assert(sizeof(RenderSettings) == 128);
+static_assert(sizeof(Node) == 48);
+static_assert(sizeof(BvhNode) == 32);
+static_assert(offsetof(Node, occluded) == 44);
+static_assert(offsetof(RenderSettings, camera) == 96);
+}  // namespace rt::dev
+#endif
+
+#endif  // RTLAB_CORE_TYPES_H
