@@ -1,1 +1,309 @@
-// stub, filled in by its owner
+#include "core/cl_runtime.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "core/error.h"
+
+namespace rt {
+
+const char* clErrorName(cl_int code) {
+    switch (code) {
+#define RT_CASE(x) \
+    case x:        \
+        return #x;
+        RT_CASE(CL_SUCCESS)
+        RT_CASE(CL_DEVICE_NOT_FOUND)
+        RT_CASE(CL_DEVICE_NOT_AVAILABLE)
+        RT_CASE(CL_COMPILER_NOT_AVAILABLE)
+        RT_CASE(CL_MEM_OBJECT_ALLOCATION_FAILURE)
+        RT_CASE(CL_OUT_OF_RESOURCES)
+        RT_CASE(CL_OUT_OF_HOST_MEMORY)
+        RT_CASE(CL_PROFILING_INFO_NOT_AVAILABLE)
+        RT_CASE(CL_MEM_COPY_OVERLAP)
+        RT_CASE(CL_IMAGE_FORMAT_MISMATCH)
+        RT_CASE(CL_IMAGE_FORMAT_NOT_SUPPORTED)
+        RT_CASE(CL_BUILD_PROGRAM_FAILURE)
+        RT_CASE(CL_MAP_FAILURE)
+        RT_CASE(CL_MISALIGNED_SUB_BUFFER_OFFSET)
+        RT_CASE(CL_EXEC_STATUS_ERROR_FOR_EVENTS_IN_WAIT_LIST)
+        RT_CASE(CL_COMPILE_PROGRAM_FAILURE)
+        RT_CASE(CL_LINKER_NOT_AVAILABLE)
+        RT_CASE(CL_LINK_PROGRAM_FAILURE)
+        RT_CASE(CL_DEVICE_PARTITION_FAILED)
+        RT_CASE(CL_KERNEL_ARG_INFO_NOT_AVAILABLE)
+        RT_CASE(CL_INVALID_VALUE)
+        RT_CASE(CL_INVALID_DEVICE_TYPE)
+        RT_CASE(CL_INVALID_PLATFORM)
+        RT_CASE(CL_INVALID_DEVICE)
+        RT_CASE(CL_INVALID_CONTEXT)
+        RT_CASE(CL_INVALID_QUEUE_PROPERTIES)
+        RT_CASE(CL_INVALID_COMMAND_QUEUE)
+        RT_CASE(CL_INVALID_HOST_PTR)
+        RT_CASE(CL_INVALID_MEM_OBJECT)
+        RT_CASE(CL_INVALID_IMAGE_FORMAT_DESCRIPTOR)
+        RT_CASE(CL_INVALID_IMAGE_SIZE)
+        RT_CASE(CL_INVALID_SAMPLER)
+        RT_CASE(CL_INVALID_BINARY)
+        RT_CASE(CL_INVALID_BUILD_OPTIONS)
+        RT_CASE(CL_INVALID_PROGRAM)
+        RT_CASE(CL_INVALID_PROGRAM_EXECUTABLE)
+        RT_CASE(CL_INVALID_KERNEL_NAME)
+        RT_CASE(CL_INVALID_KERNEL_DEFINITION)
+        RT_CASE(CL_INVALID_KERNEL)
+        RT_CASE(CL_INVALID_ARG_INDEX)
+        RT_CASE(CL_INVALID_ARG_VALUE)
+        RT_CASE(CL_INVALID_ARG_SIZE)
+        RT_CASE(CL_INVALID_KERNEL_ARGS)
+        RT_CASE(CL_INVALID_WORK_DIMENSION)
+        RT_CASE(CL_INVALID_WORK_GROUP_SIZE)
+        RT_CASE(CL_INVALID_WORK_ITEM_SIZE)
+        RT_CASE(CL_INVALID_GLOBAL_OFFSET)
+        RT_CASE(CL_INVALID_EVENT_WAIT_LIST)
+        RT_CASE(CL_INVALID_EVENT)
+        RT_CASE(CL_INVALID_OPERATION)
+        RT_CASE(CL_INVALID_GL_OBJECT)
+        RT_CASE(CL_INVALID_BUFFER_SIZE)
+        RT_CASE(CL_INVALID_MIP_LEVEL)
+        RT_CASE(CL_INVALID_GLOBAL_WORK_SIZE)
+        RT_CASE(CL_INVALID_PROPERTY)
+        RT_CASE(CL_INVALID_IMAGE_DESCRIPTOR)
+        RT_CASE(CL_INVALID_COMPILER_OPTIONS)
+        RT_CASE(CL_INVALID_LINKER_OPTIONS)
+        RT_CASE(CL_INVALID_DEVICE_PARTITION_COUNT)
+#undef RT_CASE
+        default:
+            return "CL_UNKNOWN_ERROR";
+    }
+}
+
+void throwClError(const cl::Error& e, const std::string& what) {
+    std::ostringstream msg;
+    msg << what << ": " << e.what() << " failed with " << clErrorName(e.err()) << " (" << e.err()
+        << ")";
+    throw Error(msg.str());
+}
+
+std::string DeviceInfo::label() const {
+    return name + " (" + platformName + ", driver " + driver + ")";
+}
+
+static std::string trim(std::string s) {
+    while (!s.empty() && (s.back() == '\0' || std::isspace((unsigned char)s.back()))) s.pop_back();
+    size_t i = 0;
+    while (i < s.size() && std::isspace((unsigned char)s[i])) ++i;
+    return s.substr(i);
+}
+
+std::vector<DeviceInfo> listDevices() {
+    std::vector<DeviceInfo> out;
+    std::vector<cl::Platform> platforms;
+    try {
+        cl::Platform::get(&platforms);
+    } catch (const cl::Error& e) {
+        if (e.err() == CL_PLATFORM_NOT_FOUND_KHR) return out;
+        throwClError(e, "listing OpenCL platforms");
+    }
+    for (cl::Platform& p : platforms) {
+        std::vector<cl::Device> devices;
+        try {
+            p.getDevices(CL_DEVICE_TYPE_ALL, &devices);
+        } catch (const cl::Error&) {
+            continue;  // a platform without devices is not an error
+        }
+        for (cl::Device& d : devices) {
+            DeviceInfo info;
+            info.index = int(out.size());
+            info.platform = p;
+            info.device = d;
+            info.platformName = trim(p.getInfo<CL_PLATFORM_NAME>());
+            info.name = trim(d.getInfo<CL_DEVICE_NAME>());
+            info.vendor = trim(d.getInfo<CL_DEVICE_VENDOR>());
+            cl_device_type t = d.getInfo<CL_DEVICE_TYPE>();
+            info.type = (t & CL_DEVICE_TYPE_GPU)           ? "GPU"
+                        : (t & CL_DEVICE_TYPE_CPU)         ? "CPU"
+                        : (t & CL_DEVICE_TYPE_ACCELERATOR) ? "ACCELERATOR"
+                                                           : "OTHER";
+            info.version = trim(d.getInfo<CL_DEVICE_VERSION>());
+            info.driver = trim(d.getInfo<CL_DRIVER_VERSION>());
+            info.openclC = trim(d.getInfo<CL_DEVICE_OPENCL_C_VERSION>());
+            info.computeUnits = d.getInfo<CL_DEVICE_MAX_COMPUTE_UNITS>();
+            info.globalMem = d.getInfo<CL_DEVICE_GLOBAL_MEM_SIZE>();
+            info.maxAlloc = d.getInfo<CL_DEVICE_MAX_MEM_ALLOC_SIZE>();
+            info.localMem = d.getInfo<CL_DEVICE_LOCAL_MEM_SIZE>();
+            info.maxWorkGroup = d.getInfo<CL_DEVICE_MAX_WORK_GROUP_SIZE>();
+            out.push_back(info);
+        }
+    }
+    return out;
+}
+
+static std::string lower(std::string s) {
+    std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
+    return s;
+}
+
+DeviceInfo selectDevice(const std::string& requested) {
+    std::string spec = requested;
+    std::string source = "--device";
+    if (spec.empty()) {
+        if (const char* env = std::getenv("RTLAB_DEVICE"); env && *env) {
+            spec = env;
+            source = "RTLAB_DEVICE";
+        }
+    }
+    std::vector<DeviceInfo> devices = listDevices();
+    if (devices.empty())
+        throw Error("no OpenCL device found: is an ICD installed (scripts/setup installs PoCL)?");
+    if (spec.empty()) {
+        for (const DeviceInfo& d : devices)
+            if (d.isGpu()) return d;
+        for (const DeviceInfo& d : devices)
+            if (d.type == "CPU") return d;
+        return devices.front();
+    }
+    bool numeric = std::all_of(spec.begin(), spec.end(), [](unsigned char c) { return std::isdigit(c); });
+    if (numeric) {
+        size_t i = std::stoul(spec);
+        if (i < devices.size()) return devices[i];
+        throw Error(source + " " + spec + ": no such device index (there are " +
+                    std::to_string(devices.size()) + "; see `rtlab devices`)");
+    }
+    for (const DeviceInfo& d : devices)  // "cpu" / "gpu": the first device of that type
+        if (lower(d.type) == lower(spec)) return d;
+    for (const DeviceInfo& d : devices)
+        if (lower(d.name).find(lower(spec)) != std::string::npos ||
+            lower(d.platformName).find(lower(spec)) != std::string::npos)
+            return d;
+    throw Error(source + " '" + spec + "': no device name or platform matches (see `rtlab devices`)");
+}
+
+double eventMs(const cl::Event& event) {
+    cl_ulong start = event.getProfilingInfo<CL_PROFILING_COMMAND_START>();
+    cl_ulong end = event.getProfilingInfo<CL_PROFILING_COMMAND_END>();
+    return double(end - start) * 1e-6;
+}
+
+ClContext::ClContext(const DeviceInfo& device, KernelSources sources)
+    : device_(device), sources_(std::move(sources)) {
+    try {
+        context_ = cl::Context(device_.device);
+        queue_ = cl::CommandQueue(context_, device_.device, CL_QUEUE_PROFILING_ENABLE);
+    } catch (const cl::Error& e) {
+        throwClError(e, "creating a context on " + device_.label());
+    }
+}
+
+static uint64_t fnv1a(const std::string& s, uint64_t h = 1469598103934665603ull) {
+    for (unsigned char c : s) h = (h ^ c) * 1099511628211ull;
+    return h;
+}
+
+static std::filesystem::path cacheDir() {
+    if (const char* d = std::getenv("RTLAB_CACHE_DIR"); d && *d) return d;
+    if (const char* x = std::getenv("XDG_CACHE_HOME"); x && *x)
+        return std::filesystem::path(x) / "rtlab";
+    if (const char* h = std::getenv("HOME"); h && *h)
+        return std::filesystem::path(h) / ".cache" / "rtlab";
+    return {};
+}
+
+cl::Program ClContext::program(const std::string& mainFile, const std::vector<std::string>& defines) {
+    std::string options = "-cl-std=CL1.2";
+    for (const std::string& d : defines) options += " -D" + d;
+    std::string source = sources_.resolve(mainFile);
+    std::string key = device_.name + "|" + device_.platformName + "|" + device_.driver + "|" +
+                      options + "|" + source;
+    if (auto it = programs_.find(key); it != programs_.end()) {
+        lastSource_ = "memory";
+        return it->second;
+    }
+    char hash[32];
+    std::snprintf(hash, sizeof hash, "%016llx", (unsigned long long)fnv1a(key));
+    std::filesystem::path dir = cacheDir();
+    std::filesystem::path file = dir.empty() ? dir : dir / (std::string(hash) + ".bin");
+
+    auto buildLog = [&](cl::Program& p) {
+        try {
+            return p.getBuildInfo<CL_PROGRAM_BUILD_LOG>(device_.device);
+        } catch (const cl::Error&) {
+            return std::string("(no build log)");
+        }
+    };
+
+    // Disk cache: a stale or foreign binary simply falls back to a source build.
+    if (!file.empty() && !sources_.fromDisk()) {
+        std::ifstream in(file, std::ios::binary);
+        if (in) {
+            std::vector<unsigned char> bin((std::istreambuf_iterator<char>(in)), {});
+            try {
+                cl::Program::Binaries bins{bin};
+                cl::Program p(context_, {device_.device}, bins);
+                p.build({device_.device}, options.c_str());
+                programs_[key] = p;
+                lastSource_ = "disk";
+                return p;
+            } catch (const cl::Error&) {
+            }
+        }
+    }
+
+    cl::Program p;
+    try {
+        p = cl::Program(context_, source);
+        p.build({device_.device}, options.c_str());
+    } catch (const cl::Error& e) {
+        std::string log = buildLog(p);
+        throw Error("building " + mainFile + " for " + device_.name + " failed with " +
+                    clErrorName(e.err()) + " (options: " + options + ")\n" + log);
+    }
+    programs_[key] = p;
+    lastSource_ = "built";
+    if (!file.empty()) {
+        try {
+            auto bins = p.getInfo<CL_PROGRAM_BINARIES>();
+            if (!bins.empty() && !bins[0].empty()) {
+                std::error_code ec;
+                std::filesystem::create_directories(dir, ec);
+                std::filesystem::path tmp = file;
+                tmp += ".tmp";
+                std::ofstream out(tmp, std::ios::binary);
+                out.write(reinterpret_cast<const char*>(bins[0].data()), std::streamsize(bins[0].size()));
+                out.close();
+                if (out) std::filesystem::rename(tmp, file, ec);
+            }
+        } catch (const cl::Error&) {
+        }
+    }
+    return p;
+}
+
+static std::string mib(double bytes) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.1f MiB", bytes / (1024.0 * 1024.0));
+    return buf;
+}
+
+cl::Buffer ClContext::allocate(size_t bytes, cl_mem_flags flags, const std::string& what) {
+    if (bytes > device_.maxAlloc)
+        throw Error(what + " needs " + mib(double(bytes)) + " in one buffer, but " + device_.name +
+                    " allows at most " + mib(double(device_.maxAlloc)) +
+                    " per allocation (CL_DEVICE_MAX_MEM_ALLOC_SIZE)");
+    if (allocated_ + bytes > device_.globalMem)
+        throw Error(what + " needs " + mib(double(bytes)) + " but only " +
+                    mib(double(device_.globalMem - allocated_)) + " of " + device_.name +
+                    "'s global memory is left");
+    try {
+        cl::Buffer b(context_, flags, std::max<size_t>(bytes, 16));
+        allocated_ += bytes;
+        return b;
+    } catch (const cl::Error& e) {
+        throwClError(e, "allocating " + what + " (" + mib(double(bytes)) + ")");
+    }
+}
+
+}  // namespace rt

@@ -1,1 +1,188 @@
-// stub, filled in by its owner
+#include "core/pipeline.h"
+
+#include <cstring>
+
+#include "core/accel.h"
+#include "core/error.h"
+#include "megakernel/megakernel.h"
+#include "wavefront/wavefront.h"
+#include "core/reference.h"
+
+namespace rt {
+
+PipelineKind parsePipeline(const std::string& name) {
+    if (name == "cpu") return PipelineKind::Cpu;
+    if (name == "mega") return PipelineKind::Mega;
+    if (name == "wave") return PipelineKind::Wave;
+    throw Error("--pipeline " + name + ": must be one of cpu, mega, wave");
+}
+
+const char* pipelineName(PipelineKind kind) {
+    switch (kind) {
+        case PipelineKind::Cpu: return "cpu";
+        case PipelineKind::Mega: return "mega";
+        case PipelineKind::Wave: return "wave";
+    }
+    return "?";
+}
+
+void FrameStats::addKernel(const std::string& name, double ms) {
+    deviceMs += ms;
+    for (auto& [n, t] : kernelMs)
+        if (n == name) {
+            t += ms;
+            return;
+        }
+    kernelMs.emplace_back(name, ms);
+}
+
+namespace {
+
+class CpuPipeline : public Pipeline {
+public:
+    PipelineKind kind() const override { return PipelineKind::Cpu; }
+    Image render(const Scene& scene, const RenderOptions& options) override {
+        checkOptions(scene, options);
+        stats_ = {};
+        stats_.branching = scene.branching();
+        stats_.treeNodes = treeNodeCount(stats_.branching, options.bounces);
+        return renderReference(scene, options);
+    }
+};
+
+}  // namespace
+
+std::unique_ptr<Pipeline> makePipeline(PipelineKind kind, ClContext* cl) {
+    if (kind == PipelineKind::Cpu) return std::make_unique<CpuPipeline>();
+    if (!cl) throw Error(std::string("pipeline ") + pipelineName(kind) + " needs an OpenCL device");
+    if (kind == PipelineKind::Mega) return std::make_unique<MegakernelPipeline>(*cl);
+    return std::make_unique<WavefrontPipeline>(*cl);
+}
+
+void checkOptions(const Scene& scene, const RenderOptions& o) {
+    auto range = [](const char* flag, long long v, long long lo, long long hi) {
+        if (v < lo || v > hi)
+            throw Error(std::string(flag) + " " + std::to_string(v) + ": must be in " +
+                        std::to_string(lo) + ".." + std::to_string(hi));
+    };
+    range("--size (width)", o.width, 1, 16384);
+    range("--size (height)", o.height, 1, 16384);
+    range("--bounces", o.bounces, 0, 16);
+    range("--shadow-samples", o.shadowSamples, 1, RT_MAX_SHADOW_SAMPLES);
+    range("--aa", o.aa, 1, 16);
+    if (!(o.shadowStrength >= 0.f && o.shadowStrength <= 1.f))
+        throw Error("shadow strength must be in [0, 1]");
+    if (scene.lights.size() > RT_MAX_LIGHTS)
+        throw Error(scene.source.string() + ": at most " + std::to_string(RT_MAX_LIGHTS) +
+                    " lights are supported");
+}
+
+size_t treePrivateBytes(int branching, int bounces) {
+    // A node plus its colour (float3, 16 bytes in private memory) per tree slot.
+    return size_t(treeNodeCount(branching, bounces)) * (sizeof(dev::Node) + 16);
+}
+
+void checkPrivateTree(int branching, int bounces, const std::string& who, bool suggestWeighted) {
+    size_t need = treePrivateBytes(branching, bounces);
+    if (need <= kPrivateTreeLimit) return;
+    int fits = bounces;
+    while (fits > 0 && treePrivateBytes(branching, fits) > kPrivateTreeLimit) --fits;
+    std::string msg = "--bounces " + std::to_string(bounces) + ": the " + who + " keeps " +
+                      std::to_string(treeNodeCount(branching, bounces)) + " ray-tree nodes (" +
+                      std::to_string(need / 1024) + " KiB) in private memory per work-item, over the " +
+                      std::to_string(kPrivateTreeLimit / 1024) + " KiB limit; the highest bounce " +
+                      "limit that fits is " + std::to_string(fits);
+    if (suggestWeighted) msg += " (or use --layout weighted)";
+    throw Error(msg);
+}
+
+std::vector<std::string> featureDefines(const Scene& scene, const RenderOptions& o) {
+    std::vector<std::string> d;
+    if (!scene.spheres.empty()) d.push_back("RT_HAS_SPHERES");
+    if (!scene.planes.empty()) d.push_back("RT_HAS_PLANES");
+    if (!scene.triangles.empty()) d.push_back("RT_HAS_TRIANGLES");
+    if (scene.environment.cubemapSize > 0) d.push_back("RT_HAS_CUBEMAP");
+    int c = scene.branching();
+    d.push_back("RT_BRANCH=" + std::to_string(c));
+    d.push_back("RT_MAX_BOUNCES=" + std::to_string(o.bounces));
+    d.push_back("RT_TREE_NODES=" + std::to_string(treeNodeCount(c, o.bounces)));
+    if (o.robustSphere) d.push_back("RT_ROBUST_SPHERE");
+    if (o.watertight) d.push_back("RT_WATERTIGHT");
+    if (o.scaledOffset) d.push_back("RT_SCALED_OFFSET");
+    if (!scene.triangles.empty()) {
+        if (o.accel == RenderOptions::Accel::Bv) d.push_back("RT_ACCEL_BV");
+        if (o.accel == RenderOptions::Accel::Grid) d.push_back("RT_ACCEL_GRID");
+        if (o.accel == RenderOptions::Accel::Bvh) d.push_back("RT_ACCEL_BVH");
+    }
+    return d;
+}
+
+dev::RenderSettings makeSettings(const Scene& scene, const RenderOptions& o) {
+    dev::RenderSettings s;
+    std::memset(&s, 0, sizeof s);
+    s.width = o.width;
+    s.height = o.height;
+    s.bounces = o.bounces;
+    s.shadowSamples = o.shadowSamples;
+    s.aaSamples = o.aa;
+    s.sphereCount = int(scene.spheres.size());
+    s.planeCount = int(scene.planes.size());
+    s.triangleCount = int(scene.triangles.size());
+    s.meshCount = int(scene.meshes.size());
+    s.lightCount = int(scene.lights.size());
+    s.materialCount = int(scene.materials.size());
+    s.shadowStrength = o.shadowStrength;
+    s.cubemapSize = scene.environment.cubemapSize;
+    s.skyZenith = scene.environment.zenith;
+    s.skyHorizon = scene.environment.horizon;
+    s.skyGround = scene.environment.ground;
+    s.camera = scene.camera;
+    return s;
+}
+
+template <typename T>
+static cl::Buffer upload(ClContext& cl, const std::vector<T>& v, const char* what) {
+    size_t bytes = v.size() * sizeof(T);
+    cl::Buffer b = cl.allocate(bytes, CL_MEM_READ_ONLY, what);
+    if (bytes) {
+        try {
+            cl.queue().enqueueWriteBuffer(b, CL_TRUE, 0, bytes, v.data());
+        } catch (const cl::Error& e) {
+            throwClError(e, std::string("uploading ") + what);
+        }
+    }
+    return b;
+}
+
+DeviceScene::DeviceScene(ClContext& cl, const Scene& scene, RenderOptions::Accel a)
+    : source_(&scene), accel_(a) {
+    AccelData accel = buildAccel(scene, a);
+    spheres_ = upload(cl, scene.spheres, "the sphere buffer");
+    planes_ = upload(cl, scene.planes, "the plane buffer");
+    triangles_ = upload(cl, accel.triangles, "the triangle buffer");
+    meshes_ = upload(cl, accel.meshes, "the mesh buffer");
+    lights_ = upload(cl, scene.lights, "the light buffer");
+    materials_ = upload(cl, scene.materials, "the material buffer");
+    cubemap_ = upload(cl, scene.environment.cubemap, "the cubemap buffer");
+    bvh_ = upload(cl, accel.bvh, "the BVH buffer");
+}
+
+void DeviceScene::setArgs(cl::Kernel& k, const dev::RenderSettings& settings) const {
+    k.setArg(0, spheres_);
+    k.setArg(1, planes_);
+    k.setArg(2, triangles_);
+    k.setArg(3, meshes_);
+    k.setArg(4, lights_);
+    k.setArg(5, materials_);
+    k.setArg(6, cubemap_);
+    k.setArg(7, bvh_);
+    k.setArg(8, sizeof settings, &settings);
+}
+
+Launch launch2d(const DeviceInfo& device, int width, int rows) {
+    if (!device.isGpu()) return {cl::NDRange(size_t(width), size_t(rows)), cl::NullRange};
+    const size_t lx = 16, ly = 8;
+    return {cl::NDRange((width + lx - 1) / lx * lx, (rows + ly - 1) / ly * ly), cl::NDRange(lx, ly)};
+}
+
+}  // namespace rt

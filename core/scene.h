@@ -26,6 +26,13 @@ struct RenderOptions {
     bool robustSphere = true;   // false: report Algorithm 2 (plain quadratic)
     bool watertight = true;     // false: report Algorithm 3 (Moller-Trumbore)
     bool scaledOffset = true;   // false: fixed epsilon for secondary-ray origins
+
+    // Pipeline choices; the CPU reference ignores them.
+    enum class Layout { Tree, Weighted };
+    Layout layout = Layout::Tree;   // megakernel: full private ray tree, or weighted stack
+    size_t memoryBudget = 0;        // wavefront: bytes the global ray tree may use (0 = device max)
+    enum class Accel { None, Bv, Grid, Bvh };
+    Accel accel = Accel::Bv;        // how rays find triangles (issue 5)
 };
 
 struct Environment {

@@ -1,1 +1,118 @@
-// stub
+// rtlab — the monolithic kernel (report 3.2.4): one work-item takes its pixel from the primary ray
+// to the final colour. OpenCL C has no recursion, so the ray tree lives in private memory, in one
+// of two layouts chosen at build time:
+//   RT_LAYOUT_TREE      the report's design: all N nodes in heap order, traced top-down and
+//                       combined bottom-up with the same functions as the wavefront image kernel;
+//   RT_LAYOUT_WEIGHTED  a depth-first stack of at most B*(C-1)+1 pending rays, each carrying the
+//                       weight its parent gives it, added straight into the pixel.
+#include "raytree.cl"
+
+#ifdef RT_LAYOUT_TREE
+inline float3 Megakernel_Sample(const SceneData* sc, int x, int y, int sample) {
+    Node nodes[RT_TREE_NODES];
+    float3 colors[RT_TREE_NODES];
+    nodes[0] = RayTree_TraceNode(sc, RayTree_PrimaryRay(sc, x, y, sample));
+    for (int i = 1; i < RT_TREE_NODES; ++i) {
+        int parent = (i - 1) / RT_BRANCH;
+        Ray ray;
+        if (RayTree_ChildRay(sc, &nodes[parent], RayTree_Depth(parent), i - 1 - parent * RT_BRANCH,
+                             &ray))
+            nodes[i] = RayTree_TraceNode(sc, ray);
+        else
+            nodes[i].flags = 0;
+    }
+    return RayTree_Combine(sc, nodes, colors);
+}
+#else
+#define RT_STACK_SIZE (RT_MAX_BOUNCES * (RT_BRANCH - 1) + 1)
+
+typedef struct Pending {
+    Ray ray;
+    float3 weight;
+    int depth;
+} Pending;
+
+inline float3 Megakernel_Sample(const SceneData* sc, int x, int y, int sample) {
+    Pending stack[RT_STACK_SIZE];
+    int top = 0;
+    stack[top].ray = RayTree_PrimaryRay(sc, x, y, sample);
+    stack[top].weight = (float3)(1.0f, 1.0f, 1.0f);
+    stack[top].depth = 0;
+    ++top;
+    float3 color = (float3)(0.0f, 0.0f, 0.0f);
+    while (top > 0) {
+        Pending p = stack[--top];
+        Node node = RayTree_TraceNode(sc, p.ray);
+        if (node.kind == RT_KIND_MISS) {
+            color += p.weight * Shade_Environment(sc, p.ray.dir);
+            continue;
+        }
+        Ray refl, refr;
+        bool hasRefl = RayTree_ChildRay(sc, &node, p.depth, 0, &refl);
+        bool hasRefr = RT_BRANCH == 2 && RayTree_ChildRay(sc, &node, p.depth, 1, &refr);
+        float F, o;
+        RayTree_Mix(sc, &node, hasRefl, hasRefr, &F, &o);
+        color += p.weight * ((1.0f - F) * o) * Shade_Base(sc, &node);
+        // Depth-first: at most one pending sibling per level, so B*(C-1)+1 entries suffice.
+        if (hasRefr) {
+            stack[top].ray = refr;
+            stack[top].weight = p.weight * ((1.0f - F) * (1.0f - o));
+            stack[top].depth = p.depth + 1;
+            ++top;
+        }
+        if (hasRefl) {
+            stack[top].ray = refl;
+            stack[top].weight = p.weight * F;
+            stack[top].depth = p.depth + 1;
+            ++top;
+        }
+    }
+    return color;
+}
+#endif
+
+inline void Megakernel_Store(global float* image, int i, float3 c) {
+    image[i] = c.x;
+    image[i + 1] = c.y;
+    image[i + 2] = c.z;
+}
+
+// One launch per frame (or per tile of rows): every AA sample of every pixel, summed in sample
+// order and divided once, exactly as the wavefront pipeline's passes do.
+kernel void Megakernel_Render(RT_SCENE_PARAMS, global float* image) {
+    int x = get_global_id(0), y = get_global_id(1) + settings.rowOffset;
+    if (x >= settings.width || y >= settings.height) return;
+    RT_SCENE_INIT(sc);
+    int samples = settings.aaSamples * settings.aaSamples;
+    float3 acc = Megakernel_Sample(&sc, x, y, 0);
+    for (int s = 1; s < samples; ++s) acc += Megakernel_Sample(&sc, x, y, s);
+    Megakernel_Store(image, (y * settings.width + x) * 3, acc / (float)samples);
+}
+
+// Adaptive anti-aliasing, pass 1: the centre sample of every pixel.
+kernel void Megakernel_RenderCenters(RT_SCENE_PARAMS, global float* centers) {
+    int x = get_global_id(0), y = get_global_id(1) + settings.rowOffset;
+    if (x >= settings.width || y >= settings.height) return;
+    RT_SCENE_INIT(sc);
+    sc.settings.aaSamples = 1;  // a 1 x 1 grid: its only sample is the pixel centre
+    Megakernel_Store(centers, (y * settings.width + x) * 3, Megakernel_Sample(&sc, x, y, 0));
+}
+
+// Adaptive anti-aliasing, pass 2: edges get the full n x n grid, the rest keep their centre.
+kernel void Megakernel_RenderEdges(RT_SCENE_PARAMS, global const float* centers,
+                                   global float* image) {
+    int x = get_global_id(0), y = get_global_id(1) + settings.rowOffset;
+    if (x >= settings.width || y >= settings.height) return;
+    RT_SCENE_INIT(sc);
+    int i = (y * settings.width + x) * 3;
+    if (!RayTree_IsEdge(centers, x, y, settings.width, settings.height)) {
+        image[i] = centers[i];
+        image[i + 1] = centers[i + 1];
+        image[i + 2] = centers[i + 2];
+        return;
+    }
+    int samples = settings.aaSamples * settings.aaSamples;
+    float3 acc = Megakernel_Sample(&sc, x, y, 0);
+    for (int s = 1; s < samples; ++s) acc += Megakernel_Sample(&sc, x, y, s);
+    Megakernel_Store(image, i, acc / (float)samples);
+}

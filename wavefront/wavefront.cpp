@@ -1,1 +1,129 @@
-// stub, filled in by its owner
+#include "wavefront/wavefront.h"
+
+#include <algorithm>
+#include <chrono>
+
+#include "core/error.h"
+
+namespace rt {
+
+int WavefrontPipeline::tileRows(int width, int height, int branching, int bounces, size_t budget,
+                                const std::string& budgetName) {
+    auto rowBytes = [&](int b) {
+        return size_t(width) * size_t(treeNodeCount(branching, b)) * sizeof(dev::Node);
+    };
+    size_t row = rowBytes(bounces);
+    if (row > budget) {
+        int fits = bounces;
+        while (fits >= 0 && rowBytes(fits) > budget) --fits;
+        std::string msg = "--bounces " + std::to_string(bounces) + ": one row of the wavefront ray tree (" +
+                          std::to_string(width) + " pixels x " +
+                          std::to_string(treeNodeCount(branching, bounces)) + " nodes x " +
+                          std::to_string(sizeof(dev::Node)) + " B = " + std::to_string(row) +
+                          " B) exceeds " + budgetName + " (" + std::to_string(budget) + " B); ";
+        msg += fits >= 0 ? "the highest bounce limit that fits is " + std::to_string(fits)
+                         : "not even bounce limit 0 fits";
+        throw Error(msg);
+    }
+    return int(std::min<size_t>(size_t(height), budget / row));
+}
+
+Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
+    auto t0 = std::chrono::steady_clock::now();
+    checkOptions(scene, o);
+    stats_ = {};
+    int C = scene.branching();
+    stats_.branching = C;
+    stats_.treeNodes = treeNodeCount(C, o.bounces);
+    checkPrivateTree(C, o.bounces, "wavefront image kernel", false);
+    stats_.privateBytes = treePrivateBytes(C, o.bounces);
+
+    const DeviceInfo& dev = cl_.device();
+    size_t budget = dev.maxAlloc;
+    std::string budgetName = dev.name + "'s max allocation";
+    if (o.memoryBudget && o.memoryBudget < budget) {
+        budget = o.memoryBudget;
+        budgetName = "--memory-budget";
+    }
+    int rows = tileRows(o.width, o.height, C, o.bounces, budget, budgetName);
+    stats_.tiles = (o.height + rows - 1) / rows;
+
+    cl::Program program = cl_.program("wavefront.cl", featureDefines(scene, o));
+    stats_.program = cl_.lastProgramSource();
+    if (!scene_ || !scene_->matches(scene, o.accel))
+        scene_ = std::make_unique<DeviceScene>(cl_, scene, o.accel);
+
+    size_t nodes = size_t(o.width) * rows * size_t(stats_.treeNodes);
+    size_t treeBytes = nodes * sizeof(dev::Node);
+    size_t imageBytes = size_t(o.width) * o.height * 3 * sizeof(float);
+    try {
+        if (treeBytes != treeBytes_) {
+            if (treeBytes_) cl_.release(treeBytes_);
+            tree_ = cl::Buffer();
+            tree_ = cl_.allocate(treeBytes, CL_MEM_READ_WRITE, "the wavefront ray tree");
+            treeBytes_ = treeBytes;
+            // Every slot starts untraced; from then on the reset kernel keeps it so.
+            cl_.queue().enqueueFillBuffer(tree_, cl_uchar(0), 0, treeBytes);
+        }
+        if (imageBytes != imageBytes_) {
+            if (imageBytes_) cl_.release(imageBytes_);
+            image_ = cl_.allocate(imageBytes, CL_MEM_READ_WRITE, "the image buffer");
+            imageBytes_ = imageBytes;
+        }
+    } catch (const cl::Error& e) {
+        throwClError(e, "preparing wavefront buffers");
+    }
+    stats_.treeBytes = treeBytes;
+
+    cl::Kernel trace(program, "Wavefront_Trace"), image(program, "Wavefront_Image"),
+        reset(program, "Wavefront_Reset");
+    reset.setArg(0, tree_);
+    reset.setArg(1, cl_uint(nodes));
+    dev::RenderSettings settings = makeSettings(scene, o);
+    int samples = o.aa * o.aa;
+    std::vector<cl::Event> events;  // trace, image, reset per pass, for the profile
+    Image out(o.width, o.height);
+    try {
+        cl::Event last;
+        bool haveLast = false;
+        for (int row0 = 0; row0 < o.height; row0 += rows) {
+            int tile = std::min(rows, o.height - row0);
+            Launch range = launch2d(dev, o.width, tile);
+            settings.rowOffset = row0;
+            // AA in passes: one tree per pixel, reused by every sample; image accumulates.
+            for (int s = 0; s < samples; ++s) {
+                settings.sampleIndex = s;
+                scene_->setArgs(trace, settings);
+                trace.setArg(9, tree_);
+                scene_->setArgs(image, settings);
+                image.setArg(9, tree_);
+                image.setArg(10, image_);
+                cl::Event et, ei, er;
+                std::vector<cl::Event> waitTrace;
+                if (haveLast) waitTrace.push_back(last);
+                cl_.queue().enqueueNDRangeKernel(trace, cl::NullRange, range.global, range.local,
+                                                 waitTrace.empty() ? nullptr : &waitTrace, &et);
+                std::vector<cl::Event> waitImage{et};
+                cl_.queue().enqueueNDRangeKernel(image, cl::NullRange, range.global, range.local,
+                                                 &waitImage, &ei);
+                std::vector<cl::Event> waitReset{ei};
+                cl_.queue().enqueueNDRangeKernel(reset, cl::NullRange, cl::NDRange(nodes),
+                                                 cl::NullRange, &waitReset, &er);
+                events.insert(events.end(), {et, ei, er});
+                last = er;
+                haveLast = true;
+                // setArg copies the settings, so the next pass may change them right away.
+            }
+        }
+        cl_.queue().enqueueReadBuffer(image_, CL_TRUE, 0, imageBytes, out.rgb.data());
+        static const char* names[3] = {"trace", "image", "reset"};
+        for (size_t i = 0; i < events.size(); ++i) stats_.addKernel(names[i % 3], eventMs(events[i]));
+    } catch (const cl::Error& e) {
+        throwClError(e, "wavefront frame on " + dev.name);
+    }
+    stats_.hostMs =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    return out;
+}
+
+}  // namespace rt

@@ -1,1 +1,35 @@
-// stub
+// rtlab — basics every kernel file includes: the shared records, Float3 <-> float3, the ray.
+//
+// FP_CONTRACT OFF: the compiler must not fuse a*b+c into an fma in one kernel and not in another;
+// the wavefront and megakernel pipelines call the same functions and must round identically.
+#pragma OPENCL FP_CONTRACT OFF
+#ifndef RTLAB_CL_COMMON
+#define RTLAB_CL_COMMON
+
+#include "types.h"
+
+inline float3 f3(Float3 v) { return (float3)(v.x, v.y, v.z); }
+
+inline Float3 F3(float3 v) {
+    Float3 r;
+    r.x = v.x;
+    r.y = v.y;
+    r.z = v.z;
+    return r;
+}
+
+inline float component(float3 v, int k) { return k == 0 ? v.x : (k == 1 ? v.y : v.z); }
+
+typedef struct Ray {
+    float3 origin;
+    float3 dir;  // unit length
+} Ray;
+
+inline Ray makeRay(float3 origin, float3 dir) {
+    Ray r;
+    r.origin = origin;
+    r.dir = dir;
+    return r;
+}
+
+#endif

@@ -1,1 +1,162 @@
-// stub
+// rtlab — the per-pixel ray tree (report 3.2, core/SHADING.md sections 6 and 8). Both pipelines
+// build and combine trees with these functions and nothing else, which is what makes their
+// images bit-identical. Node i at depth k has children i*C + 1 + slot (slot 0 reflection,
+// slot 1 refraction); C = RT_BRANCH, N = RT_TREE_NODES.
+#ifndef RTLAB_CL_RAYTREE
+#define RTLAB_CL_RAYTREE
+#include "camera.cl"
+#include "shade.cl"
+
+inline int RayTree_Depth(int i) {
+#if RT_BRANCH == 1
+    return i;
+#else
+    return 31 - (int)clz((uint)(i + 1));
+#endif
+}
+
+// Traces one ray: the closest hit, its facing normal, and its shadow-ray occlusion counts.
+inline Node RayTree_TraceNode(const SceneData* sc, Ray ray) {
+    Hit hit = Scene_Intersect(sc, ray, INFINITY);
+    Node n;
+    n.dir = F3(ray.dir);
+    n.object = hit.object;
+    n.kind = (uchar)hit.kind;
+    n.flags = (uchar)RT_NODE_TRACED;
+    n.material = 0;
+    for (int j = 0; j < RT_MAX_LIGHTS; ++j) n.occluded[j] = 0;
+    n.point = F3((float3)(0.0f, 0.0f, 0.0f));
+    n.normal = n.point;
+    if (hit.kind == RT_KIND_MISS) return n;
+
+    float3 p = ray.origin + hit.t * ray.dir;
+    float3 normal = (float3)(0.0f, 0.0f, 1.0f);
+    bool inside = false;
+    int material = 0;
+#ifdef RT_HAS_SPHERES
+    if (hit.kind == RT_KIND_SPHERE) {
+        Sphere s = sc->spheres[hit.object];
+        normal = (p - f3(s.center)) / s.radius;
+        inside = dot(normal, ray.dir) > 0.0f;
+        material = s.material;
+    }
+#endif
+#ifdef RT_HAS_PLANES
+    if (hit.kind == RT_KIND_PLANE) {
+        Plane pl = sc->planes[hit.object];
+        normal = f3(pl.normal);
+        inside = dot(normal, ray.dir) > 0.0f;
+        material = pl.material;
+    }
+#endif
+#ifdef RT_HAS_TRIANGLES
+    if (hit.kind == RT_KIND_TRIANGLE) {
+        Triangle tri = sc->triangles[hit.object];
+        float3 v0 = f3(tri.v0);
+        float3 geometric = cross(f3(tri.v1) - v0, f3(tri.v2) - v0);
+        float u = hit.uv.x, v = hit.uv.y;
+        normal = normalize((1.0f - u - v) * f3(tri.n0) + u * f3(tri.n1) + v * f3(tri.n2));
+        inside = dot(geometric, ray.dir) > 0.0f;
+        material = tri.material;
+    }
+#endif
+    if (inside) {
+        normal = -normal;
+        n.flags |= (uchar)RT_NODE_INSIDE;
+    }
+    n.point = F3(p);
+    n.normal = F3(normal);
+    n.material = (ushort)material;
+    for (int j = 0; j < sc->settings.lightCount; ++j)
+        n.occluded[j] = (uchar)Shade_Occlusion(sc, p, normal, j);
+    return n;
+}
+
+// The child ray of `parent` (at `depth`) in `slot`, or false when the parent has no such child.
+inline bool RayTree_ChildRay(const SceneData* sc, const Node* parent, int depth, int slot, Ray* out) {
+    if (!(parent->flags & RT_NODE_TRACED) || parent->kind == RT_KIND_MISS) return false;
+    if (depth >= sc->settings.bounces) return false;
+    Material m = sc->materials[parent->material];
+    float3 p = f3(parent->point), n = f3(parent->normal), d = f3(parent->dir);
+    if (slot == 0) {
+        if (!(m.reflectance > 0.0f || m.opacity < 1.0f)) return false;
+        *out = makeRay(p + Shade_Offset(p) * n, Shade_Reflect(d, n));
+        return true;
+    }
+    if (!(m.opacity < 1.0f)) return false;
+    float eta = (parent->flags & RT_NODE_INSIDE) ? m.ior : 1.0f / m.ior;
+    float3 t;
+    if (!Shade_Refract(d, n, eta, &t)) return false;
+    *out = makeRay(p - Shade_Offset(p) * n, t);
+    return true;
+}
+
+// Fresnel/reflectance factor F and effective opacity o of a hit node (section 8).
+inline void RayTree_Mix(const SceneData* sc, const Node* node, bool hasRefl, bool hasRefr, float* F,
+                        float* o) {
+    Material m = sc->materials[node->material];
+    *F = 0.0f;
+    if (hasRefl) {
+        if (m.opacity < 1.0f) {
+            bool in = (node->flags & RT_NODE_INSIDE) != 0;
+            *F = Shade_Fresnel(-dot(f3(node->dir), f3(node->normal)), in ? m.ior : 1.0f,
+                               in ? 1.0f : m.ior);
+        } else {
+            *F = m.reflectance;
+        }
+    }
+    *o = hasRefr ? m.opacity : 1.0f;
+}
+
+// Colour of a node from its children's colours.
+inline float3 RayTree_NodeColor(const SceneData* sc, const Node* node, bool hasRefl, float3 refl,
+                                bool hasRefr, float3 refr) {
+    if (node->kind == RT_KIND_MISS) return Shade_Environment(sc, f3(node->dir));
+    float F, o;
+    RayTree_Mix(sc, node, hasRefl, hasRefr, &F, &o);
+    float3 base = Shade_Base(sc, node);
+    float3 transmission = o * base + (1.0f - o) * refr;
+    return (1.0f - F) * transmission + F * refl;
+}
+
+// Combines a private copy of a pixel's tree from the deepest node up; colours[0] is the pixel.
+inline float3 RayTree_Combine(const SceneData* sc, const Node* nodes, float3* colors) {
+    for (int i = RT_TREE_NODES - 1; i >= 0; --i) {
+        if (!(nodes[i].flags & RT_NODE_TRACED)) continue;
+        int c0 = i * RT_BRANCH + 1;
+        bool hasRefl = c0 < RT_TREE_NODES && (nodes[c0].flags & RT_NODE_TRACED);
+        float3 refl = hasRefl ? colors[c0] : (float3)(0.0f, 0.0f, 0.0f);
+        bool hasRefr = false;
+        float3 refr = (float3)(0.0f, 0.0f, 0.0f);
+#if RT_BRANCH == 2
+        hasRefr = c0 + 1 < RT_TREE_NODES && (nodes[c0 + 1].flags & RT_NODE_TRACED);
+        if (hasRefr) refr = colors[c0 + 1];
+#endif
+        colors[i] = RayTree_NodeColor(sc, &nodes[i], hasRefl, refl, hasRefr, refr);
+    }
+    return colors[0];
+}
+
+// Pixel (x, y)'s primary ray for the AA sample `sample` of the n x n grid.
+inline Ray RayTree_PrimaryRay(const SceneData* sc, int x, int y, int sample) {
+    return Camera_PrimaryRay(&sc->settings, x, y,
+                             Camera_SampleOffset(sample, sc->settings.aaSamples));
+}
+
+// Adaptive anti-aliasing (section 11): a pixel is an edge when its centre sample differs from a
+// 4-neighbour's by more than 0.1 in some channel.
+inline bool RayTree_IsEdge(global const float* centers, int x, int y, int w, int h) {
+    int i = (y * w + x) * 3;
+    float3 c = (float3)(centers[i], centers[i + 1], centers[i + 2]);
+    int nx[4] = {x - 1, x + 1, x, x};
+    int ny[4] = {y, y, y - 1, y + 1};
+    for (int k = 0; k < 4; ++k) {
+        if (nx[k] < 0 || nx[k] >= w || ny[k] < 0 || ny[k] >= h) continue;
+        int j = (ny[k] * w + nx[k]) * 3;
+        float3 e = fabs((float3)(centers[j], centers[j + 1], centers[j + 2]) - c);
+        if (fmax(e.x, fmax(e.y, e.z)) > 0.1f) return true;
+    }
+    return false;
+}
+
+#endif

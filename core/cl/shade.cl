@@ -1,1 +1,142 @@
-// stub
+// rtlab — environment, secondary-ray geometry, shadows and Blinn-Phong
+// (core/SHADING.md sections 3 to 9). Shared by both pipelines.
+#ifndef RTLAB_CL_SHADE
+#define RTLAB_CL_SHADE
+#include "scene.cl"
+
+// ---- environment (section 9) ----
+#ifdef RT_HAS_CUBEMAP
+inline float3 Cubemap_Texel(const SceneData* sc, int face, int x, int y) {
+    int n = sc->settings.cubemapSize;
+    x = clamp(x, 0, n - 1);
+    y = clamp(y, 0, n - 1);
+    global const float* t = sc->cubemap + ((face * n + y) * n + x) * 3;
+    return (float3)(t[0], t[1], t[2]);
+}
+
+inline float3 Cubemap_Lookup(const SceneData* sc, float3 d) {
+    float3 a = fabs(d);
+    int face;
+    float sc_, tc, ma;
+    if (a.x >= a.y && a.x >= a.z) {
+        face = d.x >= 0.0f ? 0 : 1;
+        sc_ = d.x >= 0.0f ? -d.z : d.z;
+        tc = -d.y;
+        ma = a.x;
+    } else if (a.y >= a.z) {
+        face = d.y >= 0.0f ? 2 : 3;
+        sc_ = d.x;
+        tc = d.y >= 0.0f ? d.z : -d.z;
+        ma = a.y;
+    } else {
+        face = d.z >= 0.0f ? 4 : 5;
+        sc_ = d.z >= 0.0f ? d.x : -d.x;
+        tc = -d.y;
+        ma = a.z;
+    }
+    float n = (float)sc->settings.cubemapSize;
+    float fx = (sc_ / ma + 1.0f) * 0.5f * n - 0.5f, fy = (tc / ma + 1.0f) * 0.5f * n - 0.5f;
+    float x0 = floor(fx), y0 = floor(fy);
+    float tx = fx - x0, ty = fy - y0;
+    int ix = (int)x0, iy = (int)y0;
+    float3 top = Cubemap_Texel(sc, face, ix, iy) * (1.0f - tx) + Cubemap_Texel(sc, face, ix + 1, iy) * tx;
+    float3 bot = Cubemap_Texel(sc, face, ix, iy + 1) * (1.0f - tx) +
+                 Cubemap_Texel(sc, face, ix + 1, iy + 1) * tx;
+    return top * (1.0f - ty) + bot * ty;
+}
+#endif
+
+inline float3 Shade_Environment(const SceneData* sc, float3 d) {
+#ifdef RT_HAS_CUBEMAP
+    return Cubemap_Lookup(sc, d);
+#else
+    float3 horizon = f3(sc->settings.skyHorizon);
+    if (d.y >= 0.0f) return horizon + (f3(sc->settings.skyZenith) - horizon) * d.y;
+    return horizon + (f3(sc->settings.skyGround) - horizon) * (-d.y);
+#endif
+}
+
+// ---- secondary-ray geometry (sections 3, 6, 7) ----
+inline float Shade_Offset(float3 p) {
+#ifdef RT_SCALED_OFFSET
+    return 1e-4f * fmax(1.0f, fmax(fabs(p.x), fmax(fabs(p.y), fabs(p.z))));
+#else
+    return 1e-4f;
+#endif
+}
+
+inline float3 Shade_Reflect(float3 d, float3 n) { return d - 2.0f * n * dot(d, n); }
+
+// Report Algorithm 1 with the S > 1 test; n faces the incoming ray, eta = n1/n2.
+inline bool Shade_Refract(float3 d, float3 n, float eta, float3* t) {
+    float c = -dot(n, d);
+    float s = eta * eta * (1.0f - c * c);
+    if (s > 1.0f) return false;  // total internal reflection
+    *t = eta * d + (eta * c - sqrt(1.0f - s)) * n;
+    return true;
+}
+
+// Report Algorithm 5 with sinT = (n1/n2) sqrt(1 - cos^2); 1 under total internal reflection.
+inline float Shade_Fresnel(float cosI, float n1, float n2) {
+    float sinT = n1 / n2 * sqrt(fmax(0.0f, 1.0f - cosI * cosI));
+    if (sinT >= 1.0f) return 1.0f;
+    float cosT = sqrt(1.0f - sinT * sinT);
+    float rs = (n2 * cosI - n1 * cosT) / (n2 * cosI + n1 * cosT);
+    float rp = (n1 * cosI - n2 * cosT) / (n1 * cosI + n2 * cosT);
+    return (rs * rs + rp * rp) / 2.0f;
+}
+
+// ---- shadows (section 4) ----
+inline int Shade_LightSamples(const SceneData* sc, int j) {
+    return sc->lights[j].radius > 0.0f ? sc->settings.shadowSamples : 1;
+}
+
+// Occluded shadow rays from p toward light j; 0 when the light is behind the surface.
+inline int Shade_Occlusion(const SceneData* sc, float3 p, float3 n, int j) {
+    Light light = sc->lights[j];
+    float3 lp = f3(light.position);
+    float3 w = normalize(lp - p);
+    if (dot(n, w) <= 0.0f) return 0;
+    float3 origin = p + Shade_Offset(p) * n;
+    int samples = Shade_LightSamples(sc, j);
+    // Orthonormal basis around w (Duff et al. 2017).
+    float sign = w.z >= 0.0f ? 1.0f : -1.0f;
+    float a = -1.0f / (sign + w.z);
+    float b = w.x * w.y * a;
+    float3 t = (float3)(1.0f + sign * w.x * w.x * a, sign * b, -sign * w.x);
+    float3 bt = (float3)(b, sign + w.y * w.y * a, -w.y);
+    int occluded = 0;
+    for (int k = 0; k < samples; ++k) {
+        float3 q = lp;
+        if (light.radius > 0.0f) {
+            float rho = light.radius * sqrt(((float)k + 0.5f) / (float)samples);
+            float phi = 2.399963229728653f * (float)k;
+            q = lp + rho * (cos(phi) * t + sin(phi) * bt);
+        }
+        float3 v = q - origin;
+        float len = length(v);
+        if (Scene_Occluded(sc, makeRay(origin, v / len), len)) ++occluded;
+    }
+    return occluded;
+}
+
+// ---- Blinn-Phong (section 5) ----
+inline float3 Shade_Base(const SceneData* sc, const Node* node) {
+    Material m = sc->materials[node->material];
+    float3 p = f3(node->point), n = f3(node->normal), d = f3(node->dir);
+    float3 c = f3(m.ambient);
+    for (int j = 0; j < sc->settings.lightCount; ++j) {
+        Light light = sc->lights[j];
+        float3 l = normalize(f3(light.position) - p);
+        float ndl = dot(n, l);
+        if (ndl <= 0.0f) continue;
+        float vis = 1.0f - sc->settings.shadowStrength * (float)node->occluded[j] /
+                               (float)Shade_LightSamples(sc, j);
+        float3 h = normalize(l - d);
+        float spec = pow(fmax(dot(n, h), 0.0f), m.exponent);
+        c += vis * f3(light.color) * (f3(m.diffuse) * ndl + f3(m.specular) * spec);
+    }
+    return c;
+}
+
+#endif

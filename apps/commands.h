@@ -1,0 +1,15 @@
+// rtlab — subcommands of the rtlab executable. Each add* registers its flags on the app; run()
+// dispatches to the one that was parsed.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+namespace rt::cli {
+
+void addRender(CLI::App& app);
+void addDevices(CLI::App& app);
+void addSweep(CLI::App& app);  // apps/sweep.cpp
+int run(CLI::App& app);
+int runSweepCommand();  // apps/sweep.cpp
+
+}  // namespace rt::cli

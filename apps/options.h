@@ -1,0 +1,40 @@
+// rtlab — the render flags every front end shares (rtlab render, rtlab sweep, rtlab-view).
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include <filesystem>
+#include <optional>
+#include <string>
+
+#include "core/kernel_sources.h"
+#include "core/scene.h"
+
+namespace rt::cli {
+
+struct SceneFlags {
+    std::string device;
+    std::string size;  // "WxH"
+    std::optional<int> bounces, shadowSamples, aa;
+    std::optional<float> shadowStrength;
+    bool adaptive = false;
+    std::string layout = "tree";
+    std::string memoryBudget;  // bytes, with optional K/M/G suffix
+    std::string accel;
+    bool plainSphere = false, mollerTrumbore = false, fixedOffset = false;
+    std::string kernelDir;
+
+    void add(CLI::App& cmd);
+    // The scene's defaults overridden by whatever was given; throws rt::Error naming the flag.
+    RenderOptions apply(RenderOptions defaults) const;
+    KernelSources kernelSources() const;
+};
+
+// Parses "640x480"; throws rt::Error("--size ...") otherwise.
+void parseSize(const std::string& text, int& width, int& height);
+// Parses "512", "64K", "1.5M", "2G"; throws rt::Error naming --memory-budget.
+size_t parseBytes(const std::string& text, const std::string& flag);
+// Throws rt::Error when the image cannot be written there (unknown extension, missing folder).
+void checkOutputPath(const std::filesystem::path& path);
+
+}  // namespace rt::cli

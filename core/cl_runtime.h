@@ -1,0 +1,75 @@
+// rtlab — the OpenCL runtime: device discovery and selection, program builds with a binary cache,
+// checked allocations, and errors that name the failing call and the CL error code.
+#pragma once
+
+#include <CL/opencl.hpp>
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "core/kernel_sources.h"
+
+namespace rt {
+
+// "CL_OUT_OF_RESOURCES" for -5, etc.
+const char* clErrorName(cl_int code);
+
+// Turns a cl::Error into rt::Error: "<what>: <call> failed with CL_..." .
+[[noreturn]] void throwClError(const cl::Error& e, const std::string& what);
+
+struct DeviceInfo {
+    int index = -1;  // position in listDevices()
+    cl::Platform platform;
+    cl::Device device;
+    std::string platformName, name, vendor, type, version, driver, openclC;
+    cl_uint computeUnits = 0;
+    cl_ulong globalMem = 0, maxAlloc = 0, localMem = 0;
+    size_t maxWorkGroup = 0;
+    bool isGpu() const { return type == "GPU"; }
+    std::string label() const;  // "NVIDIA H100 (NVIDIA CUDA, driver 550.54)"
+};
+
+std::vector<DeviceInfo> listDevices();
+
+// spec: a device index or a case-insensitive name substring; empty = $RTLAB_DEVICE, else the
+// first GPU, else the first CPU. Throws rt::Error naming the spec when nothing matches.
+DeviceInfo selectDevice(const std::string& spec);
+
+// Milliseconds between an event's START and END profiling counters.
+double eventMs(const cl::Event& event);
+
+class ClContext {
+public:
+    explicit ClContext(const DeviceInfo& device, KernelSources sources = KernelSources());
+
+    const DeviceInfo& device() const { return device_; }
+    cl::Context& context() { return context_; }
+    cl::CommandQueue& queue() { return queue_; }
+
+    // Builds mainFile with the given -D defines. Programs are cached in memory and on disk
+    // ($RTLAB_CACHE_DIR, else ~/.cache/rtlab) keyed by device, driver, source text and options,
+    // so a repeat run does not rebuild. On failure throws rt::Error carrying the build log.
+    cl::Program program(const std::string& mainFile, const std::vector<std::string>& defines);
+    // How the last program() call was satisfied: "memory", "disk" or "built".
+    const std::string& lastProgramSource() const { return lastSource_; }
+
+    // Checks size against CL_DEVICE_MAX_MEM_ALLOC_SIZE and the global memory left before
+    // allocating; `what` names the buffer in the error. Zero bytes allocates a 16-byte stub.
+    cl::Buffer allocate(size_t bytes, cl_mem_flags flags, const std::string& what);
+    // Bytes this context has allocated and not yet released (released buffers are not tracked).
+    void release(size_t bytes) { allocated_ -= bytes < allocated_ ? bytes : allocated_; }
+    size_t allocatedBytes() const { return allocated_; }
+
+private:
+    DeviceInfo device_;
+    KernelSources sources_;
+    cl::Context context_;
+    cl::CommandQueue queue_;
+    std::map<std::string, cl::Program> programs_;
+    std::string lastSource_;
+    size_t allocated_ = 0;
+};
+
+}  // namespace rt

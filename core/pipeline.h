@@ -1,0 +1,91 @@
+// rtlab — what the pipelines share on the host: the Pipeline interface that `rtlab render`, the
+// benchmarks and the viewer drive, the device copy of a scene, and the feature defines that make
+// each program model no more than its scene needs.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/cl_runtime.h"
+#include "core/image.h"
+#include "core/scene.h"
+
+namespace rt {
+
+enum class PipelineKind { Cpu, Mega, Wave };
+PipelineKind parsePipeline(const std::string& name);  // throws rt::Error on an unknown name
+const char* pipelineName(PipelineKind kind);
+
+struct FrameStats {
+    // Device time per kernel, summed over every launch of the frame (profiling events), in ms.
+    std::vector<std::pair<std::string, double>> kernelMs;
+    double deviceMs = 0;        // sum of kernelMs
+    double hostMs = 0;          // wall time of render() on the host
+    size_t treeBytes = 0;       // global ray-tree buffer (wavefront)
+    size_t privateBytes = 0;    // private ray storage per work-item (estimate from the layout)
+    long long treeNodes = 0;    // N per pixel
+    int branching = 1;          // C
+    int tiles = 1;              // row tiles the frame was split into
+    std::string program;        // how the program was obtained: built, disk or memory cache
+    void addKernel(const std::string& name, double ms);
+};
+
+class Pipeline {
+public:
+    virtual ~Pipeline() = default;
+    virtual PipelineKind kind() const = 0;
+    // Renders one frame. Device buffers are allocated on the first call and kept while the scene
+    // (by address) and the frame size stay the same.
+    virtual Image render(const Scene& scene, const RenderOptions& options) = 0;
+    const FrameStats& stats() const { return stats_; }
+
+protected:
+    FrameStats stats_;
+};
+
+// cl may be null only for PipelineKind::Cpu.
+std::unique_ptr<Pipeline> makePipeline(PipelineKind kind, ClContext* cl);
+
+// -D defines for a scene and its options: object kinds present, C, B, N, accuracy switches.
+std::vector<std::string> featureDefines(const Scene& scene, const RenderOptions& options);
+
+// The kernel-argument record for a scene, its options and the frame.
+dev::RenderSettings makeSettings(const Scene& scene, const RenderOptions& options);
+
+// Validates options against the scene and the shared limits; throws rt::Error naming the flag.
+void checkOptions(const Scene& scene, const RenderOptions& options);
+
+// Private memory the tree layout needs per work-item, and the most it may use.
+size_t treePrivateBytes(int branching, int bounces);
+constexpr size_t kPrivateTreeLimit = 256 * 1024;
+// Throws when the tree of N nodes does not fit kPrivateTreeLimit, naming the bounce limit that
+// fits. `who` names the kernel ("megakernel tree layout", "wavefront image kernel").
+void checkPrivateTree(int branching, int bounces, const std::string& who, bool suggestWeighted);
+
+// The scene's object arrays on the device.
+class DeviceScene {
+public:
+    DeviceScene(ClContext& cl, const Scene& scene, RenderOptions::Accel accel);
+    // Sets kernel arguments 0..8 (RT_SCENE_PARAMS) with the given settings.
+    void setArgs(cl::Kernel& kernel, const dev::RenderSettings& settings) const;
+    // True when this copy was made from `scene` with `accel` (by address: scenes are not mutated
+    // while a pipeline holds them, except the camera, which travels in the settings).
+    bool matches(const Scene& scene, RenderOptions::Accel accel) const {
+        return source_ == &scene && accel_ == accel;
+    }
+
+private:
+    const Scene* source_;
+    RenderOptions::Accel accel_;
+    cl::Buffer spheres_, planes_, triangles_, meshes_, lights_, materials_, cubemap_, bvh_;
+};
+
+// 2D launch geometry: global size rounded up to the local size on GPUs, runtime's choice on CPUs.
+struct Launch {
+    cl::NDRange global, local;
+};
+Launch launch2d(const DeviceInfo& device, int width, int rows);
+
+}  // namespace rt

@@ -1,0 +1,26 @@
+// rtlab — host driver of the megakernel (megakernel/megakernel.cl): one launch per frame.
+#pragma once
+
+#include <memory>
+
+#include "core/pipeline.h"
+
+namespace rt {
+
+class MegakernelPipeline : public Pipeline {
+public:
+    explicit MegakernelPipeline(ClContext& cl) : cl_(cl) {}
+    PipelineKind kind() const override { return PipelineKind::Mega; }
+    Image render(const Scene& scene, const RenderOptions& options) override;
+
+    // The defines the program is built with (tests check them).
+    static std::vector<std::string> defines(const Scene& scene, const RenderOptions& options);
+
+private:
+    ClContext& cl_;
+    std::unique_ptr<DeviceScene> scene_;
+    cl::Buffer image_, centers_;
+    size_t imageBytes_ = 0;
+};
+
+}  // namespace rt

@@ -1,0 +1,115 @@
+// The rtlab executable: bad input ends in one line on stderr naming the file or flag, a non-zero
+// exit status, and no crash; good input writes the image.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+#include <sys/wait.h>
+
+namespace {
+
+struct Result {
+    int status;
+    std::string err, out;
+};
+
+Result run(const std::string& args) {
+    std::string errFile = ::testing::TempDir() + "rtlab_cli_err.txt";
+    std::string cmd = std::string(RTLAB_BIN_DIR) + "/rtlab " + args + " 2>" + errFile;
+    Result r{};
+    FILE* p = popen(cmd.c_str(), "r");
+    std::array<char, 4096> buf;
+    while (size_t n = fread(buf.data(), 1, buf.size(), p)) r.out.append(buf.data(), n);
+    int st = pclose(p);
+    r.status = WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
+    if (FILE* f = fopen(errFile.c_str(), "r")) {
+        while (size_t n = fread(buf.data(), 1, buf.size(), f)) r.err.append(buf.data(), n);
+        fclose(f);
+    }
+    return r;
+}
+
+int lines(const std::string& s) {
+    int n = 0;
+    for (char c : s) n += c == '\n';
+    return n;
+}
+
+struct BadCase {
+    const char* args;
+    const char* expected;  // substring of the one error line
+};
+
+class CliRejects : public ::testing::TestWithParam<BadCase> {};
+
+TEST_P(CliRejects, WithOneLineAndNonZeroExit) {
+    const BadCase& c = GetParam();
+    Result r = run(c.args);
+    EXPECT_NE(r.status, 0) << c.args;
+    EXPECT_LT(r.status, 128) << c.args << ": crashed";
+    EXPECT_NE(r.err.find(c.expected), std::string::npos) << c.args << "\nstderr: " << r.err;
+    EXPECT_EQ(lines(r.err), 1) << c.args << "\nstderr: " << r.err;
+}
+
+const std::string kOut = " -o " + ::testing::TempDir() + "cli.png";
+
+INSTANTIATE_TEST_SUITE_P(
+    BadInput, CliRejects,
+    ::testing::Values(
+        BadCase{"render scenes/nope.json --pipeline cpu -o /tmp/x.png", "scenes/nope.json"},
+        BadCase{"render scenes/spheres.json --size 0x10 -o /tmp/x.png", "--size 0x10"},
+        BadCase{"render scenes/spheres.json --size big -o /tmp/x.png", "--size big"},
+        BadCase{"render scenes/spheres.json --bounces 99 -o /tmp/x.png", "--bounces 99"},
+        BadCase{"render scenes/spheres.json --bounces -1 -o /tmp/x.png", "--bounces"},
+        BadCase{"render scenes/spheres.json --aa 0 -o /tmp/x.png", "--aa 0"},
+        BadCase{"render scenes/spheres.json --shadow-samples 1000 -o /tmp/x.png",
+                "--shadow-samples 1000"},
+        BadCase{"render scenes/spheres.json --pipeline gpu -o /tmp/x.png", "--pipeline"},
+        BadCase{"render scenes/spheres.json --device 97 -o /tmp/x.png", "--device 97"},
+        BadCase{"render scenes/spheres.json --device nosuchdevice -o /tmp/x.png", "nosuchdevice"},
+        BadCase{"render scenes/spheres.json -o /no/such/dir/x.png", "/no/such/dir"},
+        BadCase{"render scenes/spheres.json -o /tmp/x.bmpx", "unsupported image type"},
+        BadCase{"render scenes/spheres.json --pipeline wave --memory-budget 10 -o /tmp/x.png",
+                "highest bounce limit"},
+        BadCase{"render scenes/spheres.json --pipeline wave --memory-budget lots -o /tmp/x.png",
+                "--memory-budget lots"},
+        BadCase{"render scenes/spheres.json --pipeline mega --bounces 15 -o /tmp/x.png",
+                "--layout weighted"},
+        BadCase{"render scenes/spheres.json --accel kdtree -o /tmp/x.png", "--accel"},
+        BadCase{"render tests/data/bad_scenes/negative_radius.json -o /tmp/x.png",
+                "tests/data/bad_scenes/negative_radius.json: /spheres/"},
+        BadCase{"render scenes/spheres.json --kernel-dir /no/such -o /tmp/x.png", "--kernel-dir"},
+        BadCase{"bogus", "bogus"}));
+
+TEST(Cli, RendersWithEveryPipeline) {
+    for (const char* p : {"cpu", "mega", "wave"}) {
+        std::string out = ::testing::TempDir() + "cli_" + p + ".exr";
+        Result r = run(std::string("render scenes/shadows.json --size 32x24 --pipeline ") + p +
+                       " --stats -o " + out);
+        EXPECT_EQ(r.status, 0) << p << ": " << r.err;
+        EXPECT_TRUE(std::filesystem::exists(out)) << p;
+        if (std::string(p) == "wave") {
+            EXPECT_NE(r.out.find("trace"), std::string::npos) << r.out;
+            EXPECT_NE(r.out.find("ray tree"), std::string::npos) << r.out;
+        }
+    }
+}
+
+TEST(Cli, DevicesListsPoclCpu) {
+    Result r = run("devices");
+    EXPECT_EQ(r.status, 0);
+    EXPECT_NE(r.out.find("CPU"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("max allocation"), std::string::npos) << r.out;
+}
+
+TEST(Cli, HelpExplainsEveryRenderFlag) {
+    Result r = run("render --help");
+    EXPECT_EQ(r.status, 0);
+    for (const char* flag : {"--pipeline", "--device", "--size", "--bounces", "--shadow-samples",
+                             "--aa", "--stats", "--memory-budget", "--layout", "--kernel-dir"})
+        EXPECT_NE(r.out.find(flag), std::string::npos) << flag;
+}
+
+}  // namespace

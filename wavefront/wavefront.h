@@ -1,0 +1,29 @@
+// rtlab — host driver of the wavefront pipeline (wavefront/wavefront.cl): trace, image and reset
+// kernels around a global ray tree of W x rows x N nodes, in row tiles when it must.
+#pragma once
+
+#include <memory>
+
+#include "core/pipeline.h"
+
+namespace rt {
+
+class WavefrontPipeline : public Pipeline {
+public:
+    explicit WavefrontPipeline(ClContext& cl) : cl_(cl) {}
+    PipelineKind kind() const override { return PipelineKind::Wave; }
+    Image render(const Scene& scene, const RenderOptions& options) override;
+
+    // Rows per tile for a frame, given the budget for the tree buffer (bytes). Throws rt::Error
+    // naming the bounce limit that would fit when not even one row does.
+    static int tileRows(int width, int height, int branching, int bounces, size_t budget,
+                        const std::string& budgetName);
+
+private:
+    ClContext& cl_;
+    std::unique_ptr<DeviceScene> scene_;
+    cl::Buffer tree_, image_;
+    size_t treeBytes_ = 0, imageBytes_ = 0;
+};
+
+}  // namespace rt
