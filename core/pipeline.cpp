@@ -106,6 +106,7 @@ std::vector<std::string> featureDefines(const Scene& scene, const RenderOptions&
     d.push_back("RT_BRANCH=" + std::to_string(c));
     d.push_back("RT_MAX_BOUNCES=" + std::to_string(o.bounces));
     d.push_back("RT_TREE_NODES=" + std::to_string(treeNodeCount(c, o.bounces)));
+    if (o.countRays) d.push_back("RT_COUNT_RAYS");
     if (o.robustSphere) d.push_back("RT_ROBUST_SPHERE");
     if (o.watertight) d.push_back("RT_WATERTIGHT");
     if (o.scaledOffset) d.push_back("RT_SCALED_OFFSET");
@@ -165,6 +166,17 @@ DeviceScene::DeviceScene(ClContext& cl, const Scene& scene, RenderOptions::Accel
     materials_ = upload(cl, scene.materials, "the material buffer");
     cubemap_ = upload(cl, scene.environment.cubemap, "the cubemap buffer");
     bvh_ = upload(cl, accel.bvh, "the BVH buffer");
+    rayCounts_ = cl.allocate(4 * sizeof(cl_uint), CL_MEM_READ_WRITE, "the ray counters");
+}
+
+void DeviceScene::resetRayCounts(cl::CommandQueue& queue) const {
+    queue.enqueueFillBuffer(rayCounts_, cl_uint(0), 0, 4 * sizeof(cl_uint));
+}
+
+std::array<uint64_t, 4> DeviceScene::readRayCounts(cl::CommandQueue& queue) const {
+    cl_uint c[4];
+    queue.enqueueReadBuffer(rayCounts_, CL_TRUE, 0, sizeof c, c);
+    return {c[0], c[1], c[2], c[3]};
 }
 
 void DeviceScene::setArgs(cl::Kernel& k, const dev::RenderSettings& settings) const {
@@ -176,7 +188,8 @@ void DeviceScene::setArgs(cl::Kernel& k, const dev::RenderSettings& settings) co
     k.setArg(5, materials_);
     k.setArg(6, cubemap_);
     k.setArg(7, bvh_);
-    k.setArg(8, sizeof settings, &settings);
+    k.setArg(8, rayCounts_);
+    k.setArg(9, sizeof settings, &settings);
 }
 
 Launch launch2d(const DeviceInfo& device, int width, int rows) {

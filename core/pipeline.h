@@ -3,6 +3,8 @@
 // each program model no more than its scene needs.
 #pragma once
 
+#include <array>
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <utility>
@@ -29,6 +31,10 @@ struct FrameStats {
     int branching = 1;          // C
     int tiles = 1;              // row tiles the frame was split into
     std::string program;        // how the program was obtained: built, disk or memory cache
+    // Rays traced on the device by type (primary, reflection, refraction, shadow); filled only
+    // when RenderOptions::countRays is set, because the atomics cost time.
+    std::array<uint64_t, 4> rays{};
+    bool raysCounted = false;
     void addKernel(const std::string& name, double ms);
 };
 
@@ -69,7 +75,13 @@ class DeviceScene {
 public:
     DeviceScene(ClContext& cl, const Scene& scene, RenderOptions::Accel accel);
     // Sets kernel arguments 0..8 (RT_SCENE_PARAMS) with the given settings.
+    // Sets kernel arguments 0..9 (RT_SCENE_PARAMS) with the given settings; the kernel's own
+    // arguments start at kFirstKernelArg.
     void setArgs(cl::Kernel& kernel, const dev::RenderSettings& settings) const;
+    static constexpr int kFirstKernelArg = 10;
+    // Device ray counters (RenderOptions::countRays): zero them before a frame, read them after.
+    void resetRayCounts(cl::CommandQueue& queue) const;
+    std::array<uint64_t, 4> readRayCounts(cl::CommandQueue& queue) const;
     // True when this copy was made from `scene` with `accel` (by address: scenes are not mutated
     // while a pipeline holds them, except the camera, which travels in the settings).
     bool matches(const Scene& scene, RenderOptions::Accel accel) const {
@@ -79,7 +91,8 @@ public:
 private:
     const Scene* source_;
     RenderOptions::Accel accel_;
-    cl::Buffer spheres_, planes_, triangles_, meshes_, lights_, materials_, cubemap_, bvh_;
+    cl::Buffer spheres_, planes_, triangles_, meshes_, lights_, materials_, cubemap_, bvh_,
+        rayCounts_;
 };
 
 // 2D launch geometry: global size rounded up to the local size on GPUs, runtime's choice on CPUs.

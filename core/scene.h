@@ -33,6 +33,7 @@ struct RenderOptions {
     size_t memoryBudget = 0;        // wavefront: bytes the global ray tree may use (0 = device max)
     enum class Accel { None, Bv, Grid, Bvh };
     Accel accel = Accel::Bv;        // how rays find triangles (issue 5)
+    bool countRays = false;         // count rays by type on the device (slower; benchmarks)
 };
 
 struct Environment {

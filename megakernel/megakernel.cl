@@ -11,13 +11,13 @@
 inline float3 Megakernel_Sample(const SceneData* sc, int x, int y, int sample) {
     Node nodes[RT_TREE_NODES];
     float3 colors[RT_TREE_NODES];
-    nodes[0] = RayTree_TraceNode(sc, RayTree_PrimaryRay(sc, x, y, sample));
+    nodes[0] = RayTree_TraceNode(sc, RayTree_PrimaryRay(sc, x, y, sample), RT_RAY_PRIMARY);
     for (int i = 1; i < RT_TREE_NODES; ++i) {
         int parent = (i - 1) / RT_BRANCH;
         Ray ray;
         if (RayTree_ChildRay(sc, &nodes[parent], RayTree_Depth(parent), i - 1 - parent * RT_BRANCH,
                              &ray))
-            nodes[i] = RayTree_TraceNode(sc, ray);
+            nodes[i] = RayTree_TraceNode(sc, ray, RayTree_SlotType(i));
         else
             nodes[i].flags = 0;
     }
@@ -30,6 +30,7 @@ typedef struct Pending {
     Ray ray;
     float3 weight;
     int depth;
+    int type;  // RT_RAY_*
 } Pending;
 
 inline float3 Megakernel_Sample(const SceneData* sc, int x, int y, int sample) {
@@ -38,11 +39,12 @@ inline float3 Megakernel_Sample(const SceneData* sc, int x, int y, int sample) {
     stack[top].ray = RayTree_PrimaryRay(sc, x, y, sample);
     stack[top].weight = (float3)(1.0f, 1.0f, 1.0f);
     stack[top].depth = 0;
+    stack[top].type = RT_RAY_PRIMARY;
     ++top;
     float3 color = (float3)(0.0f, 0.0f, 0.0f);
     while (top > 0) {
         Pending p = stack[--top];
-        Node node = RayTree_TraceNode(sc, p.ray);
+        Node node = RayTree_TraceNode(sc, p.ray, p.type);
         if (node.kind == RT_KIND_MISS) {
             color += p.weight * Shade_Environment(sc, p.ray.dir);
             continue;
@@ -58,12 +60,14 @@ inline float3 Megakernel_Sample(const SceneData* sc, int x, int y, int sample) {
             stack[top].ray = refr;
             stack[top].weight = p.weight * ((1.0f - F) * (1.0f - o));
             stack[top].depth = p.depth + 1;
+            stack[top].type = RT_RAY_REFRACTION;
             ++top;
         }
         if (hasRefl) {
             stack[top].ray = refl;
             stack[top].weight = p.weight * F;
             stack[top].depth = p.depth + 1;
+            stack[top].type = RT_RAY_REFLECTION;
             ++top;
         }
     }

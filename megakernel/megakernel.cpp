@@ -42,17 +42,18 @@ Image MegakernelPipeline::render(const Scene& scene, const RenderOptions& o) {
     Launch range = launch2d(cl_.device(), o.width, o.height);
     Image out(o.width, o.height);
     try {
+        if (o.countRays) scene_->resetRayCounts(cl_.queue());
         if (o.adaptiveAa && o.aa > 1) {
             cl::Kernel centers(program, "Megakernel_RenderCenters");
             scene_->setArgs(centers, settings);
-            centers.setArg(9, centers_);
+            centers.setArg(DeviceScene::kFirstKernelArg, centers_);
             cl::Event e1, e2;
             cl_.queue().enqueueNDRangeKernel(centers, cl::NullRange, range.global, range.local,
                                              nullptr, &e1);
             cl::Kernel edges(program, "Megakernel_RenderEdges");
             scene_->setArgs(edges, settings);
-            edges.setArg(9, centers_);
-            edges.setArg(10, image_);
+            edges.setArg(DeviceScene::kFirstKernelArg, centers_);
+            edges.setArg(DeviceScene::kFirstKernelArg + 1, image_);
             std::vector<cl::Event> wait{e1};
             cl_.queue().enqueueNDRangeKernel(edges, cl::NullRange, range.global, range.local,
                                              &wait, &e2);
@@ -62,7 +63,7 @@ Image MegakernelPipeline::render(const Scene& scene, const RenderOptions& o) {
         } else {
             cl::Kernel kernel(program, "Megakernel_Render");
             scene_->setArgs(kernel, settings);
-            kernel.setArg(9, image_);
+            kernel.setArg(DeviceScene::kFirstKernelArg, image_);
             cl::Event e;
             cl_.queue().enqueueNDRangeKernel(kernel, cl::NullRange, range.global, range.local,
                                              nullptr, &e);
@@ -70,6 +71,10 @@ Image MegakernelPipeline::render(const Scene& scene, const RenderOptions& o) {
             stats_.addKernel("megakernel", eventMs(e));
         }
         cl_.queue().enqueueReadBuffer(image_, CL_TRUE, 0, bytes, out.rgb.data());
+        if (o.countRays) {
+            stats_.rays = scene_->readRayCounts(cl_.queue());
+            stats_.raysCounted = true;
+        }
     } catch (const cl::Error& e) {
         throwClError(e, "megakernel frame on " + cl_.device().name);
     }

@@ -84,6 +84,7 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
     std::vector<cl::Event> events;  // trace, image, reset per pass, for the profile
     Image out(o.width, o.height);
     try {
+        if (o.countRays) scene_->resetRayCounts(cl_.queue());
         cl::Event last;
         bool haveLast = false;
         for (int row0 = 0; row0 < o.height; row0 += rows) {
@@ -94,10 +95,10 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
             for (int s = 0; s < samples; ++s) {
                 settings.sampleIndex = s;
                 scene_->setArgs(trace, settings);
-                trace.setArg(9, tree_);
+                trace.setArg(DeviceScene::kFirstKernelArg, tree_);
                 scene_->setArgs(image, settings);
-                image.setArg(9, tree_);
-                image.setArg(10, image_);
+                image.setArg(DeviceScene::kFirstKernelArg, tree_);
+                image.setArg(DeviceScene::kFirstKernelArg + 1, image_);
                 cl::Event et, ei, er;
                 std::vector<cl::Event> waitTrace;
                 if (haveLast) waitTrace.push_back(last);
@@ -116,6 +117,10 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
             }
         }
         cl_.queue().enqueueReadBuffer(image_, CL_TRUE, 0, imageBytes, out.rgb.data());
+        if (o.countRays) {
+            stats_.rays = scene_->readRayCounts(cl_.queue());
+            stats_.raysCounted = true;
+        }
         static const char* names[3] = {"trace", "image", "reset"};
         for (size_t i = 0; i < events.size(); ++i) stats_.addKernel(names[i % 3], eventMs(events[i]));
     } catch (const cl::Error& e) {

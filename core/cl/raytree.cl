@@ -15,8 +15,16 @@ inline int RayTree_Depth(int i) {
 #endif
 }
 
-// Traces one ray: the closest hit, its facing normal, and its shadow-ray occlusion counts.
-inline Node RayTree_TraceNode(const SceneData* sc, Ray ray) {
+// Ray type of heap slot i > 0: slot 0 of a parent is its reflection, slot 1 its refraction.
+inline int RayTree_SlotType(int i) {
+    return (i - 1) % RT_BRANCH == 0 ? RT_RAY_REFLECTION : RT_RAY_REFRACTION;
+}
+
+// Traces one ray of the given RT_RAY_* type: the closest hit, its facing normal, and its
+// shadow-ray occlusion counts.
+inline Node RayTree_TraceNode(const SceneData* sc, Ray ray, int type) {
+    RT_COUNT_RAY(sc, type);
+    (void)type;
     Hit hit = Scene_Intersect(sc, ray, INFINITY);
     Node n;
     n.dir = F3(ray.dir);

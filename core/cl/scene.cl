@@ -14,15 +14,29 @@ typedef struct SceneData {
     global const Material* materials;
     global const float* cubemap;
     global const BvhNode* bvh;
+    global uint* rayCounts;  // RT_RAY_* counters, written only when RT_COUNT_RAYS is defined
     RenderSettings settings;
 } SceneData;
+
+// Ray types for the device-side ray counters.
+#define RT_RAY_PRIMARY 0
+#define RT_RAY_REFLECTION 1
+#define RT_RAY_REFRACTION 2
+#define RT_RAY_SHADOW 3
+
+#ifdef RT_COUNT_RAYS
+#define RT_COUNT_RAY(sc, type) atomic_inc(&(sc)->rayCounts[type])
+#else
+#define RT_COUNT_RAY(sc, type)
+#endif
 
 // Kernel parameters and their packing into a SceneData; every kernel takes the scene this way.
 #define RT_SCENE_PARAMS                                                                     \
     global const Sphere *spheres, global const Plane *planes,                               \
         global const Triangle *triangles, global const MeshInstance *meshes,                \
         global const Light *lights, global const Material *materials,                       \
-        global const float *cubemap, global const BvhNode *bvh, const RenderSettings settings
+        global const float *cubemap, global const BvhNode *bvh, global uint *rayCounts,      \
+        const RenderSettings settings
 
 #define RT_SCENE_INIT(sc)          \
     SceneData sc;                  \
@@ -34,6 +48,7 @@ typedef struct SceneData {
     sc.materials = materials;      \
     sc.cubemap = cubemap;          \
     sc.bvh = bvh;                  \
+    sc.rayCounts = rayCounts;      \
     sc.settings = settings
 
 typedef struct Hit {

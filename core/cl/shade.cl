@@ -115,6 +115,7 @@ inline int Shade_Occlusion(const SceneData* sc, float3 p, float3 n, int j) {
         }
         float3 v = q - origin;
         float len = length(v);
+        RT_COUNT_RAY(sc, RT_RAY_SHADOW);
         if (Scene_Occluded(sc, makeRay(origin, v / len), len)) ++occluded;
     }
     return occluded;
