@@ -27,6 +27,7 @@ struct DeviceInfo {
     cl_uint computeUnits = 0;
     cl_ulong globalMem = 0, maxAlloc = 0, localMem = 0;
     size_t maxWorkGroup = 0;
+    bool correctlyRoundedDivSqrt = false;  // supports -cl-fp32-correctly-rounded-divide-sqrt
     bool isGpu() const { return type == "GPU"; }
     std::string label() const;  // "NVIDIA H100 (NVIDIA CUDA, driver 550.54)"
 };
