@@ -8,6 +8,9 @@ namespace rt::cli {
 
 void addRender(CLI::App& app);
 void addDevices(CLI::App& app);
+void addCompare(CLI::App& app);  // apps/compare.cpp
+bool compareParsed();
+int runCompare();
 void addSweep(CLI::App& app);  // apps/sweep.cpp
 int run(CLI::App& app);
 int runSweepCommand();  // apps/sweep.cpp

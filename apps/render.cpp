@@ -116,6 +116,7 @@ int run(CLI::App& app) {
     (void)app;
     if (renderCmd && renderCmd->parsed()) return runRender();
     if (devicesCmd && devicesCmd->parsed()) return runDevices();
+    if (compareParsed()) return runCompare();
     return runSweepCommand();
 }
 

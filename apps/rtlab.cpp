@@ -18,6 +18,7 @@ int main(int argc, char** argv) {
     app.require_subcommand(1);
     rt::cli::addRender(app);
     rt::cli::addDevices(app);
+    rt::cli::addCompare(app);
     rt::cli::addSweep(app);
     try {
         app.parse(argc, argv);

@@ -1,5 +1,6 @@
 #include "core/pipeline.h"
 
+#include <chrono>
 #include <cstring>
 
 #include "core/accel.h"
@@ -46,7 +47,11 @@ public:
         stats_ = {};
         stats_.branching = scene.branching();
         stats_.treeNodes = treeNodeCount(stats_.branching, options.bounces);
-        return renderReference(scene, options);
+        auto t0 = std::chrono::steady_clock::now();
+        Image image = renderReference(scene, options);
+        stats_.hostMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
+                            .count();
+        return image;
     }
 };
 
@@ -110,11 +115,12 @@ std::vector<std::string> featureDefines(const Scene& scene, const RenderOptions&
     if (o.robustSphere) d.push_back("RT_ROBUST_SPHERE");
     if (o.watertight) d.push_back("RT_WATERTIGHT");
     if (o.scaledOffset) d.push_back("RT_SCALED_OFFSET");
-    if (!scene.triangles.empty()) {
-        if (o.accel == RenderOptions::Accel::Bv) d.push_back("RT_ACCEL_BV");
-        if (o.accel == RenderOptions::Accel::Grid) d.push_back("RT_ACCEL_GRID");
-        if (o.accel == RenderOptions::Accel::Bvh) d.push_back("RT_ACCEL_BVH");
-    }
+    // The grid and the BVH hold spheres and triangles; bv bounds meshes. Without anything to
+    // hold, the define is left out and the program loops over what there is.
+    bool prims = !scene.spheres.empty() || !scene.triangles.empty();
+    if (o.accel == RenderOptions::Accel::Bv && !scene.triangles.empty()) d.push_back("RT_ACCEL_BV");
+    if (o.accel == RenderOptions::Accel::Grid && prims) d.push_back("RT_ACCEL_GRID");
+    if (o.accel == RenderOptions::Accel::Bvh && prims) d.push_back("RT_ACCEL_BVH");
     return d;
 }
 
@@ -142,9 +148,10 @@ dev::RenderSettings makeSettings(const Scene& scene, const RenderOptions& o) {
 }
 
 template <typename T>
-static cl::Buffer upload(ClContext& cl, const std::vector<T>& v, const char* what) {
+static cl::Buffer upload(ClContext& cl, const std::vector<T>& v, const char* what, size_t& total) {
     size_t bytes = v.size() * sizeof(T);
     cl::Buffer b = cl.allocate(bytes, CL_MEM_READ_ONLY, what);
+    total += bytes;
     if (bytes) {
         try {
             cl.queue().enqueueWriteBuffer(b, CL_TRUE, 0, bytes, v.data());
@@ -156,18 +163,30 @@ static cl::Buffer upload(ClContext& cl, const std::vector<T>& v, const char* wha
 }
 
 DeviceScene::DeviceScene(ClContext& cl, const Scene& scene, RenderOptions::Accel a)
-    : source_(&scene), accel_(a) {
+    : cl_(cl), source_(&scene), accel_(a) {
     AccelData accel = buildAccel(scene, a);
-    spheres_ = upload(cl, scene.spheres, "the sphere buffer");
-    planes_ = upload(cl, scene.planes, "the plane buffer");
-    triangles_ = upload(cl, accel.triangles, "the triangle buffer");
-    meshes_ = upload(cl, accel.meshes, "the mesh buffer");
-    lights_ = upload(cl, scene.lights, "the light buffer");
-    materials_ = upload(cl, scene.materials, "the material buffer");
-    cubemap_ = upload(cl, scene.environment.cubemap, "the cubemap buffer");
-    bvh_ = upload(cl, accel.bvh, "the BVH buffer");
-    rayCounts_ = cl.allocate(4 * sizeof(cl_uint), CL_MEM_READ_WRITE, "the ray counters");
+    stats_ = accel.stats;
+    grid_ = accel.grid;
+    try {
+        spheres_ = upload(cl, accel.spheres, "the sphere buffer", bytes_);
+        planes_ = upload(cl, scene.planes, "the plane buffer", bytes_);
+        triangles_ = upload(cl, accel.triangles, "the triangle buffer", bytes_);
+        meshes_ = upload(cl, accel.meshes, "the mesh buffer", bytes_);
+        kdops_ = upload(cl, accel.kdops, "the bounding-volume buffer", bytes_);
+        lights_ = upload(cl, scene.lights, "the light buffer", bytes_);
+        materials_ = upload(cl, scene.materials, "the material buffer", bytes_);
+        cubemap_ = upload(cl, scene.environment.cubemap, "the cubemap buffer", bytes_);
+        bvh_ = upload(cl, accel.bvh, "the BVH buffer", bytes_);
+        cells_ = upload(cl, accel.cells, "the grid buffer", bytes_);
+        rayCounts_ = cl.allocate(4 * sizeof(cl_uint), CL_MEM_READ_WRITE, "the ray counters");
+        bytes_ += 4 * sizeof(cl_uint);
+    } catch (...) {
+        cl_.release(bytes_);
+        throw;
+    }
 }
+
+DeviceScene::~DeviceScene() { cl_.release(bytes_); }
 
 void DeviceScene::resetRayCounts(cl::CommandQueue& queue) const {
     queue.enqueueFillBuffer(rayCounts_, cl_uint(0), 0, 4 * sizeof(cl_uint));
@@ -180,16 +199,20 @@ std::array<uint64_t, 4> DeviceScene::readRayCounts(cl::CommandQueue& queue) cons
 }
 
 void DeviceScene::setArgs(cl::Kernel& k, const dev::RenderSettings& settings) const {
+    dev::RenderSettings s = settings;
+    s.grid = grid_;
     k.setArg(0, spheres_);
     k.setArg(1, planes_);
     k.setArg(2, triangles_);
     k.setArg(3, meshes_);
-    k.setArg(4, lights_);
-    k.setArg(5, materials_);
-    k.setArg(6, cubemap_);
-    k.setArg(7, bvh_);
-    k.setArg(8, rayCounts_);
-    k.setArg(9, sizeof settings, &settings);
+    k.setArg(4, kdops_);
+    k.setArg(5, lights_);
+    k.setArg(6, materials_);
+    k.setArg(7, cubemap_);
+    k.setArg(8, bvh_);
+    k.setArg(9, cells_);
+    k.setArg(10, rayCounts_);
+    k.setArg(11, sizeof s, &s);
 }
 
 Launch launch2d(const DeviceInfo& device, int width, int rows) {

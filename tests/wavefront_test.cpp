@@ -3,6 +3,7 @@
 // memory budget; the error when not even one row fits.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstring>
 
 #include "core/error.h"
@@ -38,6 +39,7 @@ TEST_P(WaveVsMega, SameImageAtEveryBounceLimit) {
                 o.aa = aa;
                 o.shadowSamples = soft ? 4 : 1;
                 Image m = mega.render(scene, o), w = wave.render(scene, o);
+                for (float v : m.rgb) ASSERT_TRUE(std::isfinite(v)) << GetParam() << " B=" << b;
                 ImageDiff d = compareImages(m, w, 1e-5, false);
                 EXPECT_LE(d.maxAbs, 1e-5) << GetParam() << " B=" << b << " aa=" << aa
                                           << " soft=" << soft;
