@@ -1,0 +1,123 @@
+// The OpenCL runtime: program cache, build logs, error names, checked allocations, device choice.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+
+#include "core/cl_runtime.h"
+#include "core/error.h"
+#include "core/kernel_sources.h"
+#include "test_device.h"
+
+namespace rt {
+namespace {
+
+namespace fs = std::filesystem;
+
+TEST(Runtime, ErrorNames) {
+    EXPECT_STREQ(clErrorName(CL_OUT_OF_RESOURCES), "CL_OUT_OF_RESOURCES");
+    EXPECT_STREQ(clErrorName(CL_INVALID_WORK_GROUP_SIZE), "CL_INVALID_WORK_GROUP_SIZE");
+    EXPECT_STREQ(clErrorName(-9999), "CL_UNKNOWN_ERROR");
+    try {
+        throwClError(cl::Error(CL_MEM_OBJECT_ALLOCATION_FAILURE, "clCreateBuffer"), "allocating x");
+        FAIL();
+    } catch (const Error& e) {
+        EXPECT_STREQ(e.what(),
+                     "allocating x: clCreateBuffer failed with CL_MEM_OBJECT_ALLOCATION_FAILURE (-4)");
+    }
+}
+
+TEST(Runtime, RepeatBuildsComeFromTheCache) {
+    fs::path dir = fs::path(::testing::TempDir()) / "rtlab_cache_test";
+    fs::remove_all(dir);
+    setenv("RTLAB_CACHE_DIR", dir.c_str(), 1);
+    DeviceInfo d = test::device().device();
+    {
+        ClContext cl(d);
+        cl.program("probe.cl", {"RT_HAS_TRIANGLES"});
+        EXPECT_EQ(cl.lastProgramSource(), "built");
+        cl.program("probe.cl", {"RT_HAS_TRIANGLES"});
+        EXPECT_EQ(cl.lastProgramSource(), "memory");
+        cl.program("probe.cl", {"RT_HAS_TRIANGLES", "RT_WATERTIGHT"});  // other defines: rebuild
+        EXPECT_EQ(cl.lastProgramSource(), "built");
+    }
+    ClContext fresh(d);  // a new process would see the same: the binary is on disk
+    fresh.program("probe.cl", {"RT_HAS_TRIANGLES"});
+    EXPECT_EQ(fresh.lastProgramSource(), "disk");
+    unsetenv("RTLAB_CACHE_DIR");
+    fs::remove_all(dir);
+}
+
+TEST(Runtime, BuildFailureCarriesTheBuildLog) {
+    // A copy of the kernel tree with a syntax error injected into intersect.cl.
+    fs::path dir = fs::path(::testing::TempDir()) / "rtlab_broken_kernels";
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    for (const EmbeddedSource& s : embeddedKernelSources()) {
+        std::ofstream out(dir / s.name);
+        out << s.text;
+        if (std::string(s.name) == "intersect.cl") out << "\nthis is not OpenCL C;\n";
+    }
+    ClContext cl(test::device().device(), KernelSources(dir));
+    try {
+        cl.program("probe.cl", {});
+        FAIL() << "the broken source built";
+    } catch (const Error& e) {
+        std::string msg = e.what();
+        EXPECT_NE(msg.find("building probe.cl"), std::string::npos) << msg;
+        EXPECT_NE(msg.find("CL_BUILD_PROGRAM_FAILURE"), std::string::npos) << msg;
+        EXPECT_NE(msg.find("intersect.cl"), std::string::npos) << "log names the file: " << msg;
+    }
+    fs::remove_all(dir);
+}
+
+TEST(Runtime, KernelDirMustExist) {
+    EXPECT_THROW(KernelSources("/no/such/dir"), Error);
+    KernelSources embedded;
+    EXPECT_THROW(embedded.file("nope.cl"), Error);
+    std::string resolved = embedded.resolve("megakernel.cl");
+    EXPECT_NE(resolved.find("#line 1 \"types.h\""), std::string::npos);
+    EXPECT_EQ(resolved.find("#include \"raytree.cl\""), std::string::npos);
+}
+
+TEST(Runtime, AllocationsAreCheckedBeforeTheyAreMade) {
+    ClContext& cl = test::device();
+    size_t tooBig = size_t(cl.device().maxAlloc) + 1;
+    try {
+        cl.allocate(tooBig, CL_MEM_READ_WRITE, "the test buffer");
+        FAIL();
+    } catch (const Error& e) {
+        std::string msg = e.what();
+        EXPECT_NE(msg.find("the test buffer"), std::string::npos) << msg;
+        EXPECT_NE(msg.find("CL_DEVICE_MAX_MEM_ALLOC_SIZE"), std::string::npos) << msg;
+    }
+    EXPECT_NO_THROW(cl.allocate(1024, CL_MEM_READ_WRITE, "a small buffer"));
+}
+
+TEST(Runtime, DeviceSelection) {
+    const char* saved = std::getenv("RTLAB_DEVICE");
+    std::string restore = saved ? saved : "";
+    std::vector<DeviceInfo> all = listDevices();
+    ASSERT_FALSE(all.empty());
+    EXPECT_EQ(selectDevice("0").name, all[0].name);
+    EXPECT_EQ(selectDevice("cpu").type, "CPU");
+    EXPECT_THROW(selectDevice("12345"), Error);
+    EXPECT_THROW(selectDevice("no-such-device-name"), Error);
+    setenv("RTLAB_DEVICE", "cpu", 1);
+    EXPECT_EQ(selectDevice("").type, "CPU");
+    setenv("RTLAB_DEVICE", "no-such-device-name", 1);
+    try {
+        selectDevice("");
+        FAIL();
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("RTLAB_DEVICE"), std::string::npos) << e.what();
+    }
+    if (restore.empty())
+        unsetenv("RTLAB_DEVICE");
+    else
+        setenv("RTLAB_DEVICE", restore.c_str(), 1);
+}
+
+}  // namespace
+}  // namespace rt
