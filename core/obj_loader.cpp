@@ -79,6 +79,10 @@ std::string readText(const fs::path& path) {
     return text;
 }
 
+std::string counted(long long n, const char* one, const char* many) {
+    return std::to_string(n) + " " + (n == 1 ? one : many);
+}
+
 bool isSpace(char c) { return c == ' ' || c == '\t'; }
 
 // Splits a line into space/tab separated tokens (tinyobjloader also stops a token at '\r').
@@ -190,7 +194,8 @@ class Scanner {
             const bool face = kind == LineKind::kFace;
             const std::size_t n = t.size() - 1;
             if (face && n < 3)
-                error(lineNo, "face has " + std::to_string(n) + " vertices, needs at least 3");
+                error(lineNo,
+                      "face has " + counted(n, "vertex", "vertices") + ", needs at least 3");
             if (face && n > std::size_t(kMaxFaceVertices))
                 error(lineNo, "face has " + std::to_string(n) + " vertices (at most " +
                                   std::to_string(kMaxFaceVertices) + ")");
@@ -213,6 +218,7 @@ class Scanner {
 
     // One face corner: v, v/t, v//n or v/t/n.
     void corner(std::string_view s, long long lineNo) {
+        if (std::count(s.begin(), s.end(), '/') > 2) error(lineNo, "bad face corner " + quoted(s));
         std::size_t slash1 = s.find('/');
         checkIndex(s.substr(0, slash1), 0, lineNo, s);
         if (slash1 == std::string_view::npos) return;
@@ -220,23 +226,17 @@ class Scanner {
         std::size_t slash2 = rest.find('/');
         std::string_view tex = rest.substr(0, slash2);
         if (!tex.empty() || slash2 == std::string_view::npos) checkIndex(tex, 1, lineNo, s);
-        if (slash2 == std::string_view::npos) return;
-        std::string_view normal = rest.substr(slash2 + 1);
-        if (normal.find('/') != std::string_view::npos)
-            error(lineNo, "bad face corner " + quoted(s));
-        checkIndex(normal, 2, lineNo, s);
+        if (slash2 != std::string_view::npos) checkIndex(rest.substr(slash2 + 1), 2, lineNo, s);
     }
 
     void checkIndex(std::string_view s, int kind, long long lineNo, std::string_view corner) {
         long long value = 0;
         const char* end = s.data() + s.size();
         auto [ptr, ec] = std::from_chars(s.data(), end, value);
-        if (s.empty() || ptr != end) {
-            if (ec == std::errc::result_out_of_range)
-                error(lineNo,
-                      std::string(kKindNames[kind]) + " index " + quoted(s) + " out of range");
+        if (ec == std::errc::result_out_of_range && ptr == end)
+            error(lineNo, std::string(kKindNames[kind]) + " index " + quoted(s) + " out of range");
+        if (s.empty() || ec != std::errc() || ptr != end)
             error(lineNo, "bad face corner " + quoted(corner));
-        }
         if (value == 0)
             error(lineNo, std::string(kKindNames[kind]) + " index 0 in " + quoted(corner) +
                               " (OBJ indices start at 1)");
@@ -246,8 +246,9 @@ class Scanner {
                               std::to_string(count_[kind]) + " defined so far)");
         if (value > total_[kind])
             error(lineNo, std::string(kKindNames[kind]) + " index " + std::to_string(value) +
-                              " out of range (" + std::to_string(total_[kind]) + " " +
-                              kPlural[kind] + " in the file)");
+                              " out of range (" +
+                              counted(total_[kind], kKindNames[kind], kPlural[kind]) +
+                              " in the file)");
     }
 
     fs::path path_;

@@ -16,6 +16,7 @@
 #include <sstream>
 #include <string>
 #include <string_view>
+#include <unordered_map>
 #include <vector>
 
 #include "core/error.h"
@@ -25,7 +26,9 @@ namespace rt {
 namespace {
 
 namespace fs = std::filesystem;
-using Json = nlohmann::ordered_json;  // keeps materials in file order
+// Not ordered_json: its inserts are linear, so 65,535 materials took seconds. The parser
+// records the material names in file order instead.
+using Json = nlohmann::json;
 
 constexpr std::size_t kMaxSpheres = 1'000'000;
 constexpr std::size_t kMaxPlanes = 1'000;
@@ -71,11 +74,17 @@ std::size_t editDistance(std::string_view a, std::string_view b) {
     return row[b.size()];
 }
 
-// " (did you mean 'radius'?)" when one candidate is close.
+// " (did you mean 'radius'?)" when a candidate is a typo away or shares a 4-letter prefix.
 template <typename Names>
 std::string suggestion(const std::string& name, const Names& candidates) {
-    for (const auto& c : candidates)
-        if (editDistance(name, c) <= 2) return " (did you mean '" + std::string(c) + "'?)";
+    for (const auto& c : candidates) {
+        std::string_view cand(c);
+        std::size_t prefix = 0;
+        while (prefix < name.size() && prefix < cand.size() && name[prefix] == cand[prefix])
+            ++prefix;
+        if (editDistance(name, cand) <= 2 || prefix >= 4)
+            return " (did you mean '" + std::string(cand) + "'?)";
+    }
     return "";
 }
 
@@ -106,44 +115,86 @@ std::string lineColumn(const std::string& text, std::size_t at) {
     return "line " + std::to_string(line) + ", column " + std::to_string(at - lineStart + 1);
 }
 
-// Parses JSON (comments allowed); rejects duplicate keys, which nlohmann would silently merge.
-Json parseJson(const std::string& file, const std::string& text) {
+// nlohmann's DOM builder plus what it lacks: duplicate keys are errors (nlohmann keeps the last
+// one silently), and the keys of the top-level "materials" object are recorded in file order.
+// (The DOM *callback* parser would also do, but it rescans the parent container at every
+// object end: quadratic in the number of spheres or materials.)
+class CheckedSax : public nlohmann::detail::json_sax_dom_parser<Json> {
+    using Base = nlohmann::detail::json_sax_dom_parser<Json>;
+
+  public:
+    CheckedSax(Json& root, const std::string& file, std::vector<std::string>* materialOrder)
+        : Base(root, true), file_(file), materialOrder_(materialOrder) {}
+
+    bool null() { return value() && Base::null(); }
+    bool boolean(bool v) { return value() && Base::boolean(v); }
+    bool number_integer(Json::number_integer_t v) { return value() && Base::number_integer(v); }
+    bool number_unsigned(Json::number_unsigned_t v) { return value() && Base::number_unsigned(v); }
+    bool number_float(Json::number_float_t v, const std::string& s) {
+        return value() && Base::number_float(v, s);
+    }
+    bool string(std::string& v) { return value() && Base::string(v); }
+    bool binary(Json::binary_t& v) { return value() && Base::binary(v); }
+    bool start_object(std::size_t n) {
+        value();
+        stack_.push_back({false, 0, 0, {}, {}});
+        return Base::start_object(n);
+    }
+    bool start_array(std::size_t n) {
+        value();
+        stack_.push_back({true, 0, 0, {}, {}});
+        return Base::start_array(n);
+    }
+    bool end_object() {
+        stack_.pop_back();
+        return Base::end_object();
+    }
+    bool end_array() {
+        stack_.pop_back();
+        return Base::end_array();
+    }
+    bool key(std::string& k) {
+        Frame& top = stack_.back();
+        top.key = k;
+        if (!top.keys.insert(k).second)
+            throw Error(file_ + ": " + pointer() + ": duplicate key '" + printable(k) + "'");
+        if (stack_.size() == 2 && stack_[0].key == "materials") materialOrder_->push_back(k);
+        return Base::key(k);
+    }
+
+  private:
     struct Frame {
         bool array;
-        std::size_t index = 0;
-        std::string key;
+        std::size_t index, next;  // arrays: the current element, the next one
+        std::string key;          // objects: the current key, and all keys so far
         std::set<std::string> keys;
     };
-    std::vector<Frame> stack;
-    auto pointer = [&](std::size_t frames) {
-        std::string p;
-        for (std::size_t i = 0; i < frames; ++i)
-            p += "/" + (stack[i].array ? std::to_string(stack[i].index) : escapeKey(stack[i].key));
-        return p.empty() ? std::string("/") : p;
-    };
-    auto completed = [&] {
-        if (!stack.empty() && stack.back().array) ++stack.back().index;
-    };
-    auto callback = [&](int, Json::parse_event_t event, Json& value) {
-        using E = Json::parse_event_t;
-        if (event == E::object_start || event == E::array_start) {
-            stack.push_back({event == E::array_start, 0, {}, {}});
-        } else if (event == E::key) {
-            Frame& top = stack.back();
-            top.key = value.get<std::string>();
-            if (!top.keys.insert(top.key).second)
-                throw Error(file + ": " + pointer(stack.size() - 1) + ": duplicate key '" +
-                            printable(top.key) + "'");
-        } else if (event == E::object_end || event == E::array_end) {
-            stack.pop_back();
-            completed();
-        } else {
-            completed();
-        }
+
+    bool value() {  // a value starts: inside an array it takes the next index
+        if (!stack_.empty() && stack_.back().array) stack_.back().index = stack_.back().next++;
         return true;
-    };
+    }
+    std::string pointer() const {  // of the innermost container
+        std::string p;
+        for (std::size_t i = 0; i + 1 < stack_.size(); ++i)
+            p += "/" +
+                 (stack_[i].array ? std::to_string(stack_[i].index) : escapeKey(stack_[i].key));
+        return p.empty() ? std::string("/") : p;
+    }
+
+    const std::string& file_;
+    std::vector<std::string>* materialOrder_;
+    std::vector<Frame> stack_;
+};
+
+// Parses JSON (comments allowed) into `json`; syntax errors name the line and column.
+Json parseJson(const std::string& file, const std::string& text,
+               std::vector<std::string>* materialOrder) {
+    Json json;
     try {
-        return Json::parse(text, callback, true, /*ignore_comments=*/true);
+        CheckedSax sax(json, file, materialOrder);
+        Json::sax_parse(text, &sax, Json::input_format_t::json, true, /*ignore_comments=*/true);
+        return json;
     } catch (const Json::parse_error& e) {
         std::string what = e.what();
         std::size_t at = what.find(": ", what.find("parse error"));
@@ -281,7 +332,7 @@ class Loader {
 
     Scene load() {
         const std::string text = readFile(path_);
-        const Json json = parseJson(file_, text);
+        const Json json = parseJson(file_, text, &materialOrder_);
         Node root(json, "", file_);
         root.object({"description", "camera", "materials", "spheres", "planes", "triangles",
                      "meshes", "lights", "environment", "render"});
@@ -335,8 +386,8 @@ class Loader {
         if (n.json().size() > RT_MAX_MATERIALS)
             n.fail("too many materials: " + std::to_string(n.json().size()) + " (at most " +
                    std::to_string(RT_MAX_MATERIALS) + ")");
-        for (const auto& [name, value] : n.json().items()) {
-            Node m(value, n.pointer() + "/" + escapeKey(name), file_);
+        for (const std::string& name : materialOrder_) {
+            Node m(n.json().at(name), n.pointer() + "/" + escapeKey(name), file_);
             if (name.empty()) m.fail("material name must not be empty");
             m.object(
                 {"ambient", "diffuse", "specular", "exponent", "reflectance", "opacity", "ior"});
@@ -349,6 +400,7 @@ class Loader {
             mat.opacity = m.opt("opacity", 1.f, readUnit);
             mat.ior = m.opt("ior", 1.f, readPositive);
             scene_.materials.push_back(mat);
+            materialIndex_[name] = int(scene_.materialNames.size());
             scene_.materialNames.push_back(name);
         }
     }
@@ -356,8 +408,8 @@ class Loader {
     int material(const Node& obj) {
         Node n = obj.at("material");
         std::string name = n.string();
-        for (std::size_t i = 0; i < scene_.materialNames.size(); ++i)
-            if (scene_.materialNames[i] == name) return int(i);
+        auto it = materialIndex_.find(name);
+        if (it != materialIndex_.end()) return it->second;
         n.fail("unknown material '" + printable(name) + "'" +
                suggestion(name, scene_.materialNames));
     }
@@ -571,6 +623,8 @@ class Loader {
     std::string file_;
     fs::path dir_;
     const ImageReader& readImage_;
+    std::vector<std::string> materialOrder_;
+    std::unordered_map<std::string, int> materialIndex_;
     Scene scene_;
 };
 
