@@ -1,7 +1,13 @@
-// rtlab — acceleration structures over a scene's triangles (report 2.2): bounding volumes per
-// mesh, a uniform grid, and a BVH. Built on the host, traversed by core/cl/scene.cl.
+// rtlab — acceleration structures (report 2.2 and 3.6, issue 5), built on the host and traversed
+// by core/cl/accel.cl in both pipelines:
+//   none  preliminary checks only: the sphere "behind the ray" test and a bounding sphere per mesh
+//   bv    plus a 7-slab bounding volume per mesh (Kay-Kajiya), tested before its triangles
+//   grid  uniform grid over every sphere and triangle, 3D-DDA traversal
+//   bvh   binned-SAH BVH over every sphere and triangle, built with every core
+// Planes are infinite and always tested one by one.
 #pragma once
 
+#include <string>
 #include <vector>
 
 #include "core/scene.h"
@@ -11,13 +17,53 @@ namespace rt {
 const char* accelName(RenderOptions::Accel accel);
 RenderOptions::Accel parseAccel(const std::string& name);  // throws rt::Error
 
-// Triangles in the order the device sees them, and the acceleration records over them.
-struct AccelData {
-    std::vector<dev::Triangle> triangles;
-    std::vector<dev::MeshInstance> meshes;
-    std::vector<dev::BvhNode> bvh;
+// The structure a scene gets when neither the command line nor the scene file names one: none
+// for a handful of primitives, bv for a few small meshes, bvh for anything larger.
+RenderOptions::Accel defaultAccel(const Scene& scene);
+
+struct AccelStats {
+    std::string name;      // accelName
+    double buildMs = 0;    // host time to build the structure (wall clock)
+    long long nodes = 0;   // bvh: nodes; grid: cells; bv: slab volumes; none: 0
+    size_t bytes = 0;      // device bytes of the structure (nodes, cells and references)
+    std::string detail;    // e.g. "64x32x64 cells, 1.2 refs/primitive" or "depth 24, 4.1 prims/leaf"
 };
 
+// Spheres and triangles in the order the device sees them, and the records over them. The bvh
+// mode reorders both arrays leaf by leaf; *Source maps each device index to the scene's.
+struct AccelData {
+    std::vector<dev::Sphere> spheres;
+    std::vector<dev::Triangle> triangles;
+    std::vector<dev::MeshInstance> meshes;  // bounding spheres padded against rounding
+    std::vector<dev::Kdop> kdops;           // bv: one per mesh
+    std::vector<dev::BvhNode> bvh;          // bvh: root at 0
+    dev::Grid grid{};                       // grid: the cell layout of `cells`
+    std::vector<int> cells;                 // grid: cell c's refs are cells[cells[c]..cells[c+1])
+    std::vector<int> sphereSource, triangleSource;
+    AccelStats stats;
+};
+
+// A primitive reference in grid cells: a triangle index t >= 0, or a sphere s as ~s (< 0).
+inline int sphereRef(int s) { return ~s; }
+
 AccelData buildAccel(const Scene& scene, RenderOptions::Accel accel);
+
+// Builders, one file each (core/accel_bvh.cpp, core/accel_grid.cpp). `threads` = 0 uses every
+// core; the result does not depend on it.
+void buildBvh(AccelData& data, unsigned threads = 0);
+void buildGrid(AccelData& data);
+
+// Every primitive's box, padded so that float rounding in the slab and DDA tests never culls a
+// primitive that its intersection routine would hit. Spheres first, then triangles.
+struct PrimBoxes {
+    std::vector<dev::Float3> lo, hi;
+    int sphereCount = 0;
+    float pad = 0;  // how far each box reaches past its primitive
+};
+PrimBoxes primitiveBoxes(const AccelData& data);
+
+// Checks the BVH invariants (each primitive in exactly one leaf, each child box inside its
+// parent's, one kind per leaf, every node reachable once); returns "" or the first violation.
+std::string checkBvh(const AccelData& data);
 
 }  // namespace rt

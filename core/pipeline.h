@@ -10,6 +10,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/accel.h"
 #include "core/cl_runtime.h"
 #include "core/image.h"
 #include "core/scene.h"
@@ -35,6 +36,9 @@ struct FrameStats {
     // when RenderOptions::countRays is set, because the atomics cost time.
     std::array<uint64_t, 4> rays{};
     bool raysCounted = false;
+    // The acceleration structure the frame traversed (DeviceScene::accelStats); its build time
+    // is that of the frame that built it, since later frames reuse the device copy.
+    AccelStats accel;
     void addKernel(const std::string& name, double ms);
 };
 
@@ -70,15 +74,17 @@ constexpr size_t kPrivateTreeLimit = 256 * 1024;
 // fits. `who` names the kernel ("megakernel tree layout", "wavefront image kernel").
 void checkPrivateTree(int branching, int bounces, const std::string& who, bool suggestWeighted);
 
-// The scene's object arrays on the device.
+// The scene's object arrays on the device, with the acceleration structure of one --accel mode.
 class DeviceScene {
 public:
     DeviceScene(ClContext& cl, const Scene& scene, RenderOptions::Accel accel);
-    // Sets kernel arguments 0..8 (RT_SCENE_PARAMS) with the given settings.
-    // Sets kernel arguments 0..9 (RT_SCENE_PARAMS) with the given settings; the kernel's own
-    // arguments start at kFirstKernelArg.
+    ~DeviceScene();
+    DeviceScene(const DeviceScene&) = delete;
+    DeviceScene& operator=(const DeviceScene&) = delete;
+    // Sets kernel arguments 0..11 (RT_SCENE_PARAMS in core/cl/scene.cl) with the given settings
+    // (their grid field is filled here); the kernel's own arguments start at kFirstKernelArg.
     void setArgs(cl::Kernel& kernel, const dev::RenderSettings& settings) const;
-    static constexpr int kFirstKernelArg = 10;
+    static constexpr int kFirstKernelArg = 12;
     // Device ray counters (RenderOptions::countRays): zero them before a frame, read them after.
     void resetRayCounts(cl::CommandQueue& queue) const;
     std::array<uint64_t, 4> readRayCounts(cl::CommandQueue& queue) const;
@@ -87,12 +93,18 @@ public:
     bool matches(const Scene& scene, RenderOptions::Accel accel) const {
         return source_ == &scene && accel_ == accel;
     }
+    // Which structure was built, in how long, and how large it is (for FrameStats::accel).
+    const AccelStats& accelStats() const { return stats_; }
 
 private:
+    ClContext& cl_;
     const Scene* source_;
     RenderOptions::Accel accel_;
-    cl::Buffer spheres_, planes_, triangles_, meshes_, lights_, materials_, cubemap_, bvh_,
-        rayCounts_;
+    AccelStats stats_;
+    dev::Grid grid_{};
+    size_t bytes_ = 0;  // allocated through cl_, released on destruction
+    cl::Buffer spheres_, planes_, triangles_, meshes_, kdops_, lights_, materials_, cubemap_, bvh_,
+        cells_, rayCounts_;
 };
 
 // 2D launch geometry: global size rounded up to the local size on GPUs, runtime's choice on CPUs.

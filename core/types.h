@@ -76,7 +76,7 @@ typedef struct Triangle {
 typedef struct MeshInstance {
     int32_t firstTriangle;
     int32_t triangleCount;
-    int32_t bvhRoot;  // first BVH node of this mesh, -1 when none is built
+    int32_t bvhRoot;  // unused, -1: the BVH (issue 5) is one tree over every primitive
     int32_t pad0;
     Float3 boundsLo;
     Float3 boundsHi;
@@ -102,6 +102,19 @@ typedef struct Camera {
     float pad[2];
 } Camera;
 
+// Uniform grid over the spheres and triangles (issue 5, --accel grid): nx * ny * nz cells of
+// cellSize over [lo, hi], x fastest. Zero cells when the scene has no sphere or triangle.
+typedef struct Grid {
+    Float3 lo;
+    int32_t nx;
+    Float3 hi;
+    int32_t ny;
+    Float3 cellSize;
+    int32_t nz;
+    Float3 invCellSize;
+    int32_t pad;
+} Grid;
+
 // Everything a kernel needs besides the object arrays. Passed by value as a kernel argument.
 typedef struct RenderSettings {
     int32_t width, height;
@@ -117,6 +130,7 @@ typedef struct RenderSettings {
     Float3 skyHorizon;
     Float3 skyGround;
     Camera camera;
+    Grid grid;              // filled by DeviceScene::setArgs, not by makeSettings
 } RenderSettings;
 
 // Node kinds: what the ray hit.
@@ -150,14 +164,25 @@ typedef struct Node {
     uint8_t occluded[RT_MAX_LIGHTS];
 } Node;
 
-// BVH node (issue 5): leaf when count > 0, then [first, first+count) are triangle indices;
-// otherwise first is the left child and the right child follows it.
+// BVH node (issue 5). Inner node when count == 0: its children are nodes first and first + 1.
+// Leaf of triangles [first, first + count) when count > 0, of spheres [first, first - count)
+// when count < 0 (leaves hold one kind; the builder orders both arrays leaf by leaf).
 typedef struct BvhNode {
     Float3 lo;
     int32_t first;
     Float3 hi;
     int32_t count;
 } BvhNode;
+
+// Bounding volume of 7 slab pairs around a mesh (report 3.6.2, Kay and Kajiya 1986): slab k
+// holds the points p with lo[k] <= dot(RT_SLAB_k, p) <= hi[k], for the unnormalized normals
+// x, y, z, (1,1,1), (-1,1,1), (1,-1,1), (1,1,-1).
+#define RT_SLABS 7
+typedef struct Kdop {
+    float lo[RT_SLABS];
+    float hi[RT_SLABS];
+    int32_t pad[2];
+} Kdop;
 
 RT_DEV_END
 
@@ -171,11 +196,14 @@ static_assert(sizeof(Triangle) == 80);
 static_assert(sizeof(MeshInstance) == 64);
 static_assert(sizeof(Light) == 32);
 static_assert(sizeof(Camera) == 32);
-static_assert(sizeof(RenderSettings) == 128);
+static_assert(sizeof(RenderSettings) == 192);
+static_assert(sizeof(Grid) == 64);
+static_assert(sizeof(Kdop) == 64);
 static_assert(sizeof(Node) == 48);
 static_assert(sizeof(BvhNode) == 32);
 static_assert(offsetof(Node, occluded) == 44);
 static_assert(offsetof(RenderSettings, camera) == 96);
+static_assert(offsetof(RenderSettings, grid) == 128);
 }  // namespace rt::dev
 #endif
 

@@ -13,7 +13,7 @@ TEST(Types, DeviceSeesTheSameSizesAndOffsets) {
     ClContext& cl = test::device();
     cl::Program program = cl.program("probe.cl", {});
     cl::Kernel kernel(program, "Probe_Sizes");
-    constexpr int kCount = 14;
+    constexpr int kCount = 17;
     cl::Buffer out(cl.context(), CL_MEM_WRITE_ONLY, kCount * sizeof(cl_uint));
     kernel.setArg(0, out);
     cl.queue().enqueueNDRangeKernel(kernel, cl::NullRange, cl::NDRange(1));
@@ -27,7 +27,9 @@ TEST(Types, DeviceSeesTheSameSizesAndOffsets) {
                                      sizeof(RenderSettings), sizeof(Node),
                                      sizeof(BvhNode),        offsetof(Node, occluded),
                                      offsetof(RenderSettings, camera),
-                                     offsetof(MeshInstance, sphereRadius)};
+                                     offsetof(MeshInstance, sphereRadius),
+                                     sizeof(Grid),           sizeof(Kdop),
+                                     offsetof(RenderSettings, grid)};
     for (int i = 0; i < kCount; ++i) EXPECT_EQ(got[i], expected[i]) << "probe entry " << i;
 }
 

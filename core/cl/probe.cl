@@ -17,6 +17,9 @@ kernel void Probe_Sizes(global uint* out) {
     out[11] = __builtin_offsetof(Node, occluded);
     out[12] = __builtin_offsetof(RenderSettings, camera);
     out[13] = __builtin_offsetof(MeshInstance, sphereRadius);
+    out[14] = sizeof(Grid);
+    out[15] = sizeof(Kdop);
+    out[16] = __builtin_offsetof(RenderSettings, grid);
 }
 
 // One ray per work-item against one sphere: in = origin, dir, centre, radius (10 floats).

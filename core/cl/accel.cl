@@ -1,0 +1,233 @@
+// rtlab — acceleration structures on the device (issue 5; built by core/accel*.cpp). Each query
+// takes the current hit and only accepts 0 < t < hit->t; with anyHit it returns at the first
+// primitive it accepts (shadow rays), otherwise it finds the closest. Included by scene.cl after
+// SceneData and Hit; RT_ACCEL_BV, RT_ACCEL_GRID or RT_ACCEL_BVH picks the structure.
+#ifndef RTLAB_CL_ACCEL
+#define RTLAB_CL_ACCEL
+
+// 1 / d with zero components replaced by a tiny value of the same sign, so that a slab product
+// is never 0 * inf = NaN for a ray that starts on a box face.
+inline float3 Ray_InvDir(float3 d) {
+    float3 tiny = copysign((float3)(1e-20f), d);
+    return 1.0f / select(d, tiny, fabs(d) < (float3)(1e-20f));
+}
+
+// Distance at which the ray enters the box, if it does so before tMax; INFINITY otherwise.
+inline float Aabb_Enter(Ray ray, float3 invDir, float3 lo, float3 hi, float tMax) {
+    float3 t0 = (lo - ray.origin) * invDir, t1 = (hi - ray.origin) * invDir;
+    float3 tn = fmin(t0, t1), tf = fmax(t0, t1);
+    float enter = fmax(fmax(tn.x, tn.y), fmax(tn.z, 0.0f));
+    float leave = fmin(fmin(tf.x, tf.y), fmin(tf.z, tMax));
+    return enter <= leave ? enter : INFINITY;
+}
+
+// ---- one primitive: true when it becomes the hit ----
+#ifdef RT_HAS_SPHERES
+inline bool Hit_Sphere(const SceneData* sc, int i, Ray ray, Hit* hit) {
+    global const Sphere* s = sc->spheres + i;
+    float t = Sphere_Intersect(ray, f3(s->center), s->radius);
+    if (!(t > 0.0f && t < hit->t)) return false;
+    hit->t = t;
+    hit->kind = RT_KIND_SPHERE;
+    hit->object = i;
+    return true;
+}
+#endif
+
+#ifdef RT_HAS_TRIANGLES
+inline bool Hit_Triangle(const SceneData* sc, int i, Ray ray, Hit* hit) {
+    global const Triangle* tri = sc->triangles + i;
+    float2 uv;
+    float t = Triangle_Intersect(ray, f3(tri->v0), f3(tri->v1), f3(tri->v2), &uv);
+    if (!(t > 0.0f && t < hit->t)) return false;
+    hit->t = t;
+    hit->kind = RT_KIND_TRIANGLE;
+    hit->object = i;
+    hit->uv = uv;
+    return true;
+}
+
+// ---- none and bv: mesh by mesh ----
+// Preliminary check (report 2.2.1): the ray misses the mesh's bounding sphere, or meets it only
+// behind the origin or beyond tMax. The radius is padded on the host against rounding.
+inline bool Mesh_SphereMisses(const MeshInstance* m, Ray ray, float tMax) {
+    float3 oc = ray.origin - f3(m->sphereCenter);
+    float r2 = m->sphereRadius * m->sphereRadius;
+    float c = dot(oc, oc) - r2;
+    if (c <= 0.0f) return false;  // origin inside
+    float b = dot(oc, ray.dir);
+    if (b > 0.0f) return true;  // outside and moving away
+    float3 f = oc - b * ray.dir;  // Ray Tracing Gems ch. 7: no b^2 - c cancellation
+    float disc = r2 - dot(f, f);
+    return disc < 0.0f || -b - sqrt(disc) > tMax;
+}
+
+#ifdef RT_ACCEL_BV
+// Kay-Kajiya slab test against the 7 slab pairs of dev::Kdop (report 3.6.2).
+inline bool Kdop_Hit(global const Kdop* k, Ray ray, float tMax) {
+    float3 o = ray.origin, d = ray.dir;
+    float no[RT_SLABS] = {o.x, o.y, o.z, o.x + o.y + o.z, -o.x + o.y + o.z, o.x - o.y + o.z,
+                          o.x + o.y - o.z};
+    float nd[RT_SLABS] = {d.x, d.y, d.z, d.x + d.y + d.z, -d.x + d.y + d.z, d.x - d.y + d.z,
+                          d.x + d.y - d.z};
+    float enter = 0.0f, leave = tMax;
+    for (int s = 0; s < RT_SLABS; ++s) {
+        if (nd[s] == 0.0f) {
+            if (no[s] < k->lo[s] || no[s] > k->hi[s]) return false;
+            continue;
+        }
+        float inv = 1.0f / nd[s];
+        float t0 = (k->lo[s] - no[s]) * inv, t1 = (k->hi[s] - no[s]) * inv;
+        enter = fmax(enter, fmin(t0, t1));
+        leave = fmin(leave, fmax(t0, t1));
+        if (enter > leave) return false;
+    }
+    return true;
+}
+#endif
+
+inline bool Mesh_Query(const SceneData* sc, int m, Ray ray, Hit* hit, bool anyHit) {
+    MeshInstance mesh = sc->meshes[m];
+    if (Mesh_SphereMisses(&mesh, ray, hit->t)) return false;
+#ifdef RT_ACCEL_BV
+    if (!Kdop_Hit(sc->kdops + m, ray, hit->t)) return false;
+#endif
+    bool found = false;
+    for (int i = mesh.firstTriangle; i < mesh.firstTriangle + mesh.triangleCount; ++i) {
+        if (Hit_Triangle(sc, i, ray, hit)) {
+            found = true;
+            if (anyHit) return true;
+        }
+    }
+    return found;
+}
+#endif  // RT_HAS_TRIANGLES
+
+// ---- grid: 3D-DDA (Amanatides and Woo 1987) ----
+#ifdef RT_ACCEL_GRID
+// A primitive reference of a grid cell: triangle t >= 0, sphere s as ~s.
+inline bool Grid_TestRef(const SceneData* sc, int ref, Ray ray, Hit* hit) {
+#ifdef RT_HAS_SPHERES
+    if (ref < 0) return Hit_Sphere(sc, ~ref, ray, hit);
+#endif
+#ifdef RT_HAS_TRIANGLES
+    if (ref >= 0) return Hit_Triangle(sc, ref, ray, hit);
+#endif
+    return false;
+}
+
+// Walks the cells the ray crosses in order. A hit found in a cell may lie in a later cell (the
+// primitive spans both), so the walk stops only once the best hit is no farther than the
+// current cell's exit: every primitive the ray meets before that point is listed in a cell
+// already visited (Xiao et al. 2012 call this the in-cell test).
+inline bool Grid_Query(const SceneData* sc, Ray ray, Hit* hit, bool anyHit) {
+    Grid g = sc->settings.grid;
+    if (g.nx == 0) return false;
+    float3 inv = Ray_InvDir(ray.dir);
+    float3 lo = f3(g.lo);
+    float enter = Aabb_Enter(ray, inv, lo, f3(g.hi), hit->t);
+    if (enter == INFINITY) return false;
+    float3 p = (ray.origin + enter * ray.dir - lo) * f3(g.invCellSize);
+    int cx = clamp((int)floor(p.x), 0, g.nx - 1);
+    int cy = clamp((int)floor(p.y), 0, g.ny - 1);
+    int cz = clamp((int)floor(p.z), 0, g.nz - 1);
+    // 1 when the walk goes toward +axis (the sign of inv, which Ray_InvDir keeps nonzero).
+    int sx = inv.x > 0.0f ? 1 : 0, sy = inv.y > 0.0f ? 1 : 0, sz = inv.z > 0.0f ? 1 : 0;
+    bool found = false;
+    for (;;) {
+        // Where the ray leaves the cell through each axis's far face (from the cell index, not
+        // accumulated, so that rounding does not drift along long walks).
+        float tx = (lo.x + (float)(cx + sx) * g.cellSize.x - ray.origin.x) * inv.x;
+        float ty = (lo.y + (float)(cy + sy) * g.cellSize.y - ray.origin.y) * inv.y;
+        float tz = (lo.z + (float)(cz + sz) * g.cellSize.z - ray.origin.z) * inv.z;
+        int cell = (cz * g.ny + cy) * g.nx + cx;
+        int end = sc->cells[cell + 1];
+        for (int k = sc->cells[cell]; k < end; ++k) {
+            if (Grid_TestRef(sc, sc->cells[k], ray, hit)) {
+                found = true;
+                if (anyHit) return true;
+            }
+        }
+        if (hit->t <= fmin(tx, fmin(ty, tz))) break;
+        if (tx <= ty && tx <= tz) {
+            cx += 2 * sx - 1;
+            if (cx < 0 || cx >= g.nx) break;
+        } else if (ty <= tz) {
+            cy += 2 * sy - 1;
+            if (cy < 0 || cy >= g.ny) break;
+        } else {
+            cz += 2 * sz - 1;
+            if (cz < 0 || cz >= g.nz) break;
+        }
+    }
+    return found;
+}
+#endif  // RT_ACCEL_GRID
+
+// ---- BVH: stackful, nearer child first ----
+#ifdef RT_ACCEL_BVH
+#define RT_BVH_STACK 64  // the builder caps the depth below this (core/accel_bvh.cpp)
+
+inline bool Bvh_Leaf(const SceneData* sc, BvhNode node, Ray ray, Hit* hit, bool anyHit) {
+    bool found = false;
+#ifdef RT_HAS_TRIANGLES
+    for (int i = node.first; i < node.first + node.count; ++i)
+        if (Hit_Triangle(sc, i, ray, hit)) {
+            found = true;
+            if (anyHit) return true;
+        }
+#endif
+#ifdef RT_HAS_SPHERES
+    for (int i = node.first; i < node.first - node.count; ++i)
+        if (Hit_Sphere(sc, i, ray, hit)) {
+            found = true;
+            if (anyHit) return true;
+        }
+#endif
+    return found;
+}
+
+inline bool Bvh_Query(const SceneData* sc, Ray ray, Hit* hit, bool anyHit) {
+    float3 inv = Ray_InvDir(ray.dir);
+    BvhNode root = sc->bvh[0];
+    if (Aabb_Enter(ray, inv, f3(root.lo), f3(root.hi), hit->t) == INFINITY) return false;
+    int stack[RT_BVH_STACK];
+    float stackT[RT_BVH_STACK];  // entry distance of each pending node
+    int top = 0, index = 0;
+    bool found = false;
+    for (;;) {
+        BvhNode node = sc->bvh[index];
+        if (node.count == 0) {
+            global const BvhNode* kids = sc->bvh + node.first;
+            float ta = Aabb_Enter(ray, inv, f3(kids[0].lo), f3(kids[0].hi), hit->t);
+            float tb = Aabb_Enter(ray, inv, f3(kids[1].lo), f3(kids[1].hi), hit->t);
+            int near = node.first, far = node.first + 1;
+            if (tb < ta) {
+                float t = ta;
+                ta = tb;
+                tb = t;
+                near = far;
+                far = node.first;
+            }
+            if (ta != INFINITY) {
+                if (tb != INFINITY) {
+                    stack[top] = far;
+                    stackT[top] = tb;
+                    ++top;
+                }
+                index = near;
+                continue;
+            }
+        } else if (Bvh_Leaf(sc, node, ray, hit, anyHit)) {
+            found = true;
+            if (anyHit) return true;
+        }
+        // Next: the most recently deferred node the ray enters before the current best hit.
+        while (top > 0 && !(stackT[top - 1] < hit->t)) --top;
+        if (top == 0) return found;
+        index = stack[--top];
+    }
+}
+#endif  // RT_ACCEL_BVH
+
+#endif
