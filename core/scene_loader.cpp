@@ -19,6 +19,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "core/accel.h"
 #include "core/error.h"
 #include "core/obj_loader.h"
 
@@ -35,6 +36,7 @@ constexpr std::size_t kMaxPlanes = 1'000;
 constexpr std::size_t kMaxMeshes = 100'000;
 constexpr std::size_t kMaxTriangles = 50'000'000;
 constexpr int kMaxCubemapSize = 4096;
+constexpr std::size_t kAny = ~std::size_t(0);  // no size limit for Node::array
 constexpr float kDegrees = 3.14159265358979f / 180.f;
 
 dev::Float3 f3(const glm::vec3& v) { return {v.x, v.y, v.z}; }
@@ -349,6 +351,7 @@ class Loader {
         if (root.has("environment")) environment(root.at("environment"));
         if (root.has("render")) render(root.at("render"));
         finalizeScene(scene_);
+        if (!accelGiven_) scene_.defaults.accel = defaultAccel(scene_);
         return std::move(scene_);
     }
 
@@ -461,7 +464,8 @@ class Loader {
             Node t = list[i];
             t.object({"vertices", "normals", "material"});
             Node vs = t.at("vertices");
-            if (vs.array(3, "vertices") != 3) vs.fail("must be an array of 3 vertices");
+            if (std::size_t k = vs.array(kAny, "vertices"); k != 3)
+                vs.fail("must be an array of 3 vertices, got " + std::to_string(k));
             glm::vec3 v[3] = {v3(vs[0].vec3()), v3(vs[1].vec3()), v3(vs[2].vec3())};
             glm::dvec3 cross = glm::cross(glm::dvec3(v[1] - v[0]), glm::dvec3(v[2] - v[0]));
             double len = glm::length(cross);
@@ -470,7 +474,8 @@ class Loader {
             n[0] = n[1] = n[2] = glm::vec3(cross / len);
             if (t.has("normals")) {
                 Node ns = t.at("normals");
-                if (ns.array(3, "normals") != 3) ns.fail("must be an array of 3 normals");
+                if (std::size_t k = ns.array(kAny, "normals"); k != 3)
+                    ns.fail("must be an array of 3 normals, got " + std::to_string(k));
                 for (int k = 0; k < 3; ++k) n[k] = ns[k].direction();
             }
             scene_.triangles.push_back(
@@ -540,7 +545,7 @@ class Loader {
     }
 
     void lights(const Node& list) {
-        const std::size_t n = list.array(~std::size_t(0), "lights");
+        const std::size_t n = list.array(kAny, "lights");
         if (n > RT_MAX_LIGHTS)
             list.fail("at most " + std::to_string(RT_MAX_LIGHTS) + " lights, got " +
                       std::to_string(n));
@@ -570,7 +575,7 @@ class Loader {
             return;
         }
         Node faces = n.at("cubemap");
-        if (faces.array(6, "cubemap faces") != 6)
+        if (faces.array(kAny, "cubemap faces") != 6)
             faces.fail("must list 6 faces (+x, -x, +y, -y, +z, -z), got " +
                        std::to_string(faces.json().size()));
         if (!readImage_) faces.fail("cubemap faces need an image reader");
@@ -604,7 +609,7 @@ class Loader {
 
     void render(const Node& n) {
         n.object({"width", "height", "bounces", "shadow_samples", "aa", "shadow_strength",
-                  "adaptive_aa"});
+                  "adaptive_aa", "accel"});
         RenderOptions& r = scene_.defaults;
         auto range = [](int lo, int hi) {
             return [=](const Node& v) { return v.integer(lo, hi); };
@@ -617,6 +622,16 @@ class Loader {
         r.shadowStrength = n.opt("shadow_strength", r.shadowStrength, readUnit);
         r.adaptiveAa =
             n.opt("adaptive_aa", r.adaptiveAa, [](const Node& b) { return b.boolean(); });
+        if (n.has("accel")) {
+            Node a = n.at("accel");
+            std::string name = a.string();
+            try {
+                r.accel = parseAccel(name);
+            } catch (const Error&) {
+                a.fail("must be one of none, bv, grid, bvh, got '" + name + "'");
+            }
+            accelGiven_ = true;
+        }
     }
 
     fs::path path_;
@@ -626,6 +641,7 @@ class Loader {
     std::vector<std::string> materialOrder_;
     std::unordered_map<std::string, int> materialIndex_;
     Scene scene_;
+    bool accelGiven_ = false;  // else the scene gets defaultAccel
 };
 
 // A bare OBJ: grey model, ground plane under it, camera on -z framing its bounding sphere.
@@ -652,6 +668,7 @@ Scene wrapObj(const fs::path& path) {
     }
     scene.meshes.push_back({0, int(scene.triangles.size()), -1, 0, {}, {}, {}, 0.f, {}});
     finalizeScene(scene);
+    scene.defaults.accel = defaultAccel(scene);
     const dev::MeshInstance& m = scene.meshes[0];
     const glm::vec3 c = v3(m.sphereCenter);
     const float r = std::max(m.sphereRadius, 1e-6f);

@@ -74,7 +74,7 @@ const BadScene kBadScenes[] = {
     {"zero_plane_normal.json", "/planes/0/normal: must be a non-zero vector"},
     {"plane_offset_and_point.json", "/planes/0: give either 'offset' or 'point', not both"},
     {"degenerate_triangle.json", "/triangles/0/vertices: degenerate triangle (zero area)"},
-    {"triangle_two_vertices.json", "/triangles/0/vertices: must be an array of 3 vertices"},
+    {"triangle_two_vertices.json", "/triangles/0/vertices: must be an array of 3 vertices, got 2"},
     {"missing_obj.json",
      "/meshes/0/file: tests/data/bad_scenes/no_such_model.obj: cannot open: No such file or "
      "directory"},
