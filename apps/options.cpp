@@ -29,7 +29,11 @@ void SceneFlags::add(CLI::App& cmd) {
     cmd.add_option("--memory-budget", memoryBudget,
                    "Wavefront: bytes the global ray tree may use (e.g. 64M); frames past it are "
                    "rendered in row tiles [device max allocation]");
-    cmd.add_option("--accel", accel, "Triangle search: none, bv, grid or bvh [bv]");
+    cmd.add_option("--accel", accel,
+                   "How rays find spheres and triangles: none (per-mesh bounding sphere only), "
+                   "bv (plus 7 slab pairs per mesh), grid (uniform grid) or bvh (SAH BVH) "
+                   "[scene's render.accel, else bvh above 64 spheres and triangles, else bv with "
+                   "triangles, else none]");
     cmd.add_flag("--plain-sphere", plainSphere,
                  "Use the report's quadratic sphere test instead of the robust one");
     cmd.add_flag("--moller-trumbore", mollerTrumbore,

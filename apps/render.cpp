@@ -32,6 +32,22 @@ std::string mib(double bytes) {
     return buf;
 }
 
+// Which acceleration structure ran (issue 5); its size and build time when the pipeline
+// reported them (DeviceScene::accelStats).
+void printAccel(const AccelStats& a, RenderOptions::Accel chosen) {
+    if (a.name.empty()) {
+        std::printf("  accel        %s\n", accelName(chosen));
+        return;
+    }
+    if (a.name == "none") {
+        std::printf("  accel        none (preliminary checks only)\n");
+        return;
+    }
+    const char* unit = a.name == "bvh" ? "nodes" : a.name == "grid" ? "cells" : "volumes";
+    std::printf("  accel        %s, %lld %s (%s), %s; built in %.1f ms\n", a.name.c_str(), a.nodes,
+                unit, mib(double(a.bytes)).c_str(), a.detail.c_str(), a.buildMs);
+}
+
 int runDevices() {
     std::vector<DeviceInfo> devices = listDevices();
     if (devices.empty()) {
@@ -86,6 +102,7 @@ int runRender() {
                         mib(double(s.treeBytes)).c_str(), s.tiles, sizeof(dev::Node));
         if (kind != PipelineKind::Cpu)
             std::printf("  private      %zu bytes per work-item\n", s.privateBytes);
+        if (kind != PipelineKind::Cpu) printAccel(s.accel, options.accel);
     }
     std::printf("wrote %s\n", output.c_str());
     return 0;

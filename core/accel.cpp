@@ -142,7 +142,7 @@ AccelData buildAccel(const Scene& scene, RenderOptions::Accel accel) {
             for (const dev::MeshInstance& m : out.meshes) out.kdops.push_back(meshKdop(out, m));
             s.nodes = (long long)out.kdops.size();
             s.bytes = out.kdops.size() * sizeof(dev::Kdop);
-            s.detail = fmt("%.0f slab volumes of 7 slab pairs", double(out.kdops.size()));
+            s.detail = "7 slab pairs per mesh";
             break;
         case RenderOptions::Accel::Grid: {
             buildGrid(out);
