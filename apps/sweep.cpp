@@ -1,9 +1,277 @@
-// rtlab sweep: filled in by the benchmark issue.
+// rtlab sweep CONFIG — runs a named sweep (bench/sweeps/, format in bench/sweeps/README.md) on one
+// device, scores the accuracy group against the converged CPU reference, and writes
+// results/<device-slug>/<sweep>.{json,csv}, the five charts (scripts/charts.py) and README.md
+// (scripts/results-readme.py). With --import DIR it does the same for what `rtlab-bench --sweep`
+// measured on another machine; --export-scenes makes the scene folder that rtlab-bench can read.
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <map>
+#include <set>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
 #include "apps/commands.h"
+#include "apps/sweep_accuracy.h"
+#include "bench/pfm.h"
+#include "bench/sweep_config.h"
+#include "bench/sweep_runner.h"
+#include "core/error.h"
+#include "image/image_io.h"
 
 namespace rt::cli {
+namespace fs = std::filesystem;
 
-void addSweep(CLI::App& app) { (void)app; }
-int runSweepCommand() { return 0; }
+namespace {
+
+struct SweepArgs {
+    std::string config, device, out, sceneDir, kernelDir, exportScenes;
+    std::vector<std::string> importDirs;
+    double timeLimit = 0;
+    bool noCharts = false;
+} sweepArgs;
+
+CLI::App* sweepCmd = nullptr;
+
+std::string csvField(const nlohmann::json& v) {
+    std::string s;
+    if (v.is_null()) return "";
+    if (v.is_string()) s = v.get<std::string>();
+    else if (v.is_boolean()) s = v.get<bool>() ? "1" : "0";
+    else s = v.dump();
+    if (s.find_first_of(",\"\n") == std::string::npos) return s;
+    std::string q = "\"";
+    for (char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c == '\n' ? ' ' : c);
+    return q + "\"";
+}
+
+// One flat CSV row per result; kernel times get one column per kernel name.
+void writeCsv(const nlohmann::json& rows, const fs::path& path) {
+    std::vector<std::string> kernels;
+    for (const auto& r : rows)
+        if (r.contains("kernel_ms"))
+            for (auto it = r["kernel_ms"].begin(); it != r["kernel_ms"].end(); ++it)
+                if (std::find(kernels.begin(), kernels.end(), it.key()) == kernels.end())
+                    kernels.push_back(it.key());
+    const std::vector<std::string> head = {
+        "sweep", "groups", "scene", "pipeline", "width", "height", "bounces", "shadow_samples",
+        "aa", "accel", "layout", "memory_budget", "adaptive", "status", "device_ms",
+        "device_ms_min", "device_ms_max", "wall_ms"};
+    const std::vector<std::string> tail = {
+        "device_bytes", "tree_bytes", "private_bytes", "tree_nodes", "branching", "tiles",
+        "mrays_per_s", "tree_used", "rmse", "mean_abs", "max_abs", "psnr_db", "warmup", "repeats",
+        "robust_sphere", "watertight", "scaled_offset", "device", "platform", "driver", "commit",
+        "error"};
+    const char* rays[4] = {"primary", "reflection", "refraction", "shadow"};
+    const char* counts[6] = {"objects", "spheres", "planes", "triangles", "meshes", "lights"};
+    std::ofstream f(path);
+    if (!f) throw Error(path.string() + ": cannot write");
+    std::string line;
+    for (const auto& h : head) line += h + ",";
+    for (const auto& k : kernels) line += "k_" + k + "_ms,";
+    for (const char* r : rays) line += std::string("rays_") + r + ",";
+    for (const char* c : counts) line += std::string("scene_") + c + ",";
+    for (const auto& t : tail) line += t + ",";
+    line.pop_back();
+    f << line << "\n";
+    for (const auto& r : rows) {
+        line.clear();
+        auto get = [&](const std::string& k) { return r.contains(k) ? r[k] : nlohmann::json(); };
+        for (const auto& h : head) {
+            if (h == "groups") {
+                std::string g;
+                for (const auto& x : r["groups"]) g += (g.empty() ? "" : " ") + x.get<std::string>();
+                line += csvField(g) + ",";
+            } else {
+                line += csvField(get(h)) + ",";
+            }
+        }
+        for (const auto& k : kernels)
+            line += csvField(r.contains("kernel_ms") && r["kernel_ms"].contains(k) ? r["kernel_ms"][k]
+                                                                                    : nlohmann::json()) + ",";
+        for (const char* x : rays)
+            line += csvField(r.contains("rays") ? r["rays"][x] : nlohmann::json()) + ",";
+        for (const char* c : counts) line += csvField(r["scene_info"][c]) + ",";
+        for (const auto& t : tail) line += csvField(get(t)) + ",";
+        line.pop_back();
+        f << line << "\n";
+    }
+}
+
+fs::path scriptPath(const std::string& name) {
+    for (fs::path p : {fs::path("scripts") / name, fs::path(RTLAB_SOURCE_DIR) / "scripts" / name})
+        if (fs::exists(p)) return p;
+    return {};
+}
+
+// Charts and README through Debian's Python (python3-matplotlib, scripts/setup); a missing
+// Python is a warning, not a failed sweep: the data are written already.
+void drawCharts(const fs::path& json) {
+    for (const char* script : {"charts.py", "results-readme.py"}) {
+        fs::path p = scriptPath(script);
+        if (p.empty()) {
+            std::fprintf(stderr, "rtlab sweep: scripts/%s not found; skipped\n", script);
+            continue;
+        }
+        std::string cmd = "/usr/bin/python3 '" + p.string() + "' '" + json.string() + "'";
+        if (std::system(cmd.c_str()) != 0)
+            std::fprintf(stderr, "rtlab sweep: %s failed (is python3-matplotlib installed? run "
+                                 "scripts/setup)\n", cmd.c_str());
+    }
+}
+
+// rtlab-bench cannot decode PNG: a copy of the scene folder whose cubemap faces are .pfm, holding
+// exactly the linear values readImage gives here.
+int exportScenes(const fs::path& dest) {
+    fs::path src = fs::exists("scenes") ? fs::path("scenes") : fs::path(RTLAB_SOURCE_DIR) / "scenes";
+    fs::create_directories(dest);
+    fs::copy(src, dest, fs::copy_options::recursive | fs::copy_options::overwrite_existing);
+    int converted = 0;
+    for (const auto& entry : fs::directory_iterator(dest)) {
+        if (entry.path().extension() != ".json") continue;
+        std::ifstream in(entry.path());
+        nlohmann::json scene = nlohmann::json::parse(in, nullptr, true, true);
+        if (!scene.contains("environment") || !scene["environment"].contains("cubemap")) continue;
+        for (auto& face : scene["environment"]["cubemap"]) {
+            fs::path file = face.get<std::string>();
+            fs::path pfm = fs::path(file).replace_extension(".pfm");
+            bench::writePfm(readImage(src / file), dest / pfm);
+            face = pfm.generic_string();
+            ++converted;
+        }
+        std::ofstream(entry.path()) << scene.dump(2) << "\n";
+    }
+    std::printf("exported %s to %s (%d cubemap faces as .pfm)\n", src.string().c_str(),
+                dest.string().c_str(), converted);
+    return 0;
+}
+
+nlohmann::json readJsonLines(const fs::path& path) {
+    std::ifstream f(path);
+    if (!f) throw Error(path.string() + ": cannot read");
+    nlohmann::json rows = nlohmann::json::array();
+    std::string line;
+    for (int n = 1; std::getline(f, line); ++n) {
+        if (line.empty()) continue;
+        try {
+            rows.push_back(nlohmann::json::parse(line));
+        } catch (const nlohmann::json::exception&) {
+            // The last line of a run killed at its limit may be cut off.
+            std::fprintf(stderr, "rtlab sweep: %s:%d: unreadable row skipped\n",
+                         path.string().c_str(), n);
+        }
+    }
+    return rows;
+}
+
+}  // namespace
+
+void addSweep(CLI::App& app) {
+    SweepArgs& a = sweepArgs;
+    sweepCmd = app.add_subcommand(
+        "sweep", "Run a named benchmark sweep and write results/<device>/ (CSV, JSON, charts, README)");
+    sweepCmd->add_option("config", a.config,
+                         "Sweep file, or a name in bench/sweeps/ (quick, full, cpu); format in "
+                         "bench/sweeps/README.md");
+    sweepCmd->add_option("--device", a.device,
+                         "OpenCL device: index or name substring [$RTLAB_DEVICE, else first GPU]");
+    sweepCmd->add_option("--out", a.out, "Output folder [results/<device-slug>]");
+    sweepCmd->add_option("--import", a.importDirs,
+                         "Do not measure: score and chart what `rtlab-bench --sweep CONFIG --out DIR` "
+                         "wrote to DIR on another machine (repeat for runs continued with --resume)")
+        ->take_all();
+    sweepCmd->add_option("--time-limit", a.timeLimit,
+                         "Stop before a cell that would end after this many seconds");
+    sweepCmd->add_option("--scene-dir", a.sceneDir, "Folder holding <scene>.json [scenes/]");
+    sweepCmd->add_option("--kernel-dir", a.kernelDir, "Read kernel sources from this source tree");
+    sweepCmd->add_flag("--no-charts", a.noCharts, "Write CSV and JSON only");
+    sweepCmd->add_option("--export-scenes", a.exportScenes,
+                         "Copy scenes/ to this folder with .pfm cubemap faces (for rtlab-bench) and exit");
+}
+
+int runSweepCommand() {
+    SweepArgs& a = sweepArgs;
+    if (!a.exportScenes.empty()) return exportScenes(a.exportScenes);
+    if (a.config.empty()) throw Error("sweep: name a sweep file (e.g. rtlab sweep bench/sweeps/quick)");
+    bench::SweepConfig config = bench::loadSweep(bench::findSweep(a.config));
+
+    nlohmann::json meta, rows = nlohmann::json::array();
+    std::vector<PendingFrame> frames;
+    if (!a.importDirs.empty()) {
+        std::map<std::string, size_t> cellRow;
+        for (const std::string& d : a.importDirs) {
+            fs::path dir = d;
+            std::ifstream m(dir / "sweep.json");
+            if (!m) throw Error((dir / "sweep.json").string() + ": cannot read (was it made by "
+                                "rtlab-bench --sweep?)");
+            nlohmann::json part = nlohmann::json::parse(m);
+            if (part.value("sweep", "") != config.name)
+                throw Error(dir.string() + " holds sweep '" + part.value("sweep", "") + "', not '" +
+                            config.name + "'");
+            if (meta.is_null()) {
+                meta = part;
+            } else {
+                // A continued run: its cells add to the first run's; the sums and the end move.
+                for (const char* k : {"measured", "failed", "seconds"})
+                    meta[k] = meta.value(k, 0.0) + part.value(k, 0.0);
+                meta["finished"] = part.value("finished", "");
+                meta["complete"] = part.value("complete", false);
+                if (part.value("commit", "") != meta.value("commit", ""))
+                    throw Error(dir.string() + " was measured at commit " + part.value("commit", "") +
+                                ", the first folder at " + meta.value("commit", ""));
+            }
+            meta["imported_from"] = (meta.contains("imported_from") ? meta["imported_from"].get<std::string>() + " + " : "") + dir.string();
+            for (auto& row : readJsonLines(dir / "rows.jsonl")) {
+                // A cell measured again (it failed the first time) replaces its old row.
+                size_t at = rows.size();
+                std::string cell = row.value("cell", "");
+                auto it = cellRow.find(cell);
+                if (it != cellRow.end() && !cell.empty()) {
+                    at = it->second;
+                    std::erase_if(frames, [&](const PendingFrame& f) { return f.row == at; });
+                }
+                if (row.contains("image")) {
+                    fs::path image = dir / row["image"].get<std::string>();
+                    if (fs::exists(image)) frames.push_back({at, bench::readPfm(image)});
+                    else std::fprintf(stderr, "rtlab sweep: %s missing; row not scored\n",
+                                      image.string().c_str());
+                    row.erase("image");
+                }
+                if (at == rows.size()) rows.push_back(row);
+                else rows[at] = row;
+                cellRow[cell] = at;
+            }
+        }
+    } else {
+        bench::SweepRunOptions o;
+        o.device = a.device;
+        o.sceneDir = a.sceneDir;
+        o.readImage = readImage;
+        o.sources = KernelSources(a.kernelDir.empty() && std::getenv("RTLAB_KERNEL_DIR")
+                                      ? std::getenv("RTLAB_KERNEL_DIR")
+                                      : a.kernelDir);
+        o.timeLimitS = a.timeLimit;
+        bench::SweepSummary s = bench::runSweep(config, o, nullptr,
+                                                [&](const nlohmann::json& row, const Image* image) {
+            if (image) frames.push_back({rows.size(), *image});
+            rows.push_back(row);
+        });
+        meta = s.meta;
+    }
+    if (!frames.empty()) scoreFrames(rows, frames, config, a.sceneDir);
+
+    fs::path out = a.out.empty() ? fs::path("results") / meta.value("device_slug", "unknown-device")
+                                 : fs::path(a.out);
+    fs::create_directories(out);
+    fs::path json = out / (config.name + ".json");
+    std::ofstream(json) << nlohmann::json{{"meta", meta}, {"rows", rows}}.dump(1) << "\n";
+    writeCsv(rows, out / (config.name + ".csv"));
+    std::printf("wrote %s and %s.csv (%zu rows)\n", json.string().c_str(),
+                (out / config.name).string().c_str(), rows.size());
+    if (!a.noCharts) drawCharts(json);
+    return 0;
+}
 
 }  // namespace rt::cli

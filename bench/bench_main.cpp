@@ -1,2 +1,388 @@
+// rtlab-bench — the benchmark harness. Two modes over one measurement protocol (bench/measure.h):
+//
+//   rtlab-bench [--benchmark_*] [selection flags]   Google Benchmark: one benchmark per scene x
+//       pipeline x resolution x bounce limit x accel x device, timed by profiling events (manual
+//       time), with per-kernel, ray, memory and tree-use counters. --benchmark_out=FILE.json
+//       writes JSON that Google Benchmark's compare.py reads.
+//   rtlab-bench --sweep FILE --out DIR              a sweep file's cells with a progress line,
+//       rows to DIR/rows.jsonl as they are measured, kept frames to DIR/images/*.pfm. This is
+//       what runs on a GPU machine: it links no OpenImageIO, so `rtlab sweep --import DIR`
+//       compares the frames and draws the charts afterwards, elsewhere.
 #include <benchmark/benchmark.h>
-BENCHMARK_MAIN();
+
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "bench/measure.h"
+#include "bench/pfm.h"
+#include "bench/sweep_config.h"
+#include "bench/sweep_runner.h"
+#include "core/accel.h"
+#include "core/error.h"
+#include "core/scene_loader.h"
+
+namespace fs = std::filesystem;
+using namespace rt;
+using namespace rt::bench;
+
+namespace {
+
+const char* kUsage = R"(rtlab-bench: megakernel versus wavefront, timed by OpenCL profiling events.
+
+Google Benchmark mode (every --benchmark_* flag works, e.g. --benchmark_filter=REGEX,
+--benchmark_out=FILE.json, --benchmark_min_time=0.1):
+  --scenes=a,b,...      scene names in the scene folder [empty,spheres,shadows,cornell,mesh,envmap]
+  --pipelines=mega,wave
+  --sizes=WxH,...       [640x360,1280x720,1920x1080,3840x2160]
+  --bounces=0..8        list and/or ranges [0..8]
+  --accels=bv,...       none, bv, grid, bvh [bv]
+  --cells=SWEEP         instead of the lists above: the cells of a sweep file
+  --devices=SPEC,...    OpenCL devices by index or name [$RTLAB_DEVICE, else first GPU]
+  --repeats=N           repetitions per benchmark; the median is reported [5]
+  --warmup=N            untimed frames before timing [2]
+  --count-rays=yes|no   one untimed frame with device ray counters [yes]
+Sweep mode (no Google Benchmark; what `rtlab sweep --import` reads):
+  --sweep=SWEEP --out=DIR [--time-limit=SECONDS] [--device=SPEC] [--resume=ROWS,...]
+                        --resume skips the cells an earlier run's rows.jsonl measured; give
+                        `rtlab sweep --import` both output folders afterwards
+Both:
+  --scene-dir=DIR       where <scene>.json are [scenes/ of the checkout]; cubemap faces must be
+                        .pfm (rtlab-bench reads no PNG: see `rtlab sweep --export-scenes`)
+  --kernel-dir=DIR      read kernel sources from a source tree [embedded]
+  --list-devices        print the OpenCL devices and exit
+)";
+
+struct Flags {
+    std::vector<std::string> scenes{"empty", "spheres", "shadows", "cornell", "mesh", "envmap"};
+    std::vector<std::string> pipelines{"mega", "wave"};
+    std::vector<std::string> sizes{"640x360", "1280x720", "1920x1080", "3840x2160"};
+    std::string bounces = "0..8";
+    std::vector<std::string> accels{"bv"};
+    std::string cells, sweep, out, device, sceneDir, kernelDir, resume;
+    std::vector<std::string> devices;
+    int repeats = 5, warmup = 2;
+    bool countRays = true, listDevices = false;
+    double timeLimit = 0;
+};
+
+std::vector<std::string> split(const std::string& s) {
+    std::vector<std::string> out;
+    size_t a = 0;
+    while (a <= s.size()) {
+        size_t b = s.find(',', a);
+        if (b == std::string::npos) b = s.size();
+        if (b > a) out.push_back(s.substr(a, b - a));
+        a = b + 1;
+    }
+    return out;
+}
+
+Flags parseFlags(int argc, char** argv) {
+    Flags f;
+    for (int i = 1; i < argc; ++i) {
+        std::string a = argv[i];
+        if (a == "--help" || a == "-h") {
+            std::fputs(kUsage, stdout);
+            std::exit(0);
+        }
+        if (a == "--list-devices") {
+            f.listDevices = true;
+            continue;
+        }
+        size_t eq = a.find('=');
+        std::string key = a.substr(0, eq);
+        std::string value;
+        if (eq != std::string::npos) {
+            value = a.substr(eq + 1);
+        } else if (i + 1 < argc) {
+            value = argv[++i];
+        } else {
+            throw Error(key + ": needs a value (see --help)");
+        }
+        auto integer = [&](int lo, int hi) {
+            int v = std::atoi(value.c_str());
+            if (v < lo || v > hi || value.empty())
+                throw Error(key + " " + value + ": must be in " + std::to_string(lo) + ".." +
+                            std::to_string(hi));
+            return v;
+        };
+        if (key == "--scenes") f.scenes = split(value);
+        else if (key == "--pipelines") f.pipelines = split(value);
+        else if (key == "--sizes") f.sizes = split(value);
+        else if (key == "--bounces") f.bounces = value;
+        else if (key == "--accels") f.accels = split(value);
+        else if (key == "--cells") f.cells = value;
+        else if (key == "--sweep") f.sweep = value;
+        else if (key == "--out") f.out = value;
+        else if (key == "--resume") f.resume = value;
+        else if (key == "--device") f.device = value;
+        else if (key == "--devices") f.devices = split(value);
+        else if (key == "--scene-dir") f.sceneDir = value;
+        else if (key == "--kernel-dir") f.kernelDir = value;
+        else if (key == "--repeats") f.repeats = integer(1, 1000);
+        else if (key == "--warmup") f.warmup = integer(0, 100);
+        else if (key == "--count-rays") f.countRays = value == "yes" || value == "true";
+        else if (key == "--time-limit") f.timeLimit = std::atof(value.c_str());
+        else throw Error("unknown flag " + key + " (see --help)");
+    }
+    return f;
+}
+
+// Cubemap faces without OpenImageIO: .pfm only.
+Image readFace(const fs::path& path) {
+    std::string ext = path.extension().string();
+    if (ext == ".pfm") return readPfm(path);
+    throw Error(path.string() + ": rtlab-bench reads cubemap faces only as .pfm (it links no "
+                "OpenImageIO); make a converted scene folder with `rtlab sweep --export-scenes DIR`");
+}
+
+int listDevicesCommand() {
+    for (const DeviceInfo& d : listDevices())
+        std::printf("%d  %s  [%s]  platform %s, driver %s, %u compute units, %.0f MiB\n", d.index,
+                    d.name.c_str(), d.type.c_str(), d.platformName.c_str(), d.driver.c_str(),
+                    d.computeUnits, double(d.globalMem) / 1048576.0);
+    return 0;
+}
+
+// ---- sweep mode ----
+
+int sweepCommand(const Flags& f) {
+    if (f.out.empty()) throw Error("--sweep needs --out DIR");
+    SweepConfig config = loadSweep(findSweep(f.sweep));
+    fs::path out(f.out);
+    fs::create_directories(out / "images");
+    std::ofstream rows(out / "rows.jsonl");
+    if (!rows) throw Error((out / "rows.jsonl").string() + ": cannot write");
+    SweepRunOptions o;
+    o.device = f.device;
+    o.sceneDir = f.sceneDir;
+    o.readImage = readFace;
+    o.sources = KernelSources(f.kernelDir);
+    o.timeLimitS = f.timeLimit;
+    for (const std::string& file : split(f.resume)) {
+        std::ifstream in(file);
+        if (!in) throw Error("--resume " + file + ": cannot read");
+        std::string line;
+        while (std::getline(in, line)) {
+            nlohmann::json row = nlohmann::json::parse(line, nullptr, false);
+            if (!row.is_discarded() && row.value("status", "") == "ok" && row.contains("cell"))
+                o.skip.insert(row["cell"].get<std::string>());
+        }
+    }
+    // Frames that are bit-identical (the two pipelines share their stage code, so they often
+    // are) are stored once: the file count and size that travel back stay small.
+    std::map<uint64_t, std::string> stored;
+    auto writeMeta = [&](const nlohmann::json& meta) {
+        std::ofstream(out / "sweep.json") << meta.dump(2) << "\n";
+    };
+    SweepSummary s = runSweep(config, o, writeMeta, [&](const nlohmann::json& row, const Image* image) {
+        nlohmann::json r = row;
+        if (image) {
+            uint64_t h = 1469598103934665603ull ^ uint64_t(image->width) << 32 ^ image->height;
+            for (unsigned char c : std::string_view(reinterpret_cast<const char*>(image->rgb.data()),
+                                                    image->rgb.size() * sizeof(float)))
+                h = (h ^ c) * 1099511628211ull;
+            auto [it, fresh] = stored.emplace(h, "images/" + imageName(row));
+            r["image"] = it->second;
+            if (fresh) writePfm(*image, out / it->second);
+        }
+        rows << r.dump() << "\n" << std::flush;
+    });
+    writeMeta(s.meta);
+    std::fprintf(stderr, "sweep %s: %d of %d cells measured, %d failed, %d done before, in %s%s -> %s\n",
+                 config.name.c_str(), s.measured, s.cells, s.failed, s.skipped,
+                 formatDuration(s.seconds).c_str(), s.complete ? "" : " (stopped by the time limit)",
+                 out.string().c_str());
+    return 0;
+}
+
+// ---- Google Benchmark mode ----
+
+struct Target {
+    std::unique_ptr<ClContext> cl;
+    std::string tag;  // "" for one device, else "/dev<index>"
+};
+
+void renderBenchmark(benchmark::State& state, ClContext* cl, const Scene* scene, PipelineKind kind,
+                     RenderOptions o, int warmup, bool countRays) {
+    size_t before = cl->allocatedBytes();
+    std::unique_ptr<Pipeline> pipeline;
+    try {
+        pipeline = makePipeline(kind, cl);
+        o.countRays = false;
+        for (int i = 0; i < warmup; ++i) pipeline->render(*scene, o);
+    } catch (const std::exception& e) {
+        state.SkipWithError(e.what());
+        return;
+    }
+    double wall = 0;
+    std::map<std::string, double> kernels;
+    for (auto _ : state) {
+        try {
+            pipeline->render(*scene, o);
+        } catch (const std::exception& e) {
+            state.SkipWithError(e.what());
+            break;
+        }
+        const FrameStats& s = pipeline->stats();
+        state.SetIterationTime(s.deviceMs * 1e-3);
+        wall += s.hostMs;
+        for (const auto& [name, ms] : s.kernelMs) kernels[name] += ms;
+    }
+    if (state.error_occurred()) return;
+    using benchmark::Counter;
+    const FrameStats& s = pipeline->stats();
+    double devSum = 0;
+    for (const auto& [name, ms] : kernels) {
+        devSum += ms;
+        state.counters["k_" + name + "_ms"] = Counter(ms, Counter::kAvgIterations);
+    }
+    state.counters["ms_per_frame"] = Counter(devSum, Counter::kAvgIterations);
+    state.counters["wall_ms"] = Counter(wall, Counter::kAvgIterations);
+    state.counters["device_bytes"] = double(cl->allocatedBytes() - before);
+    state.counters["private_bytes"] = double(s.privateBytes);
+    state.counters["tree_nodes"] = double(s.treeNodes);
+    state.counters["tiles"] = s.tiles;
+    if (countRays) {
+        Measurement m;
+        m.treeNodes = s.treeNodes;
+        m.deviceMs = state.iterations() ? devSum / double(state.iterations()) : 0;
+        try {
+            o.countRays = true;
+            pipeline->render(*scene, o);
+            m.rays = pipeline->stats().rays;
+            m.raysCounted = pipeline->stats().raysCounted;
+        } catch (const std::exception& e) {
+            state.SetLabel(std::string("ray count failed: ") + e.what());
+        }
+        deriveRayCounters(m, kind, o);
+        if (m.raysCounted) {
+            static const char* names[4] = {"rays_primary", "rays_reflection", "rays_refraction",
+                                           "rays_shadow"};
+            for (int i = 0; i < 4; ++i) state.counters[names[i]] = double(m.rays[i]);
+            state.counters["Mrays_per_s"] = m.mrays;
+            if (m.treeUsed >= 0) state.counters["tree_used"] = m.treeUsed;
+        }
+    }
+}
+
+std::vector<int> bounceList(const std::string& spec) {
+    SweepConfig c = parseSweep("[x]\nscenes = x\nbounces = " + spec + "\n", "--bounces");
+    return c.groups[0].bounces;
+}
+
+int benchmarkCommand(const Flags& f, int argc, char** argv) {
+    std::vector<std::string> deviceSpecs = f.devices;
+    if (deviceSpecs.empty()) deviceSpecs.push_back(f.device);
+    std::vector<Target> targets;
+    for (const std::string& spec : deviceSpecs) {
+        Target t;
+        t.cl = std::make_unique<ClContext>(selectDevice(spec), KernelSources(f.kernelDir));
+        if (deviceSpecs.size() > 1) t.tag = "/dev" + std::to_string(t.cl->device().index);
+        const DeviceInfo& d = t.cl->device();
+        std::string prefix = deviceSpecs.size() > 1 ? t.tag.substr(1) + "_" : "";
+        benchmark::AddCustomContext(prefix + "device", d.name);
+        benchmark::AddCustomContext(prefix + "device_slug", deviceSlug(d));
+        benchmark::AddCustomContext(prefix + "platform", d.platformName);
+        benchmark::AddCustomContext(prefix + "driver", d.driver);
+        targets.push_back(std::move(t));
+    }
+    benchmark::AddCustomContext("rtlab_commit", RTLAB_COMMIT);
+    benchmark::AddCustomContext("rtlab_timing", "manual time = device ms per frame (profiling "
+                                "events, sum over kernels) after " + std::to_string(f.warmup) +
+                                " warm-up frames");
+
+    // Scenes that fail to load (a PNG cubemap, say) are reported and left out.
+    static std::map<std::string, Scene> scenes;
+    auto scene = [&](const std::string& name) -> const Scene* {
+        if (auto it = scenes.find(name); it != scenes.end()) return &it->second;
+        try {
+            return &scenes.emplace(name, loadScene(scenePath(name, f.sceneDir), readFace)).first->second;
+        } catch (const Error& e) {
+            std::fprintf(stderr, "rtlab-bench: skipping scene %s: %s\n", name.c_str(), e.what());
+            return nullptr;
+        }
+    };
+
+    std::vector<Cell> cells;
+    if (!f.cells.empty()) {
+        SweepConfig config = loadSweep(findSweep(f.cells));
+        for (const std::string& s : sweepScenes(config)) scene(s);  // load, or report and drop
+        for (SweepGroup& g : config.groups)
+            std::erase_if(g.scenes, [&](const std::string& s) { return !scenes.count(s); });
+        std::erase_if(config.groups, [](const SweepGroup& g) { return g.scenes.empty(); });
+        cells = expandCells(config, [&](const std::string& n) -> const Scene& { return *scene(n); });
+    } else {
+        std::vector<int> bounces = bounceList(f.bounces);
+        for (const std::string& name : f.scenes) {
+            const Scene* s = scene(name);
+            if (!s) continue;
+            for (const std::string& size : f.sizes)
+                for (int b : bounces)
+                    for (const std::string& accel : s->triangles.empty() ? std::vector<std::string>{"bv"}
+                                                                         : f.accels)
+                        for (const std::string& p : f.pipelines) {
+                            Cell c;
+                            c.scene = name;
+                            c.pipeline = parsePipeline(p);
+                            c.options = s->defaults;
+                            if (std::sscanf(size.c_str(), "%dx%d", &c.options.width,
+                                            &c.options.height) != 2)
+                                throw Error("--sizes " + size + ": expected WIDTHxHEIGHT");
+                            c.options.bounces = b;
+                            c.options.accel = parseAccel(accel);
+                            c.accelApplies = !s->triangles.empty();
+                            cells.push_back(c);
+                        }
+        }
+    }
+    for (Target& t : targets)
+        for (const Cell& c : cells) {
+            const RenderOptions& o = c.options;
+            std::string name = "render/" + c.scene + "/" + pipelineName(c.pipeline) + "/" +
+                               std::to_string(o.width) + "x" + std::to_string(o.height) + "/b" +
+                               std::to_string(o.bounces) + "/s" + std::to_string(o.shadowSamples) +
+                               "/aa" + std::to_string(o.aa) + "/" +
+                               (c.accelApplies ? accelName(o.accel) : "-") + t.tag;
+            benchmark::RegisterBenchmark(name.c_str(), renderBenchmark, t.cl.get(),
+                                         scene(c.scene), c.pipeline, o, f.warmup,
+                                         f.countRays && c.countRays)
+                ->UseManualTime()
+                ->Unit(benchmark::kMillisecond)
+                ->Repetitions(f.repeats)
+                ->DisplayAggregatesOnly(f.repeats > 1);
+        }
+    (void)argc;
+    (void)argv;
+    benchmark::RunSpecifiedBenchmarks();
+    benchmark::Shutdown();
+    return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    for (int i = 1; i < argc; ++i)
+        if (!std::strcmp(argv[i], "--help") || !std::strcmp(argv[i], "-h")) {
+            std::fputs(kUsage, stdout);
+            std::puts("\nGoogle Benchmark's own flags: --benchmark_list_tests, --benchmark_filter, ...");
+            return 0;
+        }
+    try {
+        // Google Benchmark takes its --benchmark_* flags out of argv; the rest are ours.
+        benchmark::Initialize(&argc, argv);
+        Flags f = parseFlags(argc, argv);
+        if (f.listDevices) return listDevicesCommand();
+        if (!f.sweep.empty()) return sweepCommand(f);
+        return benchmarkCommand(f, argc, argv);
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "rtlab-bench: %s\n", e.what());
+        return 1;
+    }
+}

@@ -1,0 +1,202 @@
+// rtlab bench — the measurement protocol of one cell (see measure.h).
+#include "bench/measure.h"
+
+#include <algorithm>
+#include <cctype>
+#include <map>
+
+#include "core/error.h"
+
+namespace rt::bench {
+
+double median(std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    size_t n = v.size();
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+namespace {
+
+Measurement failure(const std::string& why) {
+    Measurement m;
+    m.error = why;
+    return m;
+}
+
+// Runs f; a failure becomes the text of the error instead of an exception.
+template <typename F>
+std::string attempt(F&& f) {
+    try {
+        f();
+        return "";
+    } catch (const Error& e) {
+        return e.what();
+    } catch (const cl::Error& e) {
+        return std::string(e.what()) + " failed with " + clErrorName(e.err());
+    } catch (const std::bad_alloc&) {
+        return "out of host memory";
+    }
+}
+
+struct Timed {
+    std::vector<double> device, wall;
+    std::map<std::string, std::vector<double>> kernels;
+    std::vector<std::string> kernelOrder;
+};
+
+}  // namespace
+
+std::vector<Measurement> measureCells(ClContext& cl, const Scene& scene,
+                                      const std::vector<PipelineKind>& kinds,
+                                      const RenderOptions& options, int warmup, int repeats,
+                                      bool countRays, bool keepImage) {
+    const size_t n = kinds.size();
+    std::vector<Measurement> out(n);
+    std::vector<std::unique_ptr<Pipeline>> pipelines(n);
+    std::vector<Timed> timed(n);
+    RenderOptions o = options;
+    o.countRays = false;
+    // A fresh pipeline per cell: its buffers are its own, so the allocation delta is its memory,
+    // and a large wavefront tree does not outlive the cell. Programs stay cached in the context.
+    std::vector<bool> rendered(n, false);
+    // The first frame allocates the pipeline's buffers: what it adds is the pipeline's memory.
+    auto render = [&](size_t k) {
+        size_t before = cl.allocatedBytes();
+        Image frame = pipelines[k]->render(scene, o);
+        if (!rendered[k]) out[k].deviceBytes = cl.allocatedBytes() - before;
+        rendered[k] = true;
+        return frame;
+    };
+    for (size_t k = 0; k < n; ++k) {
+        std::string error = attempt([&] {
+            pipelines[k] = makePipeline(kinds[k], &cl);
+            for (int i = 0; i < warmup; ++i) render(k);
+        });
+        if (!error.empty()) {
+            out[k] = failure(error);
+            pipelines[k].reset();
+        }
+    }
+    // Frames of the pipelines alternate, so that a burst of load on the machine or a clock change
+    // lands on both sides of their ratio.
+    for (int r = 0; r < repeats; ++r)
+        for (size_t k = 0; k < n; ++k) {
+            if (!pipelines[k]) continue;
+            std::string error = attempt([&] {
+                Image frame = render(k);
+                const FrameStats& s = pipelines[k]->stats();
+                Timed& t = timed[k];
+                t.device.push_back(s.deviceMs);
+                t.wall.push_back(s.hostMs);
+                for (const auto& [name, ms] : s.kernelMs) {
+                    if (!t.kernels.count(name)) t.kernelOrder.push_back(name);
+                    t.kernels[name].push_back(ms);
+                }
+                if (keepImage && r == repeats - 1) out[k].image = std::move(frame);
+            });
+            if (!error.empty()) {
+                out[k] = failure(error);
+                pipelines[k].reset();
+            }
+        }
+    for (size_t k = 0; k < n; ++k) {
+        if (!pipelines[k]) continue;
+        Measurement& m = out[k];
+        const FrameStats& s = pipelines[k]->stats();
+        m.treeBytes = s.treeBytes;
+        m.privateBytes = s.privateBytes;
+        m.treeNodes = s.treeNodes;
+        m.branching = s.branching;
+        m.tiles = s.tiles;
+        const Timed& t = timed[k];
+        m.frames = repeats;
+        m.deviceMs = median(t.device);
+        m.deviceMsMin = *std::min_element(t.device.begin(), t.device.end());
+        m.deviceMsMax = *std::max_element(t.device.begin(), t.device.end());
+        m.wallMs = median(t.wall);
+        for (const std::string& name : t.kernelOrder)
+            m.kernelMs.emplace_back(name, median(t.kernels.at(name)));
+        if (countRays) {
+            // Untimed, and with its own program (RT_COUNT_RAYS), after the timed frames.
+            std::string error = attempt([&] {
+                RenderOptions counting = options;
+                counting.countRays = true;
+                pipelines[k]->render(scene, counting);
+                m.rays = pipelines[k]->stats().rays;
+                m.raysCounted = pipelines[k]->stats().raysCounted;
+            });
+            if (error.empty()) deriveRayCounters(m, kinds[k], options);
+        }
+        m.ok = true;
+        pipelines[k].reset();
+    }
+    return out;
+}
+
+Measurement measureCell(ClContext& cl, const Scene& scene, PipelineKind kind,
+                        const RenderOptions& options, int warmup, int repeats, bool countRays,
+                        bool keepImage) {
+    return measureCells(cl, scene, {kind}, options, warmup, repeats, countRays, keepImage)[0];
+}
+
+void deriveRayCounters(Measurement& m, PipelineKind kind, const RenderOptions& o) {
+    if (!m.raysCounted) return;
+    double total = double(m.rays[0] + m.rays[1] + m.rays[2] + m.rays[3]);
+    if (m.deviceMs > 0) m.mrays = total / (m.deviceMs * 1e3);
+    if (kind == PipelineKind::Wave && !o.adaptiveAa) {
+        // Every traced primary, reflected or refracted ray fills one tree slot; shadow rays
+        // live inside their node.
+        double slots = double(o.width) * o.height * o.aa * o.aa * double(m.treeNodes);
+        if (slots > 0) m.treeUsed = double(m.rays[0] + m.rays[1] + m.rays[2]) / slots;
+    }
+}
+
+std::string deviceSlug(const DeviceInfo& d) {
+    std::string name = d.name;
+    std::string platform = d.platformName;
+    std::transform(platform.begin(), platform.end(), platform.begin(),
+                   [](unsigned char c) { return char(std::tolower(c)); });
+    if (platform.find("portable computing language") != std::string::npos ||
+        platform.find("pocl") != std::string::npos)
+        name = "pocl " + name;
+    std::string slug;
+    for (unsigned char c : name) {
+        if (std::isalnum(c)) {
+            slug += char(std::tolower(c));
+        } else if (!slug.empty() && slug.back() != '-') {
+            slug += '-';
+        }
+    }
+    while (!slug.empty() && slug.back() == '-') slug.pop_back();
+    return slug.empty() ? "unknown-device" : slug;
+}
+
+nlohmann::json deviceJson(const DeviceInfo& d) {
+    return {{"device", d.name},
+            {"device_slug", deviceSlug(d)},
+            {"device_type", d.type},
+            {"platform", d.platformName},
+            {"device_version", d.version},
+            {"driver", d.driver},
+            {"compute_units", d.computeUnits},
+            {"global_mem_bytes", d.globalMem},
+            {"max_alloc_bytes", d.maxAlloc},
+            {"commit", RTLAB_COMMIT}};
+}
+
+nlohmann::json sceneJson(const Scene& s) {
+    size_t lights = s.lights.size();
+    size_t area = std::count_if(s.lights.begin(), s.lights.end(),
+                                [](const dev::Light& l) { return l.radius > 0; });
+    return {{"objects", s.spheres.size() + s.planes.size() + s.triangles.size()},
+            {"spheres", s.spheres.size()},
+            {"planes", s.planes.size()},
+            {"triangles", s.triangles.size()},
+            {"meshes", s.meshes.size()},
+            {"lights", lights},
+            {"area_lights", area},
+            {"transparent", s.hasTransparency()},
+            {"cubemap", s.environment.cubemapSize > 0}};
+}
+
+}  // namespace rt::bench

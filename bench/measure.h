@@ -1,0 +1,68 @@
+// rtlab bench — measuring one cell: warm-up frames, then timed frames whose device time is the
+// sum of the frame's kernels by OpenCL profiling events, reported as medians; then, untimed, one
+// frame with the device ray counters (their atomics would distort the timed frames).
+// Used by rtlab-bench (Google Benchmark and --sweep) and by `rtlab sweep`.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "core/cl_runtime.h"
+#include "core/image.h"
+#include "core/pipeline.h"
+#include "core/scene.h"
+
+namespace rt::bench {
+
+struct Measurement {
+    bool ok = false;
+    std::string error;          // why the cell could not be measured (ok = false)
+    int frames = 0;             // timed frames
+    double deviceMs = 0;        // median over the timed frames of the kernels' summed time
+    double deviceMsMin = 0, deviceMsMax = 0;
+    double wallMs = 0;          // median host wall time of render(), read-back included
+    std::vector<std::pair<std::string, double>> kernelMs;  // median per kernel name
+    size_t deviceBytes = 0;     // global memory the pipeline allocated for this frame
+    size_t treeBytes = 0, privateBytes = 0;
+    long long treeNodes = 0;
+    int branching = 1, tiles = 1;
+    std::array<uint64_t, 4> rays{};  // primary, reflection, refraction, shadow
+    bool raysCounted = false;
+    double mrays = 0;           // million rays per second of device time (when counted)
+    double treeUsed = -1;       // wavefront: traced slots / allocated slots (when counted)
+    Image image;                // the last timed frame, when asked for
+};
+
+// Never throws for a cell that fails (CL error, a limit): the Measurement says why.
+Measurement measureCell(ClContext& cl, const Scene& scene, PipelineKind kind,
+                        const RenderOptions& options, int warmup, int repeats, bool countRays,
+                        bool keepImage);
+
+// Several pipelines on the same setting, their timed frames interleaved (mega, wave, mega, ...),
+// so that their ratio is measured under the same conditions. One result per kind.
+std::vector<Measurement> measureCells(ClContext& cl, const Scene& scene,
+                                      const std::vector<PipelineKind>& kinds,
+                                      const RenderOptions& options, int warmup, int repeats,
+                                      bool countRays, bool keepImage);
+
+// Fills mrays and treeUsed from the ray counts and the median device time.
+void deriveRayCounters(Measurement& m, PipelineKind kind, const RenderOptions& options);
+
+// The median of a non-empty list.
+double median(std::vector<double> v);
+
+// Short, filesystem-safe name for a device: "nvidia-h100-80gb-hbm3", "pocl-amd-epyc-...".
+std::string deviceSlug(const DeviceInfo& device);
+
+// What every row carries about where it ran and what was built.
+nlohmann::json deviceJson(const DeviceInfo& device);
+
+// Object counts of a scene, for the results tables.
+nlohmann::json sceneJson(const Scene& scene);
+
+}  // namespace rt::bench

@@ -1,0 +1,326 @@
+// rtlab bench — reading sweep files (format: bench/sweeps/README.md) and expanding them into cells.
+#include "bench/sweep_config.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <regex>
+#include <set>
+#include <sstream>
+
+#include "core/accel.h"
+#include "core/error.h"
+
+namespace rt::bench {
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string trim(const std::string& s) {
+    size_t a = s.find_first_not_of(" \t\r"), b = s.find_last_not_of(" \t\r");
+    return a == std::string::npos ? "" : s.substr(a, b - a + 1);
+}
+
+std::vector<std::string> words(const std::string& s) {
+    std::vector<std::string> out;
+    std::string w;
+    for (char c : s) {
+        if (c == ' ' || c == '\t' || c == ',') {
+            if (!w.empty()) out.push_back(w);
+            w.clear();
+        } else {
+            w += c;
+        }
+    }
+    if (!w.empty()) out.push_back(w);
+    return out;
+}
+
+// Parses one key's value; `where` prefixes errors ("bench/sweeps/full:12").
+class ValueParser {
+public:
+    explicit ValueParser(std::string where) : where_(std::move(where)) {}
+    [[noreturn]] void fail(const std::string& why) const { throw Error(where_ + ": " + why); }
+
+    int integer(const std::string& w, int lo, int hi) const {
+        size_t used = 0;
+        int v = 0;
+        try {
+            v = std::stoi(w, &used);
+        } catch (const std::exception&) {
+            used = 0;
+        }
+        if (used != w.size() || w.empty()) fail("'" + w + "' is not an integer");
+        if (v < lo || v > hi)
+            fail(w + " is out of range " + std::to_string(lo) + ".." + std::to_string(hi));
+        return v;
+    }
+    // "1 2 4", "0..8", or "default" (empty list).
+    std::vector<int> integers(const std::string& value, int lo, int hi) const {
+        std::vector<int> out;
+        for (const std::string& w : words(value)) {
+            if (w == "default") continue;
+            size_t dots = w.find("..");
+            if (dots == std::string::npos) {
+                out.push_back(integer(w, lo, hi));
+                continue;
+            }
+            int a = integer(w.substr(0, dots), lo, hi), b = integer(w.substr(dots + 2), lo, hi);
+            if (b < a) fail("range " + w + " runs backwards");
+            for (int i = a; i <= b; ++i) out.push_back(i);
+        }
+        return out;
+    }
+    // "4096", "64K", "512M", "2G".
+    size_t bytes(const std::string& value) const {
+        static const std::regex re("([0-9]+(\\.[0-9]+)?)([KMG]?)");
+        std::smatch m;
+        if (!std::regex_match(value, m, re)) fail("'" + value + "': expected bytes such as 512M");
+        double scale = m[3] == "K" ? 1024.0 : m[3] == "M" ? 1048576.0 : m[3] == "G" ? 1073741824.0 : 1;
+        return size_t(std::llround(std::stod(m[1]) * scale));
+    }
+    bool boolean(const std::string& value) const {
+        if (value == "yes" || value == "true" || value == "on") return true;
+        if (value == "no" || value == "false" || value == "off") return false;
+        fail("expected yes or no, got '" + value + "'");
+    }
+    template <typename F>
+    auto wrap(F&& f) const {
+        try {
+            return f();
+        } catch (const Error& e) {
+            fail(e.what());
+        }
+    }
+
+private:
+    std::string where_;
+};
+
+const std::set<std::string> kGroupKeys = {"scenes", "pipelines", "sizes",  "bounces",
+                                          "shadow-samples", "aa", "accel", "layout",
+                                          "memory-budget", "adaptive", "images",
+                                          "repeats", "warmup", "count-rays"};
+const std::set<std::string> kTopKeys = {"reference-bounces",
+                                        "reference-shadow-samples", "reference-aa"};
+
+void applyGroupKey(SweepGroup& g, const std::string& key, const std::string& value,
+                   const ValueParser& p) {
+    if (key == "scenes") {
+        g.scenes = words(value);
+    } else if (key == "pipelines") {
+        g.pipelines.clear();
+        for (const std::string& w : words(value)) {
+            PipelineKind k = p.wrap([&] { return parsePipeline(w); });
+            if (k == PipelineKind::Cpu) p.fail("the cpu reference is not a measured pipeline");
+            g.pipelines.push_back(k);
+        }
+    } else if (key == "sizes") {
+        g.sizes.clear();
+        for (const std::string& w : words(value)) {
+            if (w == "default") continue;
+            static const std::regex re("([0-9]{1,5})x([0-9]{1,5})");
+            std::smatch m;
+            if (!std::regex_match(w, m, re)) p.fail("size '" + w + "': expected WIDTHxHEIGHT");
+            g.sizes.emplace_back(p.integer(m[1], 1, 16384), p.integer(m[2], 1, 16384));
+        }
+    } else if (key == "bounces") {
+        g.bounces = p.integers(value, 0, 16);
+    } else if (key == "shadow-samples") {
+        g.shadowSamples = p.integers(value, 1, RT_MAX_SHADOW_SAMPLES);
+    } else if (key == "aa") {
+        g.aa = p.integers(value, 1, 16);
+    } else if (key == "accel") {
+        g.accels.clear();
+        for (const std::string& w : words(value))
+            if (w != "default") g.accels.push_back(p.wrap([&] { return parseAccel(w); }));
+    } else if (key == "layout") {
+        if (value != "tree" && value != "weighted") p.fail("layout must be tree or weighted");
+        g.layout = value == "tree" ? RenderOptions::Layout::Tree : RenderOptions::Layout::Weighted;
+    } else if (key == "memory-budget") {
+        g.memoryBudget = value == "default" ? 0 : p.bytes(value);
+    } else if (key == "adaptive") {
+        g.adaptive = p.boolean(value);
+    } else if (key == "images") {
+        g.images = p.boolean(value);
+    } else if (key == "repeats") {
+        g.repeats = p.integer(value, 1, 1000);
+    } else if (key == "warmup") {
+        g.warmup = p.integer(value, 0, 100);
+    } else if (key == "count-rays") {
+        g.countRays = p.boolean(value) ? 1 : 0;
+    }
+}
+
+}  // namespace
+
+SweepConfig parseSweep(const std::string& text, const fs::path& path) {
+    SweepConfig c;
+    c.path = path;
+    c.name = path.stem().string();
+    c.text = text;
+    SweepGroup defaults;  // keys before the first [group]
+    std::vector<std::vector<std::pair<std::string, std::string>>> groupKeys;
+    std::vector<std::string> groupNames;
+    std::istringstream in(text);
+    std::string line;
+    for (int n = 1; std::getline(in, line); ++n) {
+        ValueParser p(path.string() + ":" + std::to_string(n));
+        line = trim(line.substr(0, line.find('#')));
+        if (line.empty()) continue;
+        if (line.front() == '[') {
+            if (line.back() != ']' || line.size() < 3) p.fail("expected [group-name]");
+            groupNames.push_back(trim(line.substr(1, line.size() - 2)));
+            groupKeys.emplace_back();
+            continue;
+        }
+        size_t eq = line.find('=');
+        if (eq == std::string::npos) p.fail("expected 'key = value' or '[group]'");
+        std::string key = trim(line.substr(0, eq)), value = trim(line.substr(eq + 1));
+        bool top = kTopKeys.count(key), group = kGroupKeys.count(key);
+        if (!top && !group) p.fail("unknown key '" + key + "' (see bench/sweeps/README.md)");
+        if (top) {
+            if (!groupNames.empty()) p.fail("'" + key + "' belongs before the first [group]");
+            if (key == "reference-bounces") c.referenceBounces = p.integer(value, 0, 16);
+            if (key == "reference-shadow-samples")
+                c.referenceShadowSamples = p.integer(value, 1, RT_MAX_SHADOW_SAMPLES);
+            if (key == "reference-aa") c.referenceAa = p.integer(value, 1, 16);
+        } else if (groupNames.empty()) {
+            applyGroupKey(defaults, key, value, p);
+            if (key == "repeats") c.repeats = defaults.repeats;
+            if (key == "warmup") c.warmup = defaults.warmup;
+            if (key == "count-rays") c.countRays = defaults.countRays == 1;
+        } else {
+            // Validate now (for the line number), apply over the defaults below.
+            SweepGroup scratch;
+            applyGroupKey(scratch, key, value, p);
+            groupKeys.back().emplace_back(key, value + "\n" + std::to_string(n));
+        }
+    }
+    if (groupNames.empty()) throw Error(path.string() + ": no [group] (see bench/sweeps/README.md)");
+    for (size_t i = 0; i < groupNames.size(); ++i) {
+        SweepGroup g = defaults;
+        g.name = groupNames[i];
+        for (const auto& [key, valueAndLine] : groupKeys[i]) {
+            size_t nl = valueAndLine.rfind('\n');
+            ValueParser p(path.string() + ":" + valueAndLine.substr(nl + 1));
+            applyGroupKey(g, key, valueAndLine.substr(0, nl), p);
+        }
+        if (g.scenes.empty()) throw Error(path.string() + ": [" + g.name + "] lists no scenes");
+        if (g.pipelines.empty()) g.pipelines = {PipelineKind::Mega, PipelineKind::Wave};
+        c.groups.push_back(g);
+    }
+    return c;
+}
+
+SweepConfig loadSweep(const fs::path& path) {
+    std::ifstream f(path);
+    if (!f) throw Error(path.string() + ": cannot read the sweep file");
+    std::stringstream ss;
+    ss << f.rdbuf();
+    return parseSweep(ss.str(), path);
+}
+
+fs::path findSweep(const std::string& nameOrPath) {
+    fs::path p(nameOrPath);
+    if (fs::is_regular_file(p)) return p;
+    for (fs::path dir : {fs::path("bench/sweeps"), fs::path(RTLAB_SOURCE_DIR) / "bench/sweeps"})
+        if (fs::is_regular_file(dir / p)) return dir / p;
+    throw Error(nameOrPath + ": no such sweep file (give a path, or a name in bench/sweeps/)");
+}
+
+std::string Cell::settingKey() const {
+    const RenderOptions& o = options;
+    std::ostringstream k;
+    k << scene << '|' << o.width << 'x' << o.height << '|' << o.bounces << '|' << o.shadowSamples
+      << '|' << o.aa << '|' << (accelApplies ? accelName(o.accel) : "-") << '|' << int(o.layout)
+      << '|' << o.memoryBudget << '|' << o.adaptiveAa;
+    return k.str();
+}
+
+std::string Cell::key() const { return std::string(pipelineName(pipeline)) + '|' + settingKey(); }
+
+std::string Cell::label() const {
+    const RenderOptions& o = options;
+    std::ostringstream l;
+    l << scene << ' ' << pipelineName(pipeline) << ' ' << o.width << 'x' << o.height << " b"
+      << o.bounces << " s" << o.shadowSamples << " aa" << o.aa;
+    if (accelApplies) l << ' ' << accelName(o.accel);
+    if (o.layout == RenderOptions::Layout::Weighted) l << " weighted";
+    if (o.adaptiveAa) l << " adaptive";
+    return l.str();
+}
+
+std::vector<Cell> expandCells(const SweepConfig& config,
+                              const std::function<const Scene&(const std::string&)>& sceneFor) {
+    std::vector<Cell> cells;
+    std::map<std::string, size_t> index;
+    for (const SweepGroup& g : config.groups) {
+        for (const std::string& name : g.scenes) {
+            const Scene& scene = sceneFor(name);
+            const RenderOptions& d = scene.defaults;
+            auto orDefault = [](const std::vector<int>& v, int def) {
+                return v.empty() ? std::vector<int>{def} : v;
+            };
+            auto sizes = g.sizes.empty() ? std::vector<std::pair<int, int>>{{d.width, d.height}}
+                                         : g.sizes;
+            auto accels = g.accels.empty() ? std::vector<RenderOptions::Accel>{d.accel} : g.accels;
+            bool triangles = !scene.triangles.empty();
+            if (!triangles) accels = {d.accel};  // the accel changes nothing without triangles
+            // Pipelines innermost: the two pipelines of a setting run back to back, so slow
+            // drift of the machine (clocks, other load) hits both sides of a ratio alike.
+            for (auto [w, h] : sizes)
+                for (int b : orDefault(g.bounces, d.bounces))
+                    for (int s : orDefault(g.shadowSamples, d.shadowSamples))
+                        for (int a : orDefault(g.aa, d.aa))
+                            for (RenderOptions::Accel accel : accels)
+                                for (PipelineKind pipeline : g.pipelines) {
+                                    Cell c;
+                                    c.scene = name;
+                                    c.pipeline = pipeline;
+                                    c.options = d;
+                                    c.options.width = w;
+                                    c.options.height = h;
+                                    c.options.bounces = b;
+                                    c.options.shadowSamples = s;
+                                    c.options.aa = a;
+                                    c.options.accel = accel;
+                                    c.options.layout = g.layout;
+                                    c.options.memoryBudget = g.memoryBudget;
+                                    c.options.adaptiveAa = g.adaptive;
+                                    c.accelApplies = triangles;
+                                    c.groups = {g.name};
+                                    c.images = g.images;
+                                    c.repeats = g.repeats > 0 ? g.repeats : config.repeats;
+                                    c.warmup = g.warmup >= 0 ? g.warmup : config.warmup;
+                                    c.countRays = g.countRays >= 0 ? g.countRays == 1
+                                                                   : config.countRays;
+                                    auto [it, fresh] = index.emplace(c.key(), cells.size());
+                                    if (fresh) {
+                                        cells.push_back(c);
+                                        continue;
+                                    }
+                                    Cell& old = cells[it->second];
+                                    if (std::find(old.groups.begin(), old.groups.end(), g.name) ==
+                                        old.groups.end())
+                                        old.groups.push_back(g.name);
+                                    old.images = old.images || g.images;
+                                    old.repeats = std::max(old.repeats, c.repeats);
+                                    old.warmup = std::max(old.warmup, c.warmup);
+                                    old.countRays = old.countRays || c.countRays;
+                                }
+        }
+    }
+    return cells;
+}
+
+std::vector<std::string> sweepScenes(const SweepConfig& config) {
+    std::vector<std::string> out;
+    for (const SweepGroup& g : config.groups)
+        for (const std::string& s : g.scenes)
+            if (std::find(out.begin(), out.end(), s) == out.end()) out.push_back(s);
+    return out;
+}
+
+}  // namespace rt::bench

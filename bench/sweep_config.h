@@ -1,0 +1,74 @@
+// rtlab bench — sweep files (bench/sweeps/*, format in bench/sweeps/README.md): named groups of
+// cells, each group a Cartesian product of scenes x pipelines x sizes x bounce limits x shadow
+// samples x AA x accel. Read by `rtlab sweep` and `rtlab-bench --sweep`; both run the same cells.
+#pragma once
+
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "core/pipeline.h"
+#include "core/scene.h"
+
+namespace rt::bench {
+
+// One group of a sweep file. An empty list means "the scene's default".
+struct SweepGroup {
+    std::string name;  // "resolution", "bounces", "accel", "accuracy", or any other
+    std::vector<std::string> scenes;
+    std::vector<PipelineKind> pipelines;
+    std::vector<std::pair<int, int>> sizes;
+    std::vector<int> bounces, shadowSamples, aa;
+    std::vector<RenderOptions::Accel> accels;
+    RenderOptions::Layout layout = RenderOptions::Layout::Tree;
+    size_t memoryBudget = 0;
+    bool adaptive = false;
+    bool images = false;  // keep the frame for the accuracy comparison
+    int repeats = -1, warmup = -1;  // -1: the sweep's
+    int countRays = -1;             // -1: the sweep's, else 0 or 1
+};
+
+struct SweepConfig {
+    std::string name;                 // file stem: "quick", "full"
+    std::filesystem::path path;
+    std::string text;                 // the file as read, recorded with the results
+    int repeats = 5;                  // timed frames per cell; the median is reported
+    int warmup = 2;                   // untimed frames first (program build, allocation, caches)
+    bool countRays = true;            // one extra untimed frame with device ray counters
+    // The converged reference the accuracy group is compared against (CPU, double precision).
+    int referenceBounces = 12, referenceShadowSamples = 64, referenceAa = 8;
+    std::vector<SweepGroup> groups;
+};
+
+// Throws rt::Error "<file>:<line>: <reason>".
+SweepConfig parseSweep(const std::string& text, const std::filesystem::path& path);
+SweepConfig loadSweep(const std::filesystem::path& path);
+
+// A sweep named by path, or by bare name under bench/sweeps/ of the source tree.
+std::filesystem::path findSweep(const std::string& nameOrPath);
+
+// One measured cell: a scene, a pipeline and fully resolved render options.
+struct Cell {
+    std::string scene;
+    PipelineKind pipeline = PipelineKind::Mega;
+    RenderOptions options;
+    std::vector<std::string> groups;  // every group that asked for this cell
+    bool images = false;
+    int repeats = 5, warmup = 2;
+    bool countRays = true;
+    bool accelApplies = true;         // false when the scene has no triangles
+    std::string key() const;          // identity, for de-duplication
+    std::string settingKey() const;   // the same without the pipeline
+    std::string label() const;        // "cornell wave 1280x720 b4 s8 aa1 bv"
+};
+
+// Expands the groups over the loaded scenes' defaults, merging duplicates (file order kept).
+// sceneFor returns the loaded scene of a name.
+std::vector<Cell> expandCells(const SweepConfig& config,
+                              const std::function<const Scene&(const std::string&)>& sceneFor);
+
+// Every scene name the sweep uses, in first-use order.
+std::vector<std::string> sweepScenes(const SweepConfig& config);
+
+}  // namespace rt::bench

@@ -1,0 +1,289 @@
+// rtlab bench — the sweep loop (see sweep_runner.h).
+#include "bench/sweep_runner.h"
+
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <ctime>
+#include <map>
+#include <memory>
+
+#include "bench/measure.h"
+#include "core/accel.h"
+#include "core/error.h"
+
+namespace rt::bench {
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string utcNow() {
+    std::time_t t = std::time(nullptr);
+    char buf[32];
+    std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&t));
+    return buf;
+}
+
+// A rough relative cost of a cell, scaled per scene by what was measured so far, for the ETA.
+double cellCost(const Cell& c, const SweepConfig& config) {
+    const RenderOptions& o = c.options;
+    (void)config;
+    double frames = c.warmup + c.repeats + (c.countRays ? 1 : 0);
+    return double(o.width) * o.height * o.aa * o.aa * (1.0 + o.bounces) * frames;
+}
+
+class Progress {
+public:
+    Progress(const std::vector<Cell>& cells, const SweepConfig& config)
+        : cells_(cells), config_(config), tty_(isatty(fileno(stderr))),
+          start_(std::chrono::steady_clock::now()) {
+        for (const Cell& c : cells) total_ += cellCost(c, config);
+    }
+    double elapsed() const {
+        return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+    }
+    // Seconds the cells from i on should take, from the rate seen on their scene (else overall).
+    double remaining(size_t i) const {
+        double overall = doneCost_ > 0 ? spent_ / doneCost_ : 0;
+        double eta = 0;
+        for (size_t j = i; j < cells_.size(); ++j) {
+            auto it = sceneRate_.find(cells_[j].scene);
+            double rate = it != sceneRate_.end() ? it->second.first / it->second.second : overall;
+            eta += rate * cellCost(cells_[j], config_);
+        }
+        return eta;
+    }
+    double predict(size_t i, size_t j) const { return remaining(i) - remaining(j); }
+    void starting(size_t i, size_t j) {
+        if (!tty_) return;
+        std::string what = cells_[i].label();
+        for (size_t k = i + 1; k < j; ++k)
+            what += std::string(" + ") + pipelineName(cells_[k].pipeline);
+        std::fprintf(stderr, "\r\033[K[%zu/%zu] %s ... | elapsed %s, ETA %s", i + 1, cells_.size(),
+                     what.c_str(), formatDuration(elapsed()).c_str(),
+                     doneCost_ > 0 ? formatDuration(remaining(i)).c_str() : "?");
+        std::fflush(stderr);
+    }
+    void finished(size_t i, double seconds, const Measurement& m) {
+        const Cell& c = cells_[i];
+        double cost = cellCost(c, config_);
+        spent_ += seconds;
+        doneCost_ += cost;
+        auto& r = sceneRate_[c.scene];
+        r.first += seconds;
+        r.second += cost;
+        char result[96];
+        if (m.ok)
+            std::snprintf(result, sizeof result, "%.3f ms", m.deviceMs);
+        else
+            std::snprintf(result, sizeof result, "failed");
+        std::fprintf(stderr, "%s[%zu/%zu] %s: %s | elapsed %s, ETA %s%s", tty_ ? "\r\033[K" : "",
+                     i + 1, cells_.size(), c.label().c_str(), result,
+                     formatDuration(elapsed()).c_str(), formatDuration(remaining(i + 1)).c_str(),
+                     tty_ ? "" : "\n");
+        if (!m.ok) std::fprintf(stderr, "%s    %s\n", tty_ ? "\n" : "", m.error.c_str());
+        std::fflush(stderr);
+    }
+    void done() {
+        if (tty_) std::fprintf(stderr, "\n");
+    }
+
+private:
+    const std::vector<Cell>& cells_;
+    const SweepConfig& config_;
+    bool tty_;
+    std::chrono::steady_clock::time_point start_;
+    double total_ = 0, spent_ = 0, doneCost_ = 0;
+    std::map<std::string, std::pair<double, double>> sceneRate_;  // seconds, cost
+};
+
+nlohmann::json rowJson(const SweepConfig& config, const Cell& c, const Measurement& m,
+                       const nlohmann::json& device, const nlohmann::json& scene) {
+    const RenderOptions& o = c.options;
+    nlohmann::json row = {
+        {"sweep", config.name},
+        {"cell", c.key()},
+        {"groups", c.groups},
+        {"scene", c.scene},
+        {"pipeline", pipelineName(c.pipeline)},
+        {"width", o.width},
+        {"height", o.height},
+        {"bounces", o.bounces},
+        {"shadow_samples", o.shadowSamples},
+        {"aa", o.aa},
+        {"accel", c.accelApplies ? accelName(o.accel) : "-"},
+        {"layout", o.layout == RenderOptions::Layout::Tree ? "tree" : "weighted"},
+        {"memory_budget", o.memoryBudget},
+        {"adaptive", o.adaptiveAa},
+        {"robust_sphere", o.robustSphere},
+        {"watertight", o.watertight},
+        {"scaled_offset", o.scaledOffset},
+        {"warmup", c.warmup},
+        {"repeats", c.repeats},
+        {"status", m.ok ? "ok" : "error"},
+        {"error", m.error},
+    };
+    if (m.ok) {
+        nlohmann::json kernels = nlohmann::json::object();
+        for (const auto& [name, ms] : m.kernelMs) kernels[name] = ms;
+        row.update({{"device_ms", m.deviceMs},
+                    {"device_ms_min", m.deviceMsMin},
+                    {"device_ms_max", m.deviceMsMax},
+                    {"wall_ms", m.wallMs},
+                    {"kernel_ms", kernels},
+                    {"device_bytes", m.deviceBytes},
+                    {"tree_bytes", m.treeBytes},
+                    {"private_bytes", m.privateBytes},
+                    {"tree_nodes", m.treeNodes},
+                    {"branching", m.branching},
+                    {"tiles", m.tiles}});
+        if (m.raysCounted) {
+            row["rays"] = {{"primary", m.rays[0]},
+                           {"reflection", m.rays[1]},
+                           {"refraction", m.rays[2]},
+                           {"shadow", m.rays[3]}};
+            row["mrays_per_s"] = m.mrays;
+            if (m.treeUsed >= 0) row["tree_used"] = m.treeUsed;
+        }
+    }
+    row["scene_info"] = scene;
+    row.update(device);  // device, driver, platform, commit on every row
+    return row;
+}
+
+}  // namespace
+
+std::string formatDuration(double s) {
+    if (!(s >= 0) || s > 1e7) return "?";
+    long t = std::lround(s);
+    char buf[32];
+    if (t >= 3600)
+        std::snprintf(buf, sizeof buf, "%ldh%02ldm", t / 3600, t / 60 % 60);
+    else if (t >= 60)
+        std::snprintf(buf, sizeof buf, "%ldm%02lds", t / 60, t % 60);
+    else
+        std::snprintf(buf, sizeof buf, "%lds", t);
+    return buf;
+}
+
+fs::path scenePath(const std::string& name, const fs::path& sceneDir) {
+    fs::path p(name);
+    if (p.has_extension()) return p;
+    if (!sceneDir.empty()) return sceneDir / (name + ".json");
+    if (fs::exists(fs::path("scenes") / (name + ".json"))) return fs::path("scenes") / (name + ".json");
+    return fs::path(RTLAB_SOURCE_DIR) / "scenes" / (name + ".json");
+}
+
+std::string imageName(const nlohmann::json& row) {
+    std::string name = row.at("scene").get<std::string>() + "-" +
+                       row.at("pipeline").get<std::string>() + "-" +
+                       std::to_string(row.at("width").get<int>()) + "x" +
+                       std::to_string(row.at("height").get<int>()) + "-b" +
+                       std::to_string(row.at("bounces").get<int>()) + "-s" +
+                       std::to_string(row.at("shadow_samples").get<int>()) + "-aa" +
+                       std::to_string(row.at("aa").get<int>());
+    std::string accel = row.at("accel");
+    if (accel != "-") name += "-" + accel;
+    if (row.at("layout") != "tree") name += "-" + row.at("layout").get<std::string>();
+    if (row.at("adaptive").get<bool>()) name += "-adaptive";
+    for (char& c : name)
+        if (!std::isalnum((unsigned char)c) && c != '-' && c != '.' && c != '_') c = '_';
+    return name + ".pfm";
+}
+
+nlohmann::json sweepSettingsJson(const SweepConfig& c) {
+    nlohmann::json groups = nlohmann::json::array();
+    for (const SweepGroup& g : c.groups) groups.push_back(g.name);
+    return {{"repeats", c.repeats},
+            {"warmup", c.warmup},
+            {"count_rays", c.countRays},
+            {"reference", {{"pipeline", "cpu"},
+                           {"bounces", c.referenceBounces},
+                           {"shadow_samples", c.referenceShadowSamples},
+                           {"aa", c.referenceAa}}},
+            {"groups", groups},
+            {"timing", "device time = sum of the frame's kernels by OpenCL profiling events; "
+                       "median of `repeats` frames after `warmup` untimed ones; rays counted "
+                       "in one further untimed frame"}};
+}
+
+SweepSummary runSweep(const SweepConfig& config, const SweepRunOptions& options,
+                      const std::function<void(const nlohmann::json&)>& onStart,
+                      const RowSink& sink) {
+    std::map<std::string, Scene> scenes;
+    std::map<std::string, nlohmann::json> sceneInfo;
+    for (const std::string& name : sweepScenes(config)) {
+        scenes.emplace(name, loadScene(scenePath(name, options.sceneDir), options.readImage));
+        sceneInfo[name] = sceneJson(scenes.at(name));
+    }
+    std::vector<Cell> cells =
+        expandCells(config, [&](const std::string& n) -> const Scene& { return scenes.at(n); });
+    size_t before = cells.size();
+    std::erase_if(cells, [&](const Cell& c) { return options.skip.count(c.key()) > 0; });
+
+    ClContext cl(selectDevice(options.device), options.sources);
+    nlohmann::json device = deviceJson(cl.device());
+    SweepSummary summary;
+    summary.cells = int(cells.size());
+    summary.skipped = int(before - cells.size());
+    summary.meta = {{"sweep", config.name},
+                    {"config_file", config.path.string()},
+                    {"config", config.text},
+                    {"settings", sweepSettingsJson(config)},
+                    {"scenes", sceneInfo},
+                    {"started", utcNow()},
+                    {"cells", cells.size()},
+                    {"skipped_as_done", summary.skipped}};
+    summary.meta.update(device);
+    std::fprintf(stderr, "sweep %s: %zu cells on %s, commit %s\n", config.name.c_str(), cells.size(),
+                 cl.device().label().c_str(), RTLAB_COMMIT);
+    if (onStart) onStart(summary.meta);
+
+    Progress progress(cells, config);
+    for (size_t i = 0; i < cells.size();) {
+        // The pipelines of one setting are adjacent (expandCells) and measured together, their
+        // frames interleaved.
+        size_t j = i + 1;
+        while (j < cells.size() && cells[j].settingKey() == cells[i].settingKey() &&
+               cells[j].countRays == cells[i].countRays && cells[j].images == cells[i].images &&
+               cells[j].repeats == cells[i].repeats && cells[j].warmup == cells[i].warmup)
+            ++j;
+        if (options.timeLimitS > 0 && i > 0 &&
+            progress.elapsed() + progress.predict(i, j) > options.timeLimitS) {
+            std::fprintf(stderr, "\nsweep %s: stopping before cell %zu of %zu, the time limit of %s "
+                                 "would pass\n",
+                         config.name.c_str(), i + 1, cells.size(),
+                         formatDuration(options.timeLimitS).c_str());
+            summary.complete = false;
+            break;
+        }
+        const Cell& c = cells[i];
+        std::vector<PipelineKind> kinds;
+        for (size_t k = i; k < j; ++k) kinds.push_back(cells[k].pipeline);
+        progress.starting(i, j);
+        auto t0 = std::chrono::steady_clock::now();
+        std::vector<Measurement> ms = measureCells(cl, scenes.at(c.scene), kinds, c.options,
+                                                   c.warmup, c.repeats, c.countRays, c.images);
+        double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        for (size_t k = i; k < j; ++k) {
+            const Measurement& m = ms[k - i];
+            progress.finished(k, seconds / double(j - i), m);
+            ++(m.ok ? summary.measured : summary.failed);
+            sink(rowJson(config, cells[k], m, device, sceneInfo.at(c.scene)),
+                 m.ok && cells[k].images ? &m.image : nullptr);
+        }
+        i = j;
+    }
+    progress.done();
+    summary.seconds = progress.elapsed();
+    summary.meta["finished"] = utcNow();
+    summary.meta["seconds"] = summary.seconds;
+    summary.meta["complete"] = summary.complete;
+    summary.meta["measured"] = summary.measured;
+    summary.meta["failed"] = summary.failed;
+    return summary;
+}
+
+}  // namespace rt::bench

@@ -1,0 +1,57 @@
+// rtlab bench — running a sweep on one device: loads the scenes, expands the cells, measures each
+// (bench/measure.h), shows a progress line with the cell and the time left, and hands every
+// result row to a sink as it is made, so that a run cut short keeps what it measured.
+// `rtlab sweep` and `rtlab-bench --sweep` are two front ends of this one loop.
+#pragma once
+
+#include <filesystem>
+#include <functional>
+#include <set>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "bench/sweep_config.h"
+#include "core/kernel_sources.h"
+#include "core/scene_loader.h"
+
+namespace rt::bench {
+
+struct SweepRunOptions {
+    std::string device;                 // --device spec (empty: $RTLAB_DEVICE, else first GPU)
+    std::filesystem::path sceneDir;     // <scene>.json lives here; empty: scenes/ of the checkout
+    ImageReader readImage;              // for cubemap faces
+    KernelSources sources;
+    double timeLimitS = 0;              // stop before a cell that would end past this; 0 = none
+    std::set<std::string> skip;         // Cell::key()s measured by an earlier run (--resume)
+};
+
+// row: one cell's results (settings, times, counters, device, commit); image: its frame when
+// the cell keeps images (accuracy group), else null.
+using RowSink = std::function<void(const nlohmann::json& row, const Image* image)>;
+
+struct SweepSummary {
+    nlohmann::json meta;   // sweep, config text, device, commit, settings, start and end time
+    int cells = 0, measured = 0, failed = 0, skipped = 0;
+    bool complete = true;  // false when the time limit stopped it
+    double seconds = 0;
+};
+
+// meta is handed to the sink's owner before the first cell through onStart (may be null).
+SweepSummary runSweep(const SweepConfig& config, const SweepRunOptions& options,
+                      const std::function<void(const nlohmann::json& meta)>& onStart,
+                      const RowSink& sink);
+
+// Where a scene named in a sweep lives: a path as given, else <dir>/<name>.json.
+std::filesystem::path scenePath(const std::string& name, const std::filesystem::path& sceneDir);
+
+// The file name a kept frame is stored under: "cornell-wave-320x180-b4-s8-aa2-bv.pfm".
+std::string imageName(const nlohmann::json& row);
+
+// The sweep's settings as recorded in meta (repeats, warm-up, reference, groups).
+nlohmann::json sweepSettingsJson(const SweepConfig& config);
+
+// "2m05s"
+std::string formatDuration(double seconds);
+
+}  // namespace rt::bench
