@@ -40,6 +40,11 @@ void SceneFlags::add(CLI::App& cmd) {
                  "Use Moller-Trumbore (report Algorithm 3) instead of the watertight test");
     cmd.add_flag("--fixed-offset", fixedOffset,
                  "Offset secondary rays by a fixed 1e-4 instead of one scaled to the hit point");
+    cmd.add_option("--max-launch-ms", maxLaunchMs,
+                   "Split frames into row tiles so that no kernel launch runs longer than this "
+                   "(display-driver watchdogs); 0 = one launch per frame")
+        ->check(CLI::Range(0.0, 1e6))
+        ->capture_default_str();
     cmd.add_option("--kernel-dir", kernelDir,
                    "Read kernel sources from this source tree instead of the embedded copies "
                    "[$RTLAB_KERNEL_DIR]");
@@ -82,6 +87,7 @@ RenderOptions SceneFlags::apply(RenderOptions o) const {
     if (plainSphere) o.robustSphere = false;
     if (mollerTrumbore) o.watertight = false;
     if (fixedOffset) o.scaledOffset = false;
+    o.maxLaunchMs = maxLaunchMs;
     auto range = [](const char* flag, int v, int lo, int hi) {
         if (v < lo || v > hi)
             throw Error(std::string(flag) + " " + std::to_string(v) + ": must be in " +

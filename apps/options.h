@@ -23,6 +23,7 @@ struct SceneFlags {
     std::string accel;
     bool plainSphere = false, mollerTrumbore = false, fixedOffset = false;
     std::string kernelDir;
+    double maxLaunchMs = 100;
 
     void add(CLI::App& cmd);
     // The scene's defaults overridden by whatever was given; throws rt::Error naming the flag.

@@ -216,8 +216,9 @@ void DeviceScene::setArgs(cl::Kernel& k, const dev::RenderSettings& settings) co
 }
 
 Launch launch2d(const DeviceInfo& device, int width, int rows) {
-    if (!device.isGpu()) return {cl::NDRange(size_t(width), size_t(rows)), cl::NullRange};
-    const size_t lx = 16, ly = 8;
+    // A fixed work-group shape: PoCL compiles a work-group function per local size, so letting the
+    // runtime choose one per tile shape would recompile for every new tile height.
+    const size_t lx = device.isGpu() ? 16 : 64, ly = device.isGpu() ? 8 : 1;
     return {cl::NDRange((width + lx - 1) / lx * lx, (rows + ly - 1) / ly * ly), cl::NDRange(lx, ly)};
 }
 

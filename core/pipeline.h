@@ -31,6 +31,7 @@ struct FrameStats {
     long long treeNodes = 0;    // N per pixel
     int branching = 1;          // C
     int tiles = 1;              // row tiles the frame was split into
+    int launches = 0;           // kernel launches (time-bounded tiles x passes)
     std::string program;        // how the program was obtained: built, disk or memory cache
     // Rays traced on the device by type (primary, reflection, refraction, shadow); filled only
     // when RenderOptions::countRays is set, because the atomics cost time.

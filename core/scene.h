@@ -34,6 +34,8 @@ struct RenderOptions {
     enum class Accel { None, Bv, Grid, Bvh };
     Accel accel = Accel::Bv;        // how rays find triangles (issue 5)
     bool countRays = false;         // count rays by type on the device (slower; benchmarks)
+    // Split frames into row tiles so no launch runs past this (display watchdogs); 0 = off.
+    double maxLaunchMs = 0;
 };
 
 struct Environment {

@@ -39,36 +39,43 @@ Image MegakernelPipeline::render(const Scene& scene, const RenderOptions& o) {
     }
 
     dev::RenderSettings settings = makeSettings(scene, o);
-    Launch range = launch2d(cl_.device(), o.width, o.height);
     Image out(o.width, o.height);
-    try {
-        if (o.countRays) scene_->resetRayCounts(cl_.queue());
-        if (o.adaptiveAa && o.aa > 1) {
-            cl::Kernel centers(program, "Megakernel_RenderCenters");
-            scene_->setArgs(centers, settings);
-            centers.setArg(DeviceScene::kFirstKernelArg, centers_);
-            cl::Event e1, e2;
-            cl_.queue().enqueueNDRangeKernel(centers, cl::NullRange, range.global, range.local,
-                                             nullptr, &e1);
-            cl::Kernel edges(program, "Megakernel_RenderEdges");
-            scene_->setArgs(edges, settings);
-            edges.setArg(DeviceScene::kFirstKernelArg, centers_);
-            edges.setArg(DeviceScene::kFirstKernelArg + 1, image_);
-            std::vector<cl::Event> wait{e1};
-            cl_.queue().enqueueNDRangeKernel(edges, cl::NullRange, range.global, range.local,
-                                             &wait, &e2);
-            e2.wait();
-            stats_.addKernel("centers", eventMs(e1));
-            stats_.addKernel("edges", eventMs(e2));
-        } else {
-            cl::Kernel kernel(program, "Megakernel_Render");
+    std::string key = std::to_string(o.width) + "x" + std::to_string(o.height);
+    for (const std::string& d : defines(scene, o)) key += " " + d;
+    planner_.begin(o.maxLaunchMs, key + (o.adaptiveAa ? " adaptive" : ""));
+    // One pass over the frame in row tiles sized by the planner; kernel args after the scene's.
+    auto pass = [&](cl::Kernel& kernel, const char* name) {
+        for (int row0 = 0; row0 < o.height;) {
+            int rows = planner_.nextRows(o.height - row0);
+            settings.rowOffset = row0;
             scene_->setArgs(kernel, settings);
-            kernel.setArg(DeviceScene::kFirstKernelArg, image_);
+            Launch range = launch2d(cl_.device(), o.width, rows);
             cl::Event e;
             cl_.queue().enqueueNDRangeKernel(kernel, cl::NullRange, range.global, range.local,
                                              nullptr, &e);
             e.wait();
-            stats_.addKernel("megakernel", eventMs(e));
+            double ms = eventMs(e);
+            planner_.record(rows, ms);
+            stats_.addKernel(name, ms);
+            ++stats_.launches;
+            row0 += rows;
+        }
+    };
+    try {
+        if (o.countRays) scene_->resetRayCounts(cl_.queue());
+        if (o.adaptiveAa && o.aa > 1) {
+            // Every centre first: an edge test reads the neighbouring rows' centres.
+            cl::Kernel centers(program, "Megakernel_RenderCenters");
+            centers.setArg(DeviceScene::kFirstKernelArg, centers_);
+            pass(centers, "centers");
+            cl::Kernel edges(program, "Megakernel_RenderEdges");
+            edges.setArg(DeviceScene::kFirstKernelArg, centers_);
+            edges.setArg(DeviceScene::kFirstKernelArg + 1, image_);
+            pass(edges, "edges");
+        } else {
+            cl::Kernel kernel(program, "Megakernel_Render");
+            kernel.setArg(DeviceScene::kFirstKernelArg, image_);
+            pass(kernel, "megakernel");
         }
         cl_.queue().enqueueReadBuffer(image_, CL_TRUE, 0, bytes, out.rgb.data());
         if (o.countRays) {

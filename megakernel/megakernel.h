@@ -3,6 +3,7 @@
 
 #include <memory>
 
+#include "core/launch_planner.h"
 #include "core/pipeline.h"
 
 namespace rt {
@@ -21,6 +22,7 @@ private:
     std::unique_ptr<DeviceScene> scene_;
     cl::Buffer image_, centers_;
     size_t imageBytes_ = 0;
+    LaunchPlanner planner_;
 };
 
 }  // namespace rt

@@ -46,7 +46,6 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
         budgetName = "--memory-budget";
     }
     int rows = tileRows(o.width, o.height, C, o.bounces, budget, budgetName);
-    stats_.tiles = (o.height + rows - 1) / rows;
 
     cl::Program program = cl_.program("wavefront.cl", featureDefines(scene, o));
     stats_.program = cl_.lastProgramSource();
@@ -78,7 +77,6 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
     cl::Kernel trace(program, "Wavefront_Trace"), image(program, "Wavefront_Image"),
         reset(program, "Wavefront_Reset");
     reset.setArg(0, tree_);
-    reset.setArg(1, cl_uint(nodes));
     dev::RenderSettings settings = makeSettings(scene, o);
     int samples = o.aa * o.aa;
     std::vector<cl::Event> events;  // trace, image, reset per pass, for the profile
@@ -87,8 +85,15 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
         if (o.countRays) scene_->resetRayCounts(cl_.queue());
         cl::Event last;
         bool haveLast = false;
-        for (int row0 = 0; row0 < o.height; row0 += rows) {
-            int tile = std::min(rows, o.height - row0);
+        std::string key = std::to_string(o.width) + "x" + std::to_string(o.height);
+        for (const std::string& d : featureDefines(scene, o)) key += " " + d;
+        planner_.begin(o.maxLaunchMs, key + " aa" + std::to_string(o.aa));
+        stats_.tiles = 0;
+        for (int row0 = 0, tile = 0; row0 < o.height; row0 += tile) {
+            // Rows bounded by the tree buffer and, when asked, by the time one launch may take.
+            tile = std::min(rows, planner_.nextRows(o.height - row0));
+            ++stats_.tiles;
+            size_t firstEvent = events.size();
             Launch range = launch2d(dev, o.width, tile);
             settings.rowOffset = row0;
             // AA in passes: one tree per pixel, reused by every sample; image accumulates.
@@ -107,13 +112,24 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
                 std::vector<cl::Event> waitImage{et};
                 cl_.queue().enqueueNDRangeKernel(image, cl::NullRange, range.global, range.local,
                                                  &waitImage, &ei);
+                // Only this tile's slices were written, so only they need clearing.
+                size_t tileNodes = size_t(o.width) * size_t(tile) * size_t(stats_.treeNodes);
+                reset.setArg(1, cl_uint(tileNodes));
                 std::vector<cl::Event> waitReset{ei};
-                cl_.queue().enqueueNDRangeKernel(reset, cl::NullRange, cl::NDRange(nodes),
+                cl_.queue().enqueueNDRangeKernel(reset, cl::NullRange, cl::NDRange(tileNodes),
                                                  cl::NullRange, &waitReset, &er);
                 events.insert(events.end(), {et, ei, er});
                 last = er;
                 haveLast = true;
                 // setArg copies the settings, so the next pass may change them right away.
+            }
+            stats_.launches += 3 * samples;
+            if (o.maxLaunchMs > 0) {  // learn the cost per row from the slowest launch
+                last.wait();
+                double slowest = 0;
+                for (size_t i = firstEvent; i < events.size(); ++i)
+                    slowest = std::max(slowest, eventMs(events[i]));
+                planner_.record(tile, slowest);
             }
         }
         cl_.queue().enqueueReadBuffer(image_, CL_TRUE, 0, imageBytes, out.rgb.data());

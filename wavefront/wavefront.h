@@ -4,6 +4,7 @@
 
 #include <memory>
 
+#include "core/launch_planner.h"
 #include "core/pipeline.h"
 
 namespace rt {
@@ -24,6 +25,7 @@ private:
     std::unique_ptr<DeviceScene> scene_;
     cl::Buffer tree_, image_;
     size_t treeBytes_ = 0, imageBytes_ = 0;
+    LaunchPlanner planner_;
 };
 
 }  // namespace rt
