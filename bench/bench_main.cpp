@@ -41,7 +41,7 @@ Google Benchmark mode (every --benchmark_* flag works, e.g. --benchmark_filter=R
   --pipelines=mega,wave
   --sizes=WxH,...       [640x360,1280x720,1920x1080,3840x2160]
   --bounces=0..8        list and/or ranges [0..8]
-  --accels=bv,...       none, bv, grid, bvh [bv]
+  --accels=bvh,...      none, bv, grid, bvh [each scene's default]
   --cells=SWEEP         instead of the lists above: the cells of a sweep file
   --devices=SPEC,...    OpenCL devices by index or name [$RTLAB_DEVICE, else first GPU]
   --repeats=N           repetitions per benchmark; the median is reported [5]
@@ -63,7 +63,7 @@ struct Flags {
     std::vector<std::string> pipelines{"mega", "wave"};
     std::vector<std::string> sizes{"640x360", "1280x720", "1920x1080", "3840x2160"};
     std::string bounces = "0..8";
-    std::vector<std::string> accels{"bv"};
+    std::vector<std::string> accels;  // empty: each scene's default
     std::string cells, sweep, out, device, sceneDir, kernelDir, resume;
     std::vector<std::string> devices;
     int repeats = 5, warmup = 2;
@@ -325,8 +325,9 @@ int benchmarkCommand(const Flags& f, int argc, char** argv) {
             if (!s) continue;
             for (const std::string& size : f.sizes)
                 for (int b : bounces)
-                    for (const std::string& accel : s->triangles.empty() ? std::vector<std::string>{"bv"}
-                                                                         : f.accels)
+                    for (const std::string& accel :
+                         f.accels.empty() ? std::vector<std::string>{accelName(s->defaults.accel)}
+                                          : f.accels)
                         for (const std::string& p : f.pipelines) {
                             Cell c;
                             c.scene = name;
@@ -337,7 +338,7 @@ int benchmarkCommand(const Flags& f, int argc, char** argv) {
                                 throw Error("--sizes " + size + ": expected WIDTHxHEIGHT");
                             c.options.bounces = b;
                             c.options.accel = parseAccel(accel);
-                            c.accelApplies = !s->triangles.empty();
+                            c.accelApplies = !s->triangles.empty() || !s->spheres.empty();
                             cells.push_back(c);
                         }
         }

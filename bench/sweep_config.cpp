@@ -266,8 +266,10 @@ std::vector<Cell> expandCells(const SweepConfig& config,
             auto sizes = g.sizes.empty() ? std::vector<std::pair<int, int>>{{d.width, d.height}}
                                          : g.sizes;
             auto accels = g.accels.empty() ? std::vector<RenderOptions::Accel>{d.accel} : g.accels;
-            bool triangles = !scene.triangles.empty();
-            if (!triangles) accels = {d.accel};  // the accel changes nothing without triangles
+            // The grid and the BVH hold spheres and triangles, bv bounds meshes; a scene of
+            // planes alone runs the same program whatever the accel.
+            bool prims = !scene.spheres.empty() || !scene.triangles.empty();
+            if (!prims) accels = {d.accel};
             // Pipelines innermost: the two pipelines of a setting run back to back, so slow
             // drift of the machine (clocks, other load) hits both sides of a ratio alike.
             for (auto [w, h] : sizes)
@@ -289,7 +291,7 @@ std::vector<Cell> expandCells(const SweepConfig& config,
                                     c.options.layout = g.layout;
                                     c.options.memoryBudget = g.memoryBudget;
                                     c.options.adaptiveAa = g.adaptive;
-                                    c.accelApplies = triangles;
+                                    c.accelApplies = prims;
                                     c.groups = {g.name};
                                     c.images = g.images;
                                     c.repeats = g.repeats > 0 ? g.repeats : config.repeats;

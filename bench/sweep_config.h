@@ -57,7 +57,7 @@ struct Cell {
     bool images = false;
     int repeats = 5, warmup = 2;
     bool countRays = true;
-    bool accelApplies = true;         // false when the scene has no triangles
+    bool accelApplies = true;         // false when the scene has no spheres or triangles
     std::string key() const;          // identity, for de-duplication
     std::string settingKey() const;   // the same without the pipeline
     std::string label() const;        // "cornell wave 1280x720 b4 s8 aa1 bv"
