@@ -175,6 +175,17 @@ AccelData buildAccel(const Scene& scene, RenderOptions::Accel accel) {
     return out;
 }
 
+void cropToCenter(Scene& scene, RenderOptions& o, int w, int h) {
+    if (w < 1 || h < 1 || w > o.width || h > o.height || (o.width - w) % 2 || (o.height - h) % 2)
+        throw Error("crop " + std::to_string(w) + "x" + std::to_string(h) + " of " +
+                    std::to_string(o.width) + "x" + std::to_string(o.height) +
+                    ": must fit and leave even margins");
+    double t = std::tan(0.5 * double(scene.camera.fovY)) * double(h) / double(o.height);
+    scene.camera.fovY = float(2.0 * std::atan(t));
+    o.width = w;
+    o.height = h;
+}
+
 std::string checkBvh(const AccelData& data) {
     const std::vector<dev::BvhNode>& nodes = data.bvh;
     size_t prims = data.spheres.size() + data.triangles.size();

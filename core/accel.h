@@ -62,6 +62,13 @@ struct PrimBoxes {
 };
 PrimBoxes primitiveBoxes(const AccelData& data);
 
+// For benchmarks: turns `options` into a w x h crop from the centre of the frame they describe,
+// by narrowing the camera's field of view (SHADING.md section 1: a centred crop of a W x H image
+// is the w x h image with tan(fovY'/2) = tan(fovY/2) * h / H). Exact when W - w and H - h are
+// even; throws rt::Error otherwise or when the crop is larger than the frame. Brute force
+// (--accel none) on a million triangles is timed this way on a frame it can finish.
+void cropToCenter(Scene& scene, RenderOptions& options, int w, int h);
+
 // Checks the BVH invariants (each primitive in exactly one leaf, each child box inside its
 // parent's, one kind per leaf, every node reachable once); returns "" or the first violation.
 std::string checkBvh(const AccelData& data);
