@@ -108,6 +108,7 @@ std::vector<Measurement> measureCells(ClContext& cl, const Scene& scene,
         m.treeNodes = s.treeNodes;
         m.branching = s.branching;
         m.tiles = s.tiles;
+        m.launches = s.launches;
         const Timed& t = timed[k];
         m.frames = repeats;
         m.deviceMs = median(t.device);

@@ -30,7 +30,7 @@ struct Measurement {
     size_t deviceBytes = 0;     // global memory the pipeline allocated for this frame
     size_t treeBytes = 0, privateBytes = 0;
     long long treeNodes = 0;
-    int branching = 1, tiles = 1;
+    int branching = 1, tiles = 1, launches = 0;
     std::array<uint64_t, 4> rays{};  // primary, reflection, refraction, shadow
     bool raysCounted = false;
     double mrays = 0;           // million rays per second of device time (when counted)

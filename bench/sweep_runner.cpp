@@ -117,6 +117,7 @@ nlohmann::json rowJson(const SweepConfig& config, const Cell& c, const Measureme
         {"layout", o.layout == RenderOptions::Layout::Tree ? "tree" : "weighted"},
         {"memory_budget", o.memoryBudget},
         {"adaptive", o.adaptiveAa},
+        {"max_launch_ms", o.maxLaunchMs},
         {"robust_sphere", o.robustSphere},
         {"watertight", o.watertight},
         {"scaled_offset", o.scaledOffset},
@@ -138,7 +139,8 @@ nlohmann::json rowJson(const SweepConfig& config, const Cell& c, const Measureme
                     {"private_bytes", m.privateBytes},
                     {"tree_nodes", m.treeNodes},
                     {"branching", m.branching},
-                    {"tiles", m.tiles}});
+                    {"tiles", m.tiles},
+                    {"launches", m.launches}});
         if (m.raysCounted) {
             row["rays"] = {{"primary", m.rays[0]},
                            {"reflection", m.rays[1]},

@@ -1,0 +1,81 @@
+#!/usr/bin/env bash
+# Runs on the GPU machine, from the repository root, as carry/gpu-sweep/run.sh (copied there by
+# `scripts/gpu-sweep.sh prepare` beside rtlab-bench, its libraries, the scenes and the sweep).
+# Finds NVIDIA's OpenCL, runs the sweep under a time limit, packs the kept frames, and runs a few
+# Google Benchmark cells. Everything it leaves in $OUT comes back; log.txt holds its output.
+set -uo pipefail
+C=$(cd "$(dirname "$0")" && pwd)
+OUT=${OUT:-$PWD/out}
+mkdir -p "$OUT"
+SWEEP=$(cat "$C/SWEEP")
+LIMIT=${RTLAB_GPU_TIME_LIMIT:-480}
+DEVICE=${RTLAB_GPU_DEVICE:-gpu}  # "cpu" rehearses the whole run on PoCL
+export LD_LIBRARY_PATH=$C/bin${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}
+export RTLAB_CACHE_DIR=/tmp/rtlab-cache
+
+find_nvidia_opencl() {
+    # The ICD loader carried beside rtlab-bench finds vendors through .icd files, which a
+    # container image may lack although the driver brings libnvidia-opencl.
+    grep -qsi nvidia /etc/OpenCL/vendors/*.icd && return 0
+    local lib
+    lib=$(ldconfig -p 2>/dev/null | awk '/libnvidia-opencl\.so\.1/ { print $NF; exit }')
+    [ -n "$lib" ] || lib=$(find /usr/local/nvidia /usr/lib /usr/lib64 /usr/local /opt \
+                               -name 'libnvidia-opencl.so.1' 2>/dev/null | head -1)
+    if [ -z "$lib" ]; then
+        echo "== no libnvidia-opencl.so.1 on this machine: no NVIDIA OpenCL platform"
+        return 1
+    fi
+    mkdir -p /tmp/icd && echo "$lib" >/tmp/icd/nvidia.icd
+    export OCL_ICD_VENDORS=/tmp/icd
+    echo "== NVIDIA OpenCL: $lib (through OCL_ICD_VENDORS=/tmp/icd)"
+}
+
+pack_frames() {
+    local w=$1
+    [ -d "$w/images" ] && [ -n "$(ls -A "$w/images")" ] || return 0
+    if command -v xz >/dev/null; then
+        tar -C "$w" -cf - images | xz -T0 -6 >"$OUT/images.tar.xz"
+    else
+        tar -C "$w" -czf "$OUT/images.tar.xz" images  # the import step reads either
+    fi
+    if [ "$(stat -c %s "$OUT/images.tar.xz")" -gt $((15 * 1024 * 1024)) ]; then
+        split -b 15M "$OUT/images.tar.xz" "$OUT/images.tar.xz.part-" && rm "$OUT/images.tar.xz"
+    fi
+}
+
+main() {
+    echo "== machine"
+    uname -a
+    nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv 2>&1 | head -3
+    find_nvidia_opencl
+    echo "== devices"
+    "$C/bin/rtlab-bench" --list-devices | tee /tmp/rtlab-devices.txt
+    if [ "$DEVICE" = gpu ] && ! grep -q '\[GPU\]' /tmp/rtlab-devices.txt; then
+        echo "no OpenCL GPU: stopping"
+        return 3
+    fi
+
+    local resume status w=/tmp/rtlab-sweep
+    resume=$(ls "$C"/resume/*.jsonl 2>/dev/null | paste -sd, -)
+    echo "== sweep $SWEEP (stops itself after ${LIMIT} s${resume:+; skips what $resume measured})"
+    rm -rf "$w"
+    # The hard stop still keeps the rows measured so far: rows.jsonl is written cell by cell.
+    timeout $((LIMIT + 60)) "$C/bin/rtlab-bench" --sweep "$C/sweeps/$SWEEP" --out "$w" \
+        --device "$DEVICE" --scene-dir "$C/scenes" --time-limit "$LIMIT" ${resume:+--resume "$resume"}
+    status=$?
+    cp "$w/sweep.json" "$w/rows.jsonl" "$OUT/"
+    echo "== packing frames"
+    pack_frames "$w"
+
+    echo "== Google Benchmark: headline cells (programs cached by the sweep)"
+    timeout 60 "$C/bin/rtlab-bench" --device "$DEVICE" --scene-dir "$C/scenes" \
+        --scenes=spheres,cornell,mesh --sizes=1920x1080 --bounces=4 --repeats=5 \
+        --benchmark_min_time=0.2 --benchmark_out="$OUT/gbench.json" \
+        --benchmark_out_format=json >/dev/null || echo "(Google Benchmark: status $?)"
+    ls -la "$OUT"
+    echo "== done (sweep status $status)"
+    return "$status"
+}
+
+main 2>&1 | tee "$OUT/log.txt"
+exit "${PIPESTATUS[0]}"

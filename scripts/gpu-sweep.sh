@@ -1,0 +1,140 @@
+#!/usr/bin/env bash
+# Runs a sweep (bench/sweeps/full by default) on a GPU machine that has no OpenImageIO, such as
+# the H100 of the device tool, and turns what comes back into results/<device-slug>/ here.
+#
+#   scripts/gpu-sweep.sh prepare [SWEEP] [--resume DIR]...
+#       Builds rtlab and rtlab-bench from a clean clone of HEAD (so every result names an exact
+#       commit) in build-gpu/, and fills carry/gpu-sweep/ (git-ignored) with rtlab-bench, the
+#       libraries it needs beside it (libbenchmark.so.1debian, libOpenCL.so.1, libtinyobjloader),
+#       the scenes with .pfm cubemap faces, the sweep file and run.sh. --resume DIR (a folder
+#       fetched from an earlier run) makes the new run skip the cells that one measured.
+#   scripts/gpu-sweep.sh command
+#       Prints the one device-tool call that runs it.
+#   scripts/gpu-sweep.sh import DIR [DIR...]
+#       Unpacks each fetched folder (images.tar.xz or its parts) and runs
+#       `rtlab sweep SWEEP --import ...` from the measured commit: accuracy against the converged
+#       CPU reference through OpenImageIO, CSV, JSON, the five charts and README.md into
+#       results/<device-slug>/, with the Google Benchmark JSON and the device log beside them.
+#
+# The device-tool call (one command, under its 10-minute limit; the sweep stops itself after
+# RTLAB_GPU_TIME_LIMIT seconds, 480 by default, and `prepare --resume` continues it):
+#   run(command="bash carry/gpu-sweep/run.sh", carry=["carry/gpu-sweep"], timeout_s=600)
+# What comes back ($OUT, at most 8 files): sweep.json, rows.jsonl, log.txt, gbench.json and
+# images.tar.xz (or images.tar.xz.part-aa, -ab, ... past 15 MiB).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+ROOT=$PWD
+BUILD=$ROOT/build-gpu
+CARRY=carry/gpu-sweep
+
+die() { echo "gpu-sweep: $*" >&2; exit 1; }
+
+build_clean() {
+    local sha
+    sha=$(git rev-parse HEAD)
+    [ -d "$BUILD/src/.git" ] || git clone -q --no-hardlinks "$ROOT" "$BUILD/src"
+    git -C "$BUILD/src" fetch -q "$ROOT" "$sha"
+    git -C "$BUILD/src" checkout -q --detach "$sha"
+    if [ -n "$(git status --porcelain --untracked-files=no)" ]; then
+        echo "gpu-sweep: note: the working tree has uncommitted changes; the GPU build is HEAD" \
+             "($(git rev-parse --short=12 HEAD)) alone" >&2
+    fi
+    cmake -S "$BUILD/src" -B "$BUILD/build" -DCMAKE_BUILD_TYPE=Release -DRTLAB_BUILD_TESTS=OFF \
+          -DRTLAB_BUILD_VIEWER=OFF >/dev/null
+    cmake --build "$BUILD/build" -j"$(nproc)" --target rtlab rtlab-bench
+}
+
+# The file an executable's dependency `name` resolves to here.
+lib_path() { ldd "$1" | awk -v n="$2" '$1 == n { print $3 }'; }
+
+prepare() {
+    local sweep=full resumes=() i=1 path missing
+    while [ $# -gt 0 ]; do
+        case $1 in
+            --resume) [ $# -ge 2 ] || die "--resume needs a folder"; resumes+=("$2"); shift 2 ;;
+            -*) die "unknown option $1" ;;
+            *) sweep=$1; shift ;;
+        esac
+    done
+    [ -f "bench/sweeps/$sweep" ] || die "no sweep bench/sweeps/$sweep"
+    build_clean
+    rm -rf "$CARRY"
+    mkdir -p "$CARRY/bin" "$CARRY/sweeps" "$CARRY/resume"
+    cp "$BUILD/build/bin/rtlab-bench" "$CARRY/bin/"
+    for lib in libbenchmark.so.1debian libOpenCL.so.1 libtinyobjloader.so.2rc10; do
+        path=$(lib_path "$BUILD/build/bin/rtlab-bench" "$lib")
+        [ -z "$path" ] || cp -L "$path" "$CARRY/bin/$lib"
+    done
+    missing=$(ldd "$CARRY/bin/rtlab-bench" | grep -v -e libc.so -e libm.so -e libstdc++ \
+              -e libgcc_s -e ld-linux -e vdso -e "=> $ROOT/$CARRY/bin/" || true)
+    [ -z "$missing" ] || echo "gpu-sweep: rtlab-bench also needs (not carried): $missing" >&2
+    (cd "$BUILD/src" && "$BUILD/build/bin/rtlab" sweep --export-scenes "$ROOT/$CARRY/scenes") >/dev/null
+    cp "$BUILD/src/bench/sweeps/$sweep" "$CARRY/sweeps/"
+    echo "$sweep" >"$CARRY/SWEEP"
+    for dir in "${resumes[@]+"${resumes[@]}"}"; do
+        [ -f "$dir/rows.jsonl" ] || die "--resume $dir: no rows.jsonl there"
+        cp "$dir/rows.jsonl" "$CARRY/resume/rows-$i.jsonl"
+        i=$((i + 1))
+    done
+    cp "$BUILD/src/scripts/gpu-sweep-run.sh" "$CARRY/run.sh"
+    echo "gpu-sweep: $CARRY ready ($(du -sh "$CARRY" | cut -f1)), commit" \
+         "$(git -C "$BUILD/src" rev-parse --short=12 HEAD), sweep $sweep"
+    command_help
+}
+
+command_help() {
+    cat <<'TEXT'
+Run it with the device tool (one call; the sweep stops itself before the 10-minute limit):
+  run(command="bash carry/gpu-sweep/run.sh", carry=["carry/gpu-sweep"], timeout_s=600)
+then, with the folder the call's files landed in (files_at):
+  scripts/gpu-sweep.sh import FILES_AT
+If log.txt says the time limit stopped the sweep, continue it, then import both:
+  scripts/gpu-sweep.sh prepare full --resume FILES_AT     (and the same run call)
+  scripts/gpu-sweep.sh import FILES_AT FILES_AT_2
+TEXT
+}
+
+json_field() {
+    /usr/bin/python3 -c 'import json, sys; print(json.load(open(sys.argv[1]))[sys.argv[2]])' "$1" "$2"
+}
+
+import() {
+    [ $# -ge 1 ] || die "import needs the fetched folder(s)"
+    [ -x "$BUILD/build/bin/rtlab" ] || die "run prepare first (it builds $BUILD/build/bin/rtlab)"
+    local staged=() n=0 stage sweep slug
+    for dir in "$@"; do
+        [ -f "$dir/sweep.json" ] || die "$dir: no sweep.json (did the run fail? see $dir/log.txt)"
+        n=$((n + 1))
+        stage=$BUILD/import-$n
+        rm -rf "$stage" && mkdir -p "$stage"
+        cp "$dir/sweep.json" "$dir/rows.jsonl" "$stage/"
+        if ls "$dir"/images.tar.xz* >/dev/null 2>&1; then
+            cat "$dir"/images.tar.xz* >"$stage/images.tar.c"
+            tar -C "$stage" -xf "$stage/images.tar.c"  # xz or gzip: tar tells them apart
+            rm "$stage/images.tar.c"
+        fi
+        staged+=("$stage")
+    done
+    sweep=$(json_field "$1/sweep.json" sweep)
+    slug=$(json_field "$1/sweep.json" device_slug)
+    mkdir -p "results/$slug"
+    # Scenes and the reference renderer come from the commit that was measured.
+    (cd "$BUILD/src" && "$BUILD/build/bin/rtlab" sweep "bench/sweeps/$sweep" \
+        --import "${staged[@]}" --out "$ROOT/results/$slug" --no-charts)
+    n=0
+    for dir in "$@"; do
+        n=$((n + 1))
+        [ ! -f "$dir/gbench.json" ] || cp "$dir/gbench.json" "results/$slug/google-benchmark-$n.json"
+        [ ! -f "$dir/log.txt" ] || cp "$dir/log.txt" "results/$slug/device-log-$n.txt"
+    done
+    /usr/bin/python3 scripts/charts.py "results/$slug/$sweep.json"
+    /usr/bin/python3 scripts/results-readme.py "results/$slug/$sweep.json"
+    echo "gpu-sweep: results/$slug/ ready"
+}
+
+case ${1:-} in
+    prepare) shift; prepare "$@" ;;
+    command) command_help ;;
+    import) shift; import "$@" ;;
+    *) sed -n '2,/^set -euo/p' "$0" | sed '$d'; exit 2 ;;
+esac
