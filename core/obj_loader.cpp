@@ -295,7 +295,7 @@ ObjMesh build(const fs::path& path, const tinyobj::attrib_t& attrib,
     const int normalCount = int(attrib.normals.size() / 3);
     std::vector<tinyobj::index_t> corners;
     bool fileNormals = true;
-    long long degenerate = 0, total = 0;
+    long long total = 0;
     for (const tinyobj::shape_t& shape : shapes) {
         const auto& idx = shape.mesh.indices;
         if (idx.size() % 3 != 0) fail(path, "triangulation left a non-triangle face");
@@ -316,10 +316,7 @@ ObjMesh build(const fs::path& path, const tinyobj::attrib_t& attrib,
             glm::vec3 v0 = vertexAt(attrib, idx[t].vertex_index);
             glm::vec3 n = glm::cross(vertexAt(attrib, idx[t + 1].vertex_index) - v0,
                                      vertexAt(attrib, idx[t + 2].vertex_index) - v0);
-            if (n == glm::vec3(0.f) || !finite(n)) {
-                ++degenerate;
-                continue;
-            }
+            if (n == glm::vec3(0.f) || !finite(n)) continue;  // zero area: never hit, dropped
             corners.insert(corners.end(), idx.begin() + t, idx.begin() + t + 3);
         }
     }
