@@ -1,1 +1,178 @@
-int main() { return 0; }
+// rtlab-view SCENE — a real-time window on the two pipelines: the megakernel or the wavefront, or
+// both side by side. Sets up GLFW (OpenGL 3.3 core), the OpenCL device and the render thread,
+// then hands over to App (viewer_app.h). Every failure ends in one line on stderr
+// ("rtlab-view: <reason>") and exit status 1; CLI11 usage errors exit with its own code.
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>
+
+#include <CLI/CLI.hpp>
+
+#include <cstdio>
+#include <string>
+
+#include "apps/options.h"
+#include "apps/viewer_app.h"
+#include "apps/viewer_gl.h"
+#include "apps/viewer_overlay.h"
+#include "apps/viewer_renderer.h"
+#include "core/error.h"
+#include "core/scene_loader.h"
+#include "image/image_io.h"
+
+namespace {
+
+using namespace rt;
+
+struct Args {
+    std::string scene, pipeline = "mega", screenshot;
+    cli::SceneFlags flags;
+    int scale = 2;
+    bool split = false, noOverlay = false, animate = false, noRayCount = false;
+    long long frames = 0;
+    std::string keys;
+    float speed = 2.f, orbitRadius = 0.8f;
+    double orbitPeriod = 6;
+};
+
+std::string lastGlfwError;
+
+// Owns glfwInit/glfwTerminate; throws with GLFW's reason when there is no display.
+struct GlfwSession {
+    GlfwSession() {
+        glfwSetErrorCallback([](int, const char* text) { lastGlfwError = text ? text : ""; });
+        if (!glfwInit())
+            throw Error("no display: " + (lastGlfwError.empty() ? "glfwInit failed" : lastGlfwError) +
+                        " (run in a desktop session, or headless under xvfb-run -a)");
+    }
+    ~GlfwSession() { glfwTerminate(); }
+};
+
+struct Window {
+    GLFWwindow* handle;
+    Window(int width, int height, const std::string& title) {
+        glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
+        glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 3);
+        glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
+        glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
+        handle = glfwCreateWindow(width, height, title.c_str(), nullptr, nullptr);
+        if (!handle)
+            throw Error("cannot open a " + std::to_string(width) + "x" + std::to_string(height) +
+                        " window with OpenGL 3.3 core: " + lastGlfwError);
+        glfwMakeContextCurrent(handle);
+        glfwSwapInterval(1);
+    }
+    ~Window() { glfwDestroyWindow(handle); }
+};
+
+// The frame reaches the texture through the host; report 3.1's direct path would need the
+// device to share GL objects, and the pipelines to render into a shared image.
+std::string framePath(const ClContext& cl) {
+    std::string ext = cl.device().device.getInfo<CL_DEVICE_EXTENSIONS>();
+    if (ext.find("cl_khr_gl_sharing") == std::string::npos)
+        return "host copy (no cl_khr_gl_sharing)";
+    return "host copy (cl_khr_gl_sharing unused)";
+}
+
+int runViewer(Args& a) {
+    Scene scene = loadScene(a.scene, readImage);
+    RenderOptions options = a.flags.apply(scene.defaults);
+    if (!a.screenshot.empty()) {
+        try {
+            cli::checkOutputPath(a.screenshot);
+        } catch (const Error& e) {
+            std::string m = e.what();
+            throw Error("--screenshot" + m.substr(m.find(' ')));
+        }
+        if (a.frames == 0) a.frames = 1;
+    }
+    auto keys = view::parseKeyScript(a.keys);
+    if (a.frames < 0) throw Error("--frames " + std::to_string(a.frames) + ": must be >= 0");
+    if (a.scale < 1 || a.scale > 8) throw Error("--scale " + std::to_string(a.scale) + ": must be in 1..8");
+
+    GlfwSession glfw;
+    Window window(options.width * a.scale, options.height * a.scale, "rtlab-view " + scene.name);
+    view::GlDisplay display;
+    display.warmUp();
+    ClContext cl(selectDevice(a.flags.device), a.flags.kernelSources());
+    std::string path = framePath(cl);
+    std::printf("rtlab-view: %s on %s, %dx%d, frames by %s; press H for help\n", scene.name.c_str(),
+                cl.device().label().c_str(), options.width, options.height, path.c_str());
+    std::fflush(stdout);
+
+    view::Renderer::Config rc;
+    rc.scenePath = a.scene;
+    rc.flags = a.flags;
+    rc.animate = a.animate;
+    rc.orbitRadius = a.orbitRadius;
+    rc.orbitPeriod = a.orbitPeriod;
+    rc.countRays = !a.noRayCount;
+    rc.frameLimit = a.frames;
+    rc.fixedStep = a.frames > 0 ? 1.0 / 30 : 0;
+    view::ViewRequest first;
+    first.camera = scene.camera;
+    first.split = a.split;
+    first.kind = parsePipeline(a.pipeline);
+    first.bounces = options.bounces;
+    first.accel = options.accel;
+    view::Renderer renderer(cl, std::move(scene), rc, [] { glfwPostEmptyEvent(); });
+
+    view::AppConfig ac;
+    ac.overlay = !a.noOverlay;
+    ac.frames = a.frames;
+    ac.screenshot = a.screenshot;
+    ac.keys = keys;
+    ac.speed = a.speed;
+    ac.framePath = path;
+    ac.animate = a.animate;
+    view::App app(window.handle, display, renderer, first, ac);
+    renderer.start(first);
+    return app.run();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    std::string keys = "\nKeys:\n";
+    for (const std::string& line : view::helpLines()) keys += "  " + line + "\n";
+    CLI::App app{"rtlab-view: watch the megakernel and the wavefront render a scene in real time."};
+    app.footer(keys);
+    Args a;
+    app.add_option("scene", a.scene, "Scene file (.json) or OBJ model")->required();
+    app.add_option("--pipeline", a.pipeline, "Pipeline shown first: mega or wave")
+        ->check(CLI::IsMember({"mega", "wave"}))
+        ->capture_default_str();
+    app.add_flag("--split", a.split, "Start in split view: megakernel left, wavefront right");
+    app.add_option("--scale", a.scale, "Window pixels per rendered pixel, 1..8")->capture_default_str();
+    app.add_flag("--no-overlay", a.noOverlay, "Hide the overlay and the split divider (O shows them)");
+    app.add_flag("--animate", a.animate,
+                 "Move the first sphere around a circle (until scene files carry 'animate')");
+    app.add_option("--orbit-radius", a.orbitRadius, "--animate: circle radius")->capture_default_str();
+    app.add_option("--orbit-period", a.orbitPeriod, "--animate: seconds per turn")->capture_default_str();
+    app.add_option("--speed", a.speed, "Camera speed in scene units per second")->capture_default_str();
+    app.add_flag("--no-ray-count", a.noRayCount,
+                 "Do not count rays on the device (no Mrays/s, slightly faster kernels)");
+    app.add_option("--frames", a.frames, "Render this many frames, then exit (automation)");
+    app.add_option("--screenshot", a.screenshot,
+                   "After the last frame, save the window to this image (implies --frames 1)");
+    app.add_option("--keys", a.keys,
+                   "Automation: press keys once a number of frames is shown, e.g. \"6:R\" or "
+                   "\"3:V 5:B+ 8:P\" (the control letters, + and -)");
+    a.flags.add(app);
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::ParseError& e) {
+        if (e.get_exit_code() == 0) return app.exit(e);
+        std::fprintf(stderr, "rtlab-view: %s (see rtlab-view --help)\n", e.what());
+        return e.get_exit_code();
+    }
+    try {
+        return runViewer(a);
+    } catch (const Error& e) {
+        std::fprintf(stderr, "rtlab-view: %s\n", e.what());
+    } catch (const cl::Error& e) {
+        std::fprintf(stderr, "rtlab-view: OpenCL error in %s: %s\n", e.what(), clErrorName(e.err()));
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "rtlab-view: unexpected error: %s\n", e.what());
+    }
+    return 1;
+}

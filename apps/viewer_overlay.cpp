@@ -1,0 +1,92 @@
+// rtlab-view — overlay text. Mrays/s is device throughput: rays traced (counted on the device)
+// over the frame's summed kernel time.
+#include "apps/viewer_overlay.h"
+
+#include <algorithm>
+#include <cstdio>
+
+#include "core/accel.h"
+
+namespace rt::view {
+namespace {
+
+std::string format(const char* fmt, auto... args) {
+    char buf[256];
+    std::snprintf(buf, sizeof buf, fmt, args...);
+    return buf;
+}
+
+double mib(size_t bytes) { return double(bytes) / (1024.0 * 1024.0); }
+
+std::string pipelineLine(const PipelineFrame& p) {
+    const FrameStats& s = p.stats;
+    std::string line = format("%-4s %7.1f MS ", pipelineName(p.kind), s.deviceMs);
+    for (const auto& [name, ms] : s.kernelMs) line += format(" %s %.1f", name.c_str(), ms);
+    if (s.raysCounted && s.deviceMs > 0) {
+        double rays = 0;
+        for (uint64_t r : s.rays) rays += double(r);
+        line += format("  %.2f MRAYS/S", rays / (s.deviceMs * 1e-3) / 1e6);
+    }
+    return line;
+}
+
+constexpr Rgba kBackground{0, 0, 0, 150}, kText{235, 235, 235, 255}, kDim{160, 200, 255, 255},
+    kWarn{255, 190, 90, 255};
+
+}  // namespace
+
+const std::vector<std::string>& helpLines() {
+    static const std::vector<std::string> lines = {
+        "W/A/S/D  move            Q/E  down/up      shift  faster",
+        "drag     turn (yaw/pitch); in split view, drag the divider",
+        "M  megakernel/wavefront  V  split view     +/-  bounce limit",
+        "B  accel none/bv/grid/bvh    R  reload scene    P  screenshot",
+        "O  overlay   H  help   Esc  quit",
+    };
+    return lines;
+}
+
+TextCanvas makeOverlay(const OverlayInfo& info) {
+    struct Line {
+        std::string text;
+        Rgba color;
+    };
+    std::vector<Line> lines;
+    if (info.stats) {
+        const FrameOut* f = info.frame;
+        std::string mode = info.split ? "split mega|wave" : pipelineName(info.kind);
+        std::string head = f ? format("%s %dx%d", f->sceneName.c_str(), f->width, f->height) : "";
+        lines.push_back({format("%s  %s  B %d  accel %s%s", head.c_str(), mode.c_str(), info.bounces,
+                                accelName(info.accel), info.animate ? "  animated" : ""),
+                         kText});
+        if (f) {
+            lines.push_back({format("FPS %.1f  frame %.0f ms  %s", info.fps, f->wallMs,
+                                    info.framePath.c_str()),
+                             kText});
+            size_t tree = 0;
+            for (const PipelineFrame& p : f->pipelines) {
+                lines.push_back({pipelineLine(p), kDim});
+                tree = std::max(tree, p.stats.treeBytes);
+            }
+            std::string mem = format("device memory %.1f MiB", mib(f->deviceBytes));
+            if (tree) mem += format(" (ray tree %.1f MiB)", mib(tree));
+            lines.push_back({mem, kText});
+        } else {
+            lines.push_back({"building kernels, first frame...", kText});
+        }
+    }
+    for (const std::string& m : info.messages) lines.push_back({m, kWarn});
+    if (info.help)
+        for (const std::string& h : helpLines()) lines.push_back({h, kText});
+    else if (info.stats)
+        lines.push_back({"H help", kDim});
+
+    size_t cols = 1;
+    for (const Line& l : lines) cols = std::max(cols, l.text.size());
+    TextCanvas canvas(int(std::min<size_t>(cols, 160)), int(std::max<size_t>(lines.size(), 1)),
+                      kBackground);
+    for (size_t i = 0; i < lines.size(); ++i) canvas.text(0, int(i), lines[i].text, lines[i].color);
+    return canvas;
+}
+
+}  // namespace rt::view

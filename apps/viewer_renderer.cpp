@@ -1,0 +1,235 @@
+// rtlab-view — the render thread: reloads, animation, option changes that may be refused (a bounce
+// limit past the private-memory limit, an accel that is not implemented), and frames handed back.
+#include "apps/viewer_renderer.h"
+
+#include <chrono>
+#include <cmath>
+
+#include "apps/viewer_srgb.h"
+#include "core/error.h"
+#include "core/scene_loader.h"
+#include "image/image_io.h"
+
+namespace rt::view {
+
+dev::Float3 Animation::at(double seconds) const {
+    if (path.empty()) return {};
+    double u = std::fmod(seconds / period, 1.0);
+    if (u < 0) u += 1;
+    u *= double(path.size());
+    size_t i = size_t(u) % path.size(), j = (i + 1) % path.size();
+    float f = float(u - std::floor(u));
+    const dev::Float3 &a = path[i], &b = path[j];
+    return {a.x + (b.x - a.x) * f, a.y + (b.y - a.y) * f, a.z + (b.z - a.z) * f};
+}
+
+Animation orbitFirstSphere(const Scene& scene, float radius, double period) {
+    if (scene.spheres.empty())
+        throw Error("--animate: " + scene.source.string() + " has no sphere to move");
+    Animation a;
+    a.sphere = 0;
+    a.period = period;
+    dev::Float3 c = scene.spheres[0].center;
+    const int steps = 48;
+    for (int i = 0; i < steps; ++i) {
+        double t = 2 * M_PI * i / steps;
+        a.path.push_back({c.x + radius * float(std::cos(t)), c.y, c.z + radius * float(std::sin(t))});
+    }
+    return a;
+}
+
+Renderer::Renderer(ClContext& cl, Scene scene, Config config, std::function<void()> wake)
+    : cl_(cl), config_(std::move(config)), wake_(std::move(wake)) {
+    base_ = config_.flags.apply(scene.defaults);
+    base_.countRays = config_.countRays;
+    if (config_.animate) animation_ = orbitFirstSphere(scene, config_.orbitRadius, config_.orbitPeriod);
+    scenes_[0] = std::move(scene);
+    if (animation_) scenes_[1] = scenes_[0];
+    fileCamera_ = scenes_[0].camera;
+    good_ = {base_.bounces, base_.accel};
+    resetPipelines();
+}
+
+Renderer::~Renderer() {
+    {
+        std::lock_guard<std::mutex> lock(mutex_);
+        stop_ = true;
+    }
+    cv_.notify_all();
+    if (thread_.joinable()) thread_.join();
+}
+
+void Renderer::resetPipelines() {
+    mega_ = makePipeline(PipelineKind::Mega, &cl_);
+    wave_ = makePipeline(PipelineKind::Wave, &cl_);
+}
+
+void Renderer::start(const ViewRequest& first) {
+    request_ = first;
+    thread_ = std::thread([this] { loop(); });
+}
+
+void Renderer::request(const ViewRequest& r) {
+    {
+        std::lock_guard<std::mutex> lock(mutex_);
+        request_ = r;
+    }
+    cv_.notify_all();
+}
+
+bool Renderer::takeFrame(FrameOut& out) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (latest_.index <= taken_) return false;
+    out = std::move(latest_);
+    taken_ = out.index;
+    return true;
+}
+
+std::vector<Notice> Renderer::takeNotices() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return std::exchange(notices_, {});
+}
+
+uint64_t Renderer::framesRendered() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return rendered_;
+}
+
+void Renderer::post(Notice n) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    notices_.push_back(std::move(n));
+}
+
+void Renderer::loop() {
+    for (;;) {
+        ViewRequest r;
+        {
+            std::unique_lock<std::mutex> lock(mutex_);
+            cv_.wait(lock, [&] {
+                return stop_ || (!failed_ && (config_.frameLimit == 0 ||
+                                              (long long)rendered_ < config_.frameLimit));
+            });
+            if (stop_) return;
+            r = request_;
+        }
+        renderOne(r);
+        wake_();
+    }
+}
+
+RenderOptions Renderer::optionsFor(int bounces, RenderOptions::Accel accel) const {
+    RenderOptions o = base_;
+    o.bounces = bounces;
+    o.accel = accel;
+    return o;
+}
+
+bool Renderer::reload() {
+    Scene fresh;
+    RenderOptions base;
+    std::optional<Animation> animation;
+    try {
+        fresh = loadScene(config_.scenePath, readImage);
+        base = config_.flags.apply(fresh.defaults);
+        base.countRays = config_.countRays;
+        if (config_.animate)
+            animation = orbitFirstSphere(fresh, config_.orbitRadius, config_.orbitPeriod);
+    } catch (const std::exception& e) {
+        post({std::string("reload failed, kept the previous scene: ") + e.what()});
+        return false;
+    }
+    backup_ = Backup{std::move(scenes_[0]), animation_, base_, fileCamera_};
+    scenes_[0] = std::move(fresh);
+    if (animation) scenes_[1] = scenes_[0];
+    animation_ = animation;
+    base_ = base;
+    fileCamera_ = scenes_[0].camera;
+    refused_.clear();
+    // New pipelines: the scenes keep their addresses, so old device copies would look current.
+    resetPipelines();
+    return true;
+}
+
+void Renderer::restoreBackup() {
+    scenes_[0] = std::move(backup_->scene);
+    animation_ = backup_->animation;
+    if (animation_) scenes_[1] = scenes_[0];
+    base_ = backup_->base;
+    fileCamera_ = backup_->fileCamera;
+    backup_.reset();
+    refused_.clear();
+    resetPipelines();
+}
+
+void Renderer::renderOne(const ViewRequest& r) {
+    bool reloaded = false;
+    if (r.reloads != reloadsDone_) {
+        reloadsDone_ = r.reloads;
+        reloaded = reload();
+    }
+    std::pair<int, RenderOptions::Accel> choice{r.bounces, r.accel};
+    if (refused_.count(choice)) choice = good_;
+    RenderOptions o = optionsFor(choice.first, choice.second);
+
+    Scene* scene = &scenes_[0];
+    if (animation_) {
+        current_ ^= 1;  // a new address, so the pipelines upload the moved object
+        scene = &scenes_[current_];
+        double t = config_.fixedStep > 0
+                       ? double(rendered_) * config_.fixedStep
+                       : std::chrono::duration<double>(std::chrono::steady_clock::now() - started_)
+                             .count();
+        scene->spheres[size_t(animation_->sphere)].center = animation_->at(t);
+    }
+    scene->camera = r.camera;
+
+    auto t0 = std::chrono::steady_clock::now();
+    FrameOut f;
+    std::string failure;
+    try {
+        std::vector<Pipeline*> order;
+        if (r.split) order = {mega_.get(), wave_.get()};
+        else order = {r.kind == PipelineKind::Wave ? wave_.get() : mega_.get()};
+        for (Pipeline* p : order) {
+            Image image = p->render(*scene, o);
+            PipelineFrame pf{p->kind(), p->stats(), {}};
+            encodeSrgb8(image, pf.rgb);
+            f.pipelines.push_back(std::move(pf));
+        }
+    } catch (const cl::Error& e) {
+        failure = std::string("OpenCL error in ") + e.what() + ": " + clErrorName(e.err());
+    } catch (const std::exception& e) {
+        failure = e.what();
+    }
+
+    if (!failure.empty()) {
+        if (backup_) {
+            restoreBackup();
+            post({"reload failed, kept the previous scene: " + failure});
+        } else if (!anyFrame_ || choice == good_) {
+            failed_ = true;
+            post({failure, true});
+        } else {
+            refused_.insert(choice);
+            post({failure, false, true, good_.first, good_.second});
+        }
+        return;
+    }
+    if (reloaded) ++generation_;
+    backup_.reset();
+    good_ = choice;
+    anyFrame_ = true;
+    f.width = o.width;
+    f.height = o.height;
+    f.options = o;
+    f.wallMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    f.deviceBytes = cl_.allocatedBytes();
+    f.sceneGeneration = generation_;
+    f.sceneCamera = fileCamera_;
+    f.sceneName = scenes_[0].name;
+    std::lock_guard<std::mutex> lock(mutex_);
+    f.index = ++rendered_;
+    latest_ = std::move(f);
+}
+
+}  // namespace rt::view

@@ -1,0 +1,157 @@
+// rtlab-view — the render thread. It owns the scene and both pipelines (megakernel, wavefront),
+// renders whatever the window last asked for, and hands back 8-bit frames and their stats. The
+// window thread stays free for input and drawing, so a slow device (PoCL) never stalls the UI.
+//
+// Buffers: each Pipeline keeps its device buffers while the scene address and the frame size stay
+// the same; the renderer keeps its scenes at fixed addresses, so a frame only changes the camera
+// (kernel settings) and queues kernels. An animated frame alternates between two copies of the
+// scene, because the pipelines have no call to update object buffers in place yet.
+#pragma once
+
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <set>
+#include <string>
+#include <thread>
+#include <utility>
+#include <vector>
+
+#include "apps/options.h"
+#include "core/cl_runtime.h"
+#include "core/pipeline.h"
+#include "core/scene.h"
+
+namespace rt::view {
+
+// Moves one sphere along a closed polyline, once around every `period` seconds: the viewer's
+// stand-in for a scene-file "animate" entry until the loader accepts one.
+struct Animation {
+    int sphere = 0;
+    std::vector<dev::Float3> path;
+    double period = 6;
+    dev::Float3 at(double seconds) const;
+};
+// The first sphere orbits its own centre on a horizontal circle of `radius`. Throws rt::Error when
+// the scene has no sphere.
+Animation orbitFirstSphere(const Scene& scene, float radius, double period);
+
+// What the window wants rendered next; the latest request wins.
+struct ViewRequest {
+    uint64_t version = 0;
+    dev::Camera camera{};
+    bool split = false;                      // mega and wave, both full frame
+    PipelineKind kind = PipelineKind::Mega;  // when not split
+    int bounces = 0;
+    RenderOptions::Accel accel = RenderOptions::Accel::Bv;
+    uint64_t reloads = 0;  // bumped by R
+};
+
+struct PipelineFrame {
+    PipelineKind kind;
+    FrameStats stats;
+    std::vector<uint8_t> rgb;  // sRGB, 3 bytes per pixel, rows top first
+};
+
+struct FrameOut {
+    uint64_t index = 0;  // 1 for the first frame
+    int width = 0, height = 0;
+    std::vector<PipelineFrame> pipelines;  // split: mega then wave
+    double wallMs = 0;                     // render thread time for the frame
+    RenderOptions options;                 // as rendered
+    size_t deviceBytes = 0;                // ClContext::allocatedBytes()
+    uint64_t sceneGeneration = 0;          // bumped by every successful reload
+    dev::Camera sceneCamera{};             // the camera in the scene file
+    std::string sceneName;
+};
+
+struct Notice {
+    std::string text;  // one line
+    bool fatal = false;
+    // Set when the request's bounce limit or accel was refused: the values rendered instead.
+    bool reverted = false;
+    int bounces = 0;
+    RenderOptions::Accel accel = RenderOptions::Accel::Bv;
+};
+
+class Renderer {
+public:
+    struct Config {
+        std::filesystem::path scenePath;
+        cli::SceneFlags flags;  // command-line overrides of the scene's defaults
+        bool animate = false;
+        float orbitRadius = 0.8f;
+        double orbitPeriod = 6;
+        bool countRays = true;      // for Mrays/s
+        long long frameLimit = 0;   // stop after this many frames (0 = never)
+        // Animation clock: seconds per frame when > 0 (reproducible automation), else wall time.
+        double fixedStep = 0;
+    };
+    // `scene` is the already loaded scenePath; `wake` is called (from the render thread) after
+    // each frame or notice, e.g. glfwPostEmptyEvent.
+    Renderer(ClContext& cl, Scene scene, Config config, std::function<void()> wake);
+    ~Renderer();
+    Renderer(const Renderer&) = delete;
+    Renderer& operator=(const Renderer&) = delete;
+
+    // The options the scene and the command line give (size, bounces, accel, ...).
+    const RenderOptions& baseOptions() const { return base_; }
+    const Scene& initialScene() const { return scenes_[0]; }
+
+    void start(const ViewRequest& first);
+    void request(const ViewRequest& r);
+    bool takeFrame(FrameOut& out);  // true when a frame newer than the last one taken is ready
+    std::vector<Notice> takeNotices();
+    uint64_t framesRendered() const;
+
+private:
+    void loop();
+    void renderOne(const ViewRequest& r);
+    bool reload();
+    void restoreBackup();
+    void post(Notice n);
+    RenderOptions optionsFor(int bounces, RenderOptions::Accel accel) const;
+    void resetPipelines();
+
+    ClContext& cl_;
+    Config config_;
+    std::function<void()> wake_;
+
+    // Render-thread state.
+    Scene scenes_[2];  // [1] is the animation's second copy
+    int current_ = 0;
+    std::optional<Animation> animation_;
+    RenderOptions base_;
+    dev::Camera fileCamera_{};
+    // What a reload replaced, kept until the new scene renders once.
+    struct Backup {
+        Scene scene;
+        std::optional<Animation> animation;
+        RenderOptions base;
+        dev::Camera fileCamera;
+    };
+    std::optional<Backup> backup_;
+    std::unique_ptr<Pipeline> mega_, wave_;
+    std::pair<int, RenderOptions::Accel> good_;
+    std::set<std::pair<int, RenderOptions::Accel>> refused_;
+    uint64_t reloadsDone_ = 0, generation_ = 0;
+    std::chrono::steady_clock::time_point started_ = std::chrono::steady_clock::now();
+    bool anyFrame_ = false, failed_ = false;
+
+    // Shared with the window thread.
+    mutable std::mutex mutex_;
+    std::condition_variable cv_;
+    ViewRequest request_;
+    FrameOut latest_;
+    uint64_t taken_ = 0, rendered_ = 0;
+    std::vector<Notice> notices_;
+    bool stop_ = false;
+    std::thread thread_;
+};
+
+}  // namespace rt::view

@@ -1,0 +1,158 @@
+// rtlab-view under Xvfb (Mesa's software OpenGL): the split view shows exactly what
+// `rtlab render` writes for each pipeline, a failed reload keeps the old scene, and a missing
+// display or a bad scene ends in one line and a non-zero exit instead of a crash.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <string>
+#include <sys/wait.h>
+
+#include "image/compare.h"
+#include "image/image_io.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::string kBin = RTLAB_BIN_DIR;
+const std::string kXvfb = "xvfb-run -a -s \"-screen 0 1024x768x24\" ";
+
+struct Result {
+    int status;
+    std::string out, err;
+};
+
+int exitStatus(int st) { return WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st); }
+
+std::string slurp(const std::string& path) {
+    std::ifstream in(path);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+// Runs a shell command; onFirstLine (if any) is called once the first stdout line arrives.
+Result run(const std::string& cmd, const std::function<void()>& onFirstLine = {}) {
+    std::string errFile = ::testing::TempDir() + "rtlab_view_err.txt";
+    Result r{};
+    FILE* p = popen((cmd + " 2>" + errFile).c_str(), "r");
+    std::array<char, 4096> line;
+    bool first = true;
+    while (fgets(line.data(), int(line.size()), p)) {
+        r.out += line.data();
+        if (first && r.out.back() == '\n') {
+            first = false;
+            if (onFirstLine) onFirstLine();
+        }
+    }
+    r.status = exitStatus(pclose(p));
+    r.err = slurp(errFile);
+    return r;
+}
+
+int lines(const std::string& s) {
+    int n = 0;
+    for (char c : s) n += c == '\n';
+    return n;
+}
+
+bool haveXvfb() { return std::system("command -v xvfb-run >/dev/null 2>&1") == 0; }
+
+rt::Image columns(const rt::Image& image, int x0, int x1) {
+    rt::Image out(x1 - x0, image.height);
+    for (int y = 0; y < image.height; ++y)
+        for (int x = x0; x < x1; ++x)
+            for (int c = 0; c < 3; ++c) out.pixel(x - x0, y)[c] = image.pixel(x, y)[c];
+    return out;
+}
+
+// One 8-bit sRGB step, in linear units, where the steps are widest (at white): compareImages
+// works on linear values, and the pipelines agree to one PNG quantisation step.
+double oneSrgbStep() {
+    auto decode = [](double s) { return s <= 0.04045 ? s / 12.92 : std::pow((s + 0.055) / 1.055, 2.4); };
+    return decode(1.0) - decode(254.0 / 255.0) + 1e-6;
+}
+
+std::string renderPng(const std::string& scene, const std::string& pipeline) {
+    std::string out = ::testing::TempDir() + "viewer_" + pipeline + ".png";
+    Result r = run(kBin + "/rtlab render " + scene + " --pipeline " + pipeline + " -o " + out);
+    EXPECT_EQ(r.status, 0) << r.err;
+    return out;
+}
+
+void expectSame(const rt::Image& shot, const rt::Image& render, int x0, int x1, const char* side) {
+    rt::ImageDiff d = rt::compareImages(columns(shot, x0, x1), columns(render, x0, x1), oneSrgbStep());
+    EXPECT_EQ(d.pixelsOver, 0) << side << ": max difference " << d.maxAbs << " (linear)";
+    EXPECT_LE(d.maxAbs, oneSrgbStep()) << side;
+}
+
+class Viewer : public ::testing::Test {
+protected:
+    void SetUp() override {
+        if (!fs::exists(kBin + "/rtlab-view")) GTEST_SKIP() << "rtlab-view was not built";
+        if (!haveXvfb()) GTEST_SKIP() << "xvfb-run is missing (scripts/setup installs it)";
+    }
+};
+
+TEST_F(Viewer, SplitViewHalvesMatchTheirPipelinesRenders) {
+    const std::string scene = "scenes/spheres.json";
+    std::string shotPath = ::testing::TempDir() + "viewer_split.png";
+    fs::remove(shotPath);
+    Result r = run(kXvfb + kBin + "/rtlab-view " + scene +
+                   " --frames 30 --split --no-overlay --scale 1 --screenshot " + shotPath);
+    ASSERT_EQ(r.status, 0) << r.out << r.err;
+    rt::Image shot = rt::readImage(shotPath);
+    rt::Image mega = rt::readImage(renderPng(scene, "mega"));
+    rt::Image wave = rt::readImage(renderPng(scene, "wave"));
+    ASSERT_EQ(shot.width, mega.width);
+    ASSERT_EQ(shot.height, mega.height);
+    // The divider starts at 50%: columns left of it show the megakernel, the rest the wavefront.
+    int divider = shot.width / 2;
+    expectSame(shot, mega, 0, divider, "left (megakernel)");
+    expectSame(shot, wave, divider, shot.width, "right (wavefront)");
+}
+
+TEST_F(Viewer, SceneErrorOnReloadKeepsTheOldSceneWithOneLine) {
+    std::string dir = ::testing::TempDir() + "viewer_reload/";
+    fs::create_directories(dir);
+    std::string scene = dir + "scene.json", shotPath = dir + "after.png";
+    fs::copy_file("scenes/spheres.json", scene, fs::copy_options::overwrite_existing);
+    fs::remove(shotPath);
+    // The viewer prints its first line after loading the scene; break the file then, well
+    // before the reload at frame 6 (PoCL takes over a second for those frames).
+    Result r = run(kXvfb + kBin + "/rtlab-view " + scene +
+                       " --frames 10 --keys 6:R --no-overlay --scale 1 --screenshot " + shotPath,
+                   [&] { std::ofstream(scene) << "{\"spheres\": [\n"; });
+    ASSERT_EQ(r.status, 0) << r.out << r.err;
+    EXPECT_EQ(lines(r.err), 1) << r.err;
+    EXPECT_NE(r.err.find("reload failed, kept the previous scene"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("scene.json"), std::string::npos) << r.err;
+    rt::Image shot = rt::readImage(shotPath);
+    rt::Image mega = rt::readImage(renderPng("scenes/spheres.json", "mega"));
+    expectSame(shot, mega, 0, shot.width, "after the failed reload");
+}
+
+TEST(ViewerErrors, NoDisplayEndsInOneLine) {
+    if (!fs::exists(kBin + "/rtlab-view")) GTEST_SKIP() << "rtlab-view was not built";
+    Result r = run("env -u DISPLAY -u WAYLAND_DISPLAY " + kBin +
+                   "/rtlab-view scenes/spheres.json --frames 1");
+    EXPECT_NE(r.status, 0);
+    EXPECT_LT(r.status, 128) << "crashed";
+    EXPECT_EQ(lines(r.err), 1) << r.err;
+    EXPECT_NE(r.err.find("display"), std::string::npos) << r.err;
+}
+
+TEST(ViewerErrors, BadSceneEndsInOneLine) {
+    if (!fs::exists(kBin + "/rtlab-view")) GTEST_SKIP() << "rtlab-view was not built";
+    Result r = run(kBin + "/rtlab-view scenes/no-such-scene.json");
+    EXPECT_NE(r.status, 0);
+    EXPECT_LT(r.status, 128) << "crashed";
+    EXPECT_EQ(lines(r.err), 1) << r.err;
+    EXPECT_NE(r.err.find("no-such-scene.json"), std::string::npos) << r.err;
+}
+
+}  // namespace
