@@ -65,7 +65,7 @@ inline float Triangle_Intersect(Ray ray, float3 v0, float3 v1, float3 v2, float2
 }
 #else
 // Woop, Benthin, Wald 2013: shear into ray space, exact edge-function signs. A ray through a
-// shared edge hits exactly one of the two triangles (no double-precision fallback here).
+// shared edge cannot slip between the two triangles (no double-precision fallback here).
 inline float Triangle_Intersect(Ray ray, float3 v0, float3 v1, float3 v2, float2* uv) {
     float3 ad = fabs(ray.dir);
     int kz = ad.x >= ad.y ? (ad.x >= ad.z ? 0 : 2) : (ad.y >= ad.z ? 1 : 2);
