@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <ctime>
+#include <fstream>
 #include <map>
 #include <memory>
 
@@ -155,6 +156,14 @@ nlohmann::json rowJson(const SweepConfig& config, const Cell& c, const Measureme
     return row;
 }
 
+// The host's load averages: other work on the machine skews CPU-device timings (PoCL) most.
+std::string loadAverage() {
+    std::ifstream f("/proc/loadavg");
+    std::string one, five, fifteen;
+    f >> one >> five >> fifteen;
+    return f ? one + " " + five + " " + fifteen : "unknown";
+}
+
 }  // namespace
 
 std::string formatDuration(double s) {
@@ -236,6 +245,7 @@ SweepSummary runSweep(const SweepConfig& config, const SweepRunOptions& options,
                     {"settings", sweepSettingsJson(config)},
                     {"scenes", sceneInfo},
                     {"started", utcNow()},
+                    {"host_load_start", loadAverage()},
                     {"cells", cells.size()},
                     {"skipped_as_done", summary.skipped}};
     summary.meta.update(device);
@@ -281,6 +291,7 @@ SweepSummary runSweep(const SweepConfig& config, const SweepRunOptions& options,
     progress.done();
     summary.seconds = progress.elapsed();
     summary.meta["finished"] = utcNow();
+    summary.meta["host_load_end"] = loadAverage();
     summary.meta["seconds"] = summary.seconds;
     summary.meta["complete"] = summary.complete;
     summary.meta["measured"] = summary.measured;

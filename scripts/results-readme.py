@@ -175,7 +175,9 @@ def main():
                ["Sweep", f"`{meta.get('config_file')}` ({meta.get('measured')} of "
                          f"{meta.get('cells')} cells measured, {meta.get('failed')} failed"
                          f"{'' if meta.get('complete', True) else ', stopped by its time limit'})"],
-               ["Measured", f"{meta.get('started')} to {meta.get('finished')}"
+               ["Measured", f"{meta.get('started')} to {meta.get('finished')}; host load "
+                            f"average {meta.get('host_load_start', '?')} at the start, "
+                            f"{meta.get('host_load_end', '?')} at the end"
                             + (f", imported from `{meta['imported_from']}`"
                                if meta.get("imported_from") else "")],
                ["Timing", f"device ms = sum of a frame's kernels by OpenCL profiling events; "
