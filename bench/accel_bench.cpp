@@ -38,7 +38,8 @@ fs::path bigMesh() {
     fs::path dir = env && *env ? fs::path(env) : fs::path(RTLAB_SOURCE_DIR) / "scenes" / "stress";
     fs::path scene = dir / "big-mesh.json";
     if (!fs::exists(scene) || !fs::exists(dir / "models" / "big-mesh.obj")) {
-        std::string cmd = "python3 " + (fs::path(RTLAB_SOURCE_DIR) / "scripts" / "make-stress.py").string() +
+        std::string cmd = "python3 " +
+                          (fs::path(RTLAB_SOURCE_DIR) / "scripts" / "make-stress.py").string() +
                           " --only mesh --out " + dir.string();
         std::fprintf(stderr, "generating %s\n", scene.c_str());
         if (std::system(cmd.c_str()) != 0) throw Error("failed: " + cmd);
@@ -46,7 +47,9 @@ fs::path bigMesh() {
     return scene;
 }
 
-uint64_t totalRays(const FrameStats& s) { return std::accumulate(s.rays.begin(), s.rays.end(), uint64_t(0)); }
+uint64_t totalRays(const FrameStats& s) {
+    return std::accumulate(s.rays.begin(), s.rays.end(), uint64_t(0));
+}
 
 // Device time and rays of one frame; counts rays in that frame when `count` is set.
 struct Frame {

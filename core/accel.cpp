@@ -13,10 +13,14 @@ namespace rt {
 
 const char* accelName(RenderOptions::Accel accel) {
     switch (accel) {
-        case RenderOptions::Accel::None: return "none";
-        case RenderOptions::Accel::Bv: return "bv";
-        case RenderOptions::Accel::Grid: return "grid";
-        case RenderOptions::Accel::Bvh: return "bvh";
+        case RenderOptions::Accel::None:
+            return "none";
+        case RenderOptions::Accel::Bv:
+            return "bv";
+        case RenderOptions::Accel::Grid:
+            return "grid";
+        case RenderOptions::Accel::Bvh:
+            return "bvh";
     }
     return "?";
 }
@@ -137,7 +141,8 @@ AccelData buildAccel(const Scene& scene, RenderOptions::Accel accel) {
     AccelStats& s = out.stats;
     s.name = accelName(accel);
     switch (accel) {
-        case RenderOptions::Accel::None: break;
+        case RenderOptions::Accel::None:
+            break;
         case RenderOptions::Accel::Bv:
             for (const dev::MeshInstance& m : out.meshes) out.kdops.push_back(meshKdop(out, m));
             s.nodes = (long long)out.kdops.size();
@@ -153,9 +158,8 @@ AccelData buildAccel(const Scene& scene, RenderOptions::Accel accel) {
             s.bytes = out.cells.size() * sizeof(int);
             s.detail = std::to_string(g.nx) + "x" + std::to_string(g.ny) + "x" +
                        std::to_string(g.nz) + " cells, " +
-                       fmt("%.2f refs/primitive", prims ? double(out.cells.size() - cells - 1) /
-                                                              double(prims)
-                                                        : 0.0);
+                       fmt("%.2f refs/primitive",
+                           prims ? double(out.cells.size() - cells - 1) / double(prims) : 0.0);
             break;
         }
         case RenderOptions::Accel::Bvh: {
@@ -196,16 +200,17 @@ std::string checkBvh(const AccelData& data) {
         return c.lo.x >= p.lo.x && c.lo.y >= p.lo.y && c.lo.z >= p.lo.z && c.hi.x <= p.hi.x &&
                c.hi.y <= p.hi.y && c.hi.z <= p.hi.z;
     };
-    auto contains = [](const dev::BvhNode& n, float x0, float y0, float z0, float x1, float y1,
-                       float z1) {
-        return n.lo.x <= x0 && n.lo.y <= y0 && n.lo.z <= z0 && n.hi.x >= x1 && n.hi.y >= y1 &&
-               n.hi.z >= z1;
+    // The unpadded box of a primitive must lie in its leaf's box.
+    auto contains = [](const dev::BvhNode& n, const float* lo, const float* hi) {
+        return n.lo.x <= lo[0] && n.lo.y <= lo[1] && n.lo.z <= lo[2] && n.hi.x >= hi[0] &&
+               n.hi.y >= hi[1] && n.hi.z >= hi[2];
     };
     std::vector<int> stack{0};
     while (!stack.empty()) {
         int i = stack.back();
         stack.pop_back();
-        if (i < 0 || size_t(i) >= nodes.size()) return "node index " + std::to_string(i) + " out of range";
+        if (i < 0 || size_t(i) >= nodes.size())
+            return "node index " + std::to_string(i) + " out of range";
         if (nodeSeen[i]++) return "node " + std::to_string(i) + " is reached twice";
         const dev::BvhNode& n = nodes[i];
         std::string where = "node " + std::to_string(i);
@@ -213,7 +218,8 @@ std::string checkBvh(const AccelData& data) {
             if (n.first <= 0 || size_t(n.first) + 1 >= nodes.size())
                 return where + ": children " + std::to_string(n.first) + " out of range";
             for (int c : {n.first, n.first + 1}) {
-                if (!inside(nodes[c], n)) return where + ": child " + std::to_string(c) + "'s box is not inside";
+                if (!inside(nodes[c], n))
+                    return where + ": child " + std::to_string(c) + "'s box is not inside";
                 stack.push_back(c);
             }
         } else if (n.count > 0) {
@@ -222,9 +228,13 @@ std::string checkBvh(const AccelData& data) {
             for (int t = n.first; t < n.first + n.count; ++t) {
                 if (triangleSeen[t]++) return "triangle " + std::to_string(t) + " is in two leaves";
                 const dev::Triangle& tr = data.triangles[t];
-                if (!contains(n, std::min({tr.v0.x, tr.v1.x, tr.v2.x}), std::min({tr.v0.y, tr.v1.y, tr.v2.y}),
-                              std::min({tr.v0.z, tr.v1.z, tr.v2.z}), std::max({tr.v0.x, tr.v1.x, tr.v2.x}),
-                              std::max({tr.v0.y, tr.v1.y, tr.v2.y}), std::max({tr.v0.z, tr.v1.z, tr.v2.z})))
+                float lo[3], hi[3];
+                for (int a = 0; a < 3; ++a) {
+                    float v0 = (&tr.v0.x)[a], v1 = (&tr.v1.x)[a], v2 = (&tr.v2.x)[a];
+                    lo[a] = std::min({v0, v1, v2});
+                    hi[a] = std::max({v0, v1, v2});
+                }
+                if (!contains(n, lo, hi))
                     return where + ": box does not contain triangle " + std::to_string(t);
             }
         } else {
@@ -233,9 +243,10 @@ std::string checkBvh(const AccelData& data) {
             for (int s = n.first; s < n.first - n.count; ++s) {
                 if (sphereSeen[s]++) return "sphere " + std::to_string(s) + " is in two leaves";
                 const dev::Sphere& sp = data.spheres[s];
-                float r = sp.radius;
-                if (!contains(n, sp.center.x - r, sp.center.y - r, sp.center.z - r,
-                              sp.center.x + r, sp.center.y + r, sp.center.z + r))
+                const float* c = &sp.center.x;
+                float lo[3] = {c[0] - sp.radius, c[1] - sp.radius, c[2] - sp.radius};
+                float hi[3] = {c[0] + sp.radius, c[1] + sp.radius, c[2] + sp.radius};
+                if (!contains(n, lo, hi))
                     return where + ": box does not contain sphere " + std::to_string(s);
             }
         }

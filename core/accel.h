@@ -22,11 +22,11 @@ RenderOptions::Accel parseAccel(const std::string& name);  // throws rt::Error
 RenderOptions::Accel defaultAccel(const Scene& scene);
 
 struct AccelStats {
-    std::string name;      // accelName
-    double buildMs = 0;    // host time to build the structure (wall clock)
-    long long nodes = 0;   // bvh: nodes; grid: cells; bv: slab volumes; none: 0
-    size_t bytes = 0;      // device bytes of the structure (nodes, cells and references)
-    std::string detail;    // e.g. "64x32x64 cells, 1.2 refs/primitive" or "depth 24, 4.1 prims/leaf"
+    std::string name;     // accelName
+    double buildMs = 0;   // host time to build the structure (wall clock)
+    long long nodes = 0;  // bvh: nodes; grid: cells; bv: slab volumes; none: 0
+    size_t bytes = 0;     // device bytes of the structure (nodes, cells and references)
+    std::string detail;   // e.g. "64x32x64 cells, 1.2 refs/primitive" or "depth 24, 4.1 prims/leaf"
 };
 
 // Spheres and triangles in the order the device sees them, and the records over them. The bvh

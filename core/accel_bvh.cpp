@@ -54,14 +54,17 @@ struct Ref {
 };
 
 class Builder {
-public:
-    Builder(const PrimBoxes& boxes, unsigned threads) : sphereCount_(boxes.sphereCount), threads_(threads) {
+  public:
+    Builder(const PrimBoxes& boxes, unsigned threads)
+        : sphereCount_(boxes.sphereCount), threads_(threads) {
         int n = int(boxes.lo.size());
         refs_.resize(n);
         for (int i = 0; i < n; ++i) {
             Ref& r = refs_[i];
-            r = {{boxes.lo[i].x, boxes.lo[i].y, boxes.lo[i].z}, i,
-                 {boxes.hi[i].x, boxes.hi[i].y, boxes.hi[i].z}, 0};
+            r = {{boxes.lo[i].x, boxes.lo[i].y, boxes.lo[i].z},
+                 i,
+                 {boxes.hi[i].x, boxes.hi[i].y, boxes.hi[i].z},
+                 0};
         }
         nodes_.resize(size_t(std::max(1, 2 * n)));
     }
@@ -76,7 +79,7 @@ public:
     const std::vector<BuildNode>& nodes() const { return nodes_; }
     int id(int i) const { return refs_[i].id; }
 
-private:
+  private:
     bool isSphere(const Ref& r) const { return r.id < sphereCount_; }
 
     // Runs fn(chunkBegin, chunkEnd, partial) over [begin, end), on every thread when the range
@@ -135,12 +138,14 @@ private:
             for (int a = 0; a < 3; ++a)
                 for (int k = 0; k < nb; ++k) {
                     count[a][k] = 0;
-                    for (int c = 0; c < 3; ++c) raw[a][k].lo[c] = INFINITY, raw[a][k].hi[c] = -INFINITY;
+                    for (int c = 0; c < 3; ++c)
+                        raw[a][k].lo[c] = INFINITY, raw[a][k].hi[c] = -INFINITY;
                 }
         }
         void grow(int a, int k, const float* lo, const float* hi) {
             Raw& r = raw[a][k];
-            for (int c = 0; c < 3; ++c) r.lo[c] = std::min(r.lo[c], lo[c]), r.hi[c] = std::max(r.hi[c], hi[c]);
+            for (int c = 0; c < 3; ++c)
+                r.lo[c] = std::min(r.lo[c], lo[c]), r.hi[c] = std::max(r.hi[c], hi[c]);
         }
     };
 
@@ -212,7 +217,8 @@ private:
         n.box = box;
         n.begin = begin;
         n.end = end;
-        // Leaves hold one kind: a mixed range becomes a node over a sphere leaf and a triangle leaf.
+        // Leaves hold one kind: a mixed range becomes a node over a sphere leaf and a triangle
+        // leaf.
         Ref* mid = std::partition(refs_.data() + begin, refs_.data() + end,
                                   [&](const Ref& r) { return isSphere(r); });
         int m = int(mid - refs_.data());
@@ -238,7 +244,8 @@ private:
         float splitCost = kTraversalCost + split.cost / std::max(b.box.area(), 1e-30f);
         int mid;
         if (split.axis >= 0) {
-            if (count <= kMaxLeaf && splitCost >= leafCost) return makeLeaf(node, begin, end, b.box);
+            if (count <= kMaxLeaf && splitCost >= leafCost)
+                return makeLeaf(node, begin, end, b.box);
             int a = split.axis;
             const Box& cb = b.centroids;
             Ref* m = std::partition(refs_.data() + begin, refs_.data() + end, [&](const Ref& r) {

@@ -12,10 +12,10 @@
 namespace rt {
 namespace {
 
-constexpr double kDensity = 4.0;         // cells per primitive
-constexpr int kMaxResolution = 1024;     // per axis
-constexpr double kMaxCells = 1 << 24;    // 64 MiB of cell offsets
-constexpr double kMaxRefs = 1 << 28;     // 1 GiB of references: refuse rather than thrash
+constexpr double kDensity = 4.0;       // cells per primitive
+constexpr int kMaxResolution = 1024;   // per axis
+constexpr double kMaxCells = 1 << 24;  // 64 MiB of cell offsets
+constexpr double kMaxRefs = 1 << 28;   // 1 GiB of references: refuse rather than thrash
 
 struct CellRange {
     int lo[3], hi[3];
@@ -34,7 +34,8 @@ void buildGrid(AccelData& data) {
     for (int i = 0; i < n; ++i) {
         const float* l = &boxes.lo[i].x;
         const float* h = &boxes.hi[i].x;
-        for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], double(l[a])), hi[a] = std::max(hi[a], double(h[a]));
+        for (int a = 0; a < 3; ++a)
+            lo[a] = std::min(lo[a], double(l[a])), hi[a] = std::max(hi[a], double(h[a]));
     }
     double extent[3], maxExtent = 0;
     for (int a = 0; a < 3; ++a) maxExtent = std::max(maxExtent, hi[a] - lo[a]);

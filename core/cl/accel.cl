@@ -56,7 +56,7 @@ inline bool Mesh_SphereMisses(const MeshInstance* m, Ray ray, float tMax) {
     float c = dot(oc, oc) - r2;
     if (c <= 0.0f) return false;  // origin inside
     float b = dot(oc, ray.dir);
-    if (b > 0.0f) return true;  // outside and moving away
+    if (b > 0.0f) return true;    // outside and moving away
     float3 f = oc - b * ray.dir;  // Ray Tracing Gems ch. 7: no b^2 - c cancellation
     float disc = r2 - dot(f, f);
     return disc < 0.0f || -b - sqrt(disc) > tMax;
@@ -66,10 +66,10 @@ inline bool Mesh_SphereMisses(const MeshInstance* m, Ray ray, float tMax) {
 // Kay-Kajiya slab test against the 7 slab pairs of dev::Kdop (report 3.6.2).
 inline bool Kdop_Hit(global const Kdop* k, Ray ray, float tMax) {
     float3 o = ray.origin, d = ray.dir;
-    float no[RT_SLABS] = {o.x, o.y, o.z, o.x + o.y + o.z, -o.x + o.y + o.z, o.x - o.y + o.z,
-                          o.x + o.y - o.z};
-    float nd[RT_SLABS] = {d.x, d.y, d.z, d.x + d.y + d.z, -d.x + d.y + d.z, d.x - d.y + d.z,
-                          d.x + d.y - d.z};
+    float no[RT_SLABS] = {
+        o.x, o.y, o.z, o.x + o.y + o.z, -o.x + o.y + o.z, o.x - o.y + o.z, o.x + o.y - o.z};
+    float nd[RT_SLABS] = {
+        d.x, d.y, d.z, d.x + d.y + d.z, -d.x + d.y + d.z, d.x - d.y + d.z, d.x + d.y - d.z};
     float enter = 0.0f, leave = tMax;
     for (int s = 0; s < RT_SLABS; ++s) {
         if (nd[s] == 0.0f) {
