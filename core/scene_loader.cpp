@@ -578,7 +578,7 @@ class Loader {
         if (faces.array(kAny, "cubemap faces") != 6)
             faces.fail("must list 6 faces (+x, -x, +y, -y, +z, -z), got " +
                        std::to_string(faces.json().size()));
-        if (!readImage_) faces.fail("cubemap faces need an image reader");
+        if (!readImage_) faces.fail("cubemap needs an image reader");
         for (std::size_t i = 0; i < 6; ++i) {
             Node f = faces[i];
             fs::path file = dir_ / f.string();

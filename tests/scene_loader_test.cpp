@@ -88,7 +88,7 @@ const BadScene kBadScenes[] = {
     {"negative_light_radius.json", "/lights/0/radius: must be >= 0, got -0.5"},
     {"cubemap_five_faces.json",
      "/environment/cubemap: must list 6 faces (+x, -x, +y, -y, +z, -z), got 5"},
-    {"cubemap_no_reader.json", "/environment/cubemap: cubemap faces need an image reader"},
+    {"cubemap_no_reader.json", "/environment/cubemap: cubemap needs an image reader"},
     {"sky_and_cubemap.json", "/environment: give either 'sky' or 'cubemap', not both"},
     {"bounces_out_of_range.json", "/render/bounces: must be in 0..16, got 17"},
     {"shadow_samples_zero.json", "/render/shadow_samples: must be in 1..255, got 0"},
