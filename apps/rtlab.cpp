@@ -20,6 +20,17 @@ int main(int argc, char** argv) {
     rt::cli::addDevices(app);
     rt::cli::addCompare(app);
     rt::cli::addSweep(app);
+    std::string names;
+    bool known = false;
+    for (const CLI::App* sub : app.get_subcommands({})) {
+        names += (names.empty() ? "" : ", ") + sub->get_name();
+        known |= argc > 1 && sub->get_name() == argv[1];
+    }
+    if (argc > 1 && argv[1][0] != '-' && !known) {
+        std::fprintf(stderr, "rtlab: unknown command '%s' (commands: %s; see rtlab --help)\n",
+                     argv[1], names.c_str());
+        return 2;
+    }
     try {
         app.parse(argc, argv);
         return rt::cli::run(app);

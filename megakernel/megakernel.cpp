@@ -30,6 +30,7 @@ Image MegakernelPipeline::render(const Scene& scene, const RenderOptions& o) {
     stats_.program = cl_.lastProgramSource();
     if (!scene_ || !scene_->matches(scene, o.accel))
         scene_ = std::make_unique<DeviceScene>(cl_, scene, o.accel);
+    stats_.accel = scene_->accelStats();
     size_t bytes = size_t(o.width) * o.height * 3 * sizeof(float);
     if (bytes != imageBytes_) {
         if (imageBytes_) cl_.release(2 * imageBytes_);

@@ -72,7 +72,10 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"render scenes/spheres.json -o /no/such/dir/x.png", "/no/such/dir"},
         BadCase{"render scenes/spheres.json -o /tmp/x.bmpx", "unsupported image type"},
         BadCase{"render scenes/spheres.json --pipeline wave --memory-budget 10 -o /tmp/x.png",
-                "highest bounce limit"},
+                "exceeds --memory-budget (10 B)"},
+        BadCase{"render scenes/spheres.json --pipeline wave --memory-budget 100K --bounces 8 "
+                "-o /tmp/x.png",
+                "the highest bounce limit that fits is 4"},
         BadCase{"render scenes/spheres.json --pipeline wave --memory-budget lots -o /tmp/x.png",
                 "--memory-budget lots"},
         BadCase{"render scenes/spheres.json --pipeline mega --bounces 15 -o /tmp/x.png",
@@ -81,7 +84,7 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"render tests/data/bad_scenes/negative_radius.json -o /tmp/x.png",
                 "tests/data/bad_scenes/negative_radius.json: /spheres/"},
         BadCase{"render scenes/spheres.json --kernel-dir /no/such -o /tmp/x.png", "--kernel-dir"},
-        BadCase{"bogus", "bogus"}));
+        BadCase{"bogus", "unknown command 'bogus'"}));
 
 TEST(Cli, RendersWithEveryPipeline) {
     for (const char* p : {"cpu", "mega", "wave"}) {

@@ -51,6 +51,7 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
     stats_.program = cl_.lastProgramSource();
     if (!scene_ || !scene_->matches(scene, o.accel))
         scene_ = std::make_unique<DeviceScene>(cl_, scene, o.accel);
+    stats_.accel = scene_->accelStats();
 
     size_t nodes = size_t(o.width) * rows * size_t(stats_.treeNodes);
     size_t treeBytes = nodes * sizeof(dev::Node);
