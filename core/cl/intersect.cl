@@ -95,13 +95,4 @@ inline float Triangle_Intersect(Ray ray, float3 v0, float3 v1, float3 v2, float2
 #endif
 #endif  // RT_HAS_TRIANGLES
 
-// Slab test against a box; true when the ray enters it before tMax.
-inline bool Aabb_Hit(Ray ray, float3 invDir, float3 lo, float3 hi, float tMax) {
-    float3 t0 = (lo - ray.origin) * invDir, t1 = (hi - ray.origin) * invDir;
-    float3 tn = fmin(t0, t1), tf = fmax(t0, t1);
-    float enter = fmax(fmax(tn.x, tn.y), fmax(tn.z, 0.0f));
-    float leave = fmin(fmin(tf.x, tf.y), fmin(tf.z, tMax));
-    return enter <= leave;
-}
-
 #endif
