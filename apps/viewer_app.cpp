@@ -259,7 +259,7 @@ void App::draw() {
     p.split = haveFrame_ && frame_.pipelines.size() > 1;
     p.divider = divider_;
     p.showDivider = showStats_;
-    int scale = w >= 1000 ? 2 : 1;
+    int scale = w >= 900 ? 2 : 1;
     if (showStats_ || showHelp_) {
         OverlayInfo info;
         info.frame = haveFrame_ ? &frame_ : nullptr;

@@ -43,11 +43,11 @@ Renderer::Renderer(ClContext& cl, Scene scene, Config config, std::function<void
     base_ = config_.flags.apply(scene.defaults);
     base_.countRays = config_.countRays;
     if (config_.animate) animation_ = orbitFirstSphere(scene, config_.orbitRadius, config_.orbitPeriod);
-    scenes_[0] = std::move(scene);
-    if (animation_) scenes_[1] = scenes_[0];
-    fileCamera_ = scenes_[0].camera;
+    fileCamera_ = scene.camera;
+    install(std::move(scene));
     good_ = {base_.bounces, base_.accel};
-    resetPipelines();
+    mega_.pipeline = makePipeline(PipelineKind::Mega, &cl_);
+    wave_.pipeline = makePipeline(PipelineKind::Wave, &cl_);
 }
 
 Renderer::~Renderer() {
@@ -59,9 +59,42 @@ Renderer::~Renderer() {
     if (thread_.joinable()) thread_.join();
 }
 
-void Renderer::resetPipelines() {
-    mega_ = makePipeline(PipelineKind::Mega, &cl_);
-    wave_ = makePipeline(PipelineKind::Wave, &cl_);
+int Renderer::freeSlot() const {
+    // At most 2 + 2 held, the current and the backup slot are taken, so one of 8 is free.
+    for (int s = 0; s < kSlots; ++s)
+        if (s != current_ && !mega_.slots.count(s) && !wave_.slots.count(s) &&
+            !(backup_ && backup_->slot == s))
+            return s;
+    throw Error("internal: no free scene slot");
+}
+
+void Renderer::install(Scene scene) {
+    int s = freeSlot();
+    slots_[size_t(s)] = std::move(scene);
+    slotLoad_[size_t(s)] = ++loads_;
+    current_ = s;
+}
+
+void Renderer::animate() {
+    double t = config_.fixedStep > 0
+                   ? double(rendered_) * config_.fixedStep
+                   : std::chrono::duration<double>(std::chrono::steady_clock::now() - started_).count();
+    int s = freeSlot();  // a new address, so the pipelines upload the moved object
+    if (slotLoad_[size_t(s)] != slotLoad_[size_t(current_)]) {
+        slots_[size_t(s)] = slots_[size_t(current_)];
+        slotLoad_[size_t(s)] = slotLoad_[size_t(current_)];
+    }
+    slots_[size_t(s)].spheres[size_t(animation_->sphere)].center = animation_->at(t);
+    current_ = s;
+}
+
+void Renderer::dropUnusedSlots() {
+    for (int s = 0; s < kSlots; ++s)
+        if (slotLoad_[size_t(s)] && slotLoad_[size_t(s)] != slotLoad_[size_t(current_)] &&
+            !mega_.slots.count(s) && !wave_.slots.count(s) && !(backup_ && backup_->slot == s)) {
+            slots_[size_t(s)] = Scene();
+            slotLoad_[size_t(s)] = 0;
+        }
 }
 
 void Renderer::start(const ViewRequest& first) {
@@ -112,7 +145,12 @@ void Renderer::loop() {
             if (stop_) return;
             r = request_;
         }
-        renderOne(r);
+        try {
+            renderOne(r);
+        } catch (const std::exception& e) {  // nothing may escape the thread
+            failed_ = true;
+            post({std::string("render thread: ") + e.what(), true});
+        }
         wake_();
     }
 }
@@ -138,27 +176,22 @@ bool Renderer::reload() {
         post({std::string("reload failed, kept the previous scene: ") + e.what()});
         return false;
     }
-    backup_ = Backup{std::move(scenes_[0]), animation_, base_, fileCamera_};
-    scenes_[0] = std::move(fresh);
-    if (animation) scenes_[1] = scenes_[0];
+    backup_ = Backup{current_, animation_, base_, fileCamera_};
+    fileCamera_ = fresh.camera;
+    install(std::move(fresh));
     animation_ = animation;
     base_ = base;
-    fileCamera_ = scenes_[0].camera;
     refused_.clear();
-    // New pipelines: the scenes keep their addresses, so old device copies would look current.
-    resetPipelines();
     return true;
 }
 
 void Renderer::restoreBackup() {
-    scenes_[0] = std::move(backup_->scene);
+    current_ = backup_->slot;
     animation_ = backup_->animation;
-    if (animation_) scenes_[1] = scenes_[0];
     base_ = backup_->base;
     fileCamera_ = backup_->fileCamera;
     backup_.reset();
     refused_.clear();
-    resetPipelines();
 }
 
 void Renderer::renderOne(const ViewRequest& r) {
@@ -171,28 +204,22 @@ void Renderer::renderOne(const ViewRequest& r) {
     if (refused_.count(choice)) choice = good_;
     RenderOptions o = optionsFor(choice.first, choice.second);
 
-    Scene* scene = &scenes_[0];
-    if (animation_) {
-        current_ ^= 1;  // a new address, so the pipelines upload the moved object
-        scene = &scenes_[current_];
-        double t = config_.fixedStep > 0
-                       ? double(rendered_) * config_.fixedStep
-                       : std::chrono::duration<double>(std::chrono::steady_clock::now() - started_)
-                             .count();
-        scene->spheres[size_t(animation_->sphere)].center = animation_->at(t);
-    }
-    scene->camera = r.camera;
+    if (animation_) animate();
+    Scene& scene = slots_[size_t(current_)];
+    scene.camera = r.camera;  // travels in the kernel settings, not in the device scene
 
     auto t0 = std::chrono::steady_clock::now();
     FrameOut f;
     std::string failure;
     try {
-        std::vector<Pipeline*> order;
-        if (r.split) order = {mega_.get(), wave_.get()};
-        else order = {r.kind == PipelineKind::Wave ? wave_.get() : mega_.get()};
-        for (Pipeline* p : order) {
-            Image image = p->render(*scene, o);
-            PipelineFrame pf{p->kind(), p->stats(), {}};
+        std::vector<Held*> order;
+        if (r.split) order = {&mega_, &wave_};
+        else order = {r.kind == PipelineKind::Wave ? &wave_ : &mega_};
+        for (Held* h : order) {
+            h->slots.insert(current_);
+            Image image = h->pipeline->render(scene, o);
+            h->slots = {current_};
+            PipelineFrame pf{h->pipeline->kind(), h->pipeline->stats(), {}};
             encodeSrgb8(image, pf.rgb);
             f.pipelines.push_back(std::move(pf));
         }
@@ -203,6 +230,11 @@ void Renderer::renderOne(const ViewRequest& r) {
     }
 
     if (!failure.empty()) {
+        for (Held* h : {&mega_, &wave_})
+            if (h->slots.size() > 2) {  // keep freeSlot()'s count: start this one afresh
+                h->pipeline = makePipeline(h->pipeline->kind(), &cl_);
+                h->slots.clear();
+            }
         if (backup_) {
             restoreBackup();
             post({"reload failed, kept the previous scene: " + failure});
@@ -217,6 +249,7 @@ void Renderer::renderOne(const ViewRequest& r) {
     }
     if (reloaded) ++generation_;
     backup_.reset();
+    dropUnusedSlots();
     good_ = choice;
     anyFrame_ = true;
     f.width = o.width;
@@ -226,7 +259,7 @@ void Renderer::renderOne(const ViewRequest& r) {
     f.deviceBytes = cl_.allocatedBytes();
     f.sceneGeneration = generation_;
     f.sceneCamera = fileCamera_;
-    f.sceneName = scenes_[0].name;
+    f.sceneName = scene.name;
     std::lock_guard<std::mutex> lock(mutex_);
     f.index = ++rendered_;
     latest_ = std::move(f);

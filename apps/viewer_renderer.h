@@ -3,11 +3,14 @@
 // window thread stays free for input and drawing, so a slow device (PoCL) never stalls the UI.
 //
 // Buffers: each Pipeline keeps its device buffers while the scene address and the frame size stay
-// the same; the renderer keeps its scenes at fixed addresses, so a frame only changes the camera
-// (kernel settings) and queues kernels. An animated frame alternates between two copies of the
-// scene, because the pipelines have no call to update object buffers in place yet.
+// the same, so a still frame only changes the camera (kernel settings) and queues kernels. The
+// pipelines have no call yet to update objects in place, and know a scene only by its address; so
+// the renderer never changes a scene a pipeline may hold a device copy of. A reload or an animation
+// step writes a different slot (a scene at another fixed address), which the pipelines then upload,
+// while their image and ray-tree buffers stay.
 #pragma once
 
+#include <array>
 #include <chrono>
 #include <condition_variable>
 #include <cstdint>
@@ -99,10 +102,6 @@ public:
     Renderer(const Renderer&) = delete;
     Renderer& operator=(const Renderer&) = delete;
 
-    // The options the scene and the command line give (size, bounces, accel, ...).
-    const RenderOptions& baseOptions() const { return base_; }
-    const Scene& initialScene() const { return scenes_[0]; }
-
     void start(const ViewRequest& first);
     void request(const ViewRequest& r);
     bool takeFrame(FrameOut& out);  // true when a frame newer than the last one taken is ready
@@ -116,27 +115,39 @@ private:
     void restoreBackup();
     void post(Notice n);
     RenderOptions optionsFor(int bounces, RenderOptions::Accel accel) const;
-    void resetPipelines();
+    int freeSlot() const;
+    void install(Scene scene);
+    void animate();
+    void dropUnusedSlots();
 
     ClContext& cl_;
     Config config_;
     std::function<void()> wake_;
 
-    // Render-thread state.
-    Scene scenes_[2];  // [1] is the animation's second copy
+    // Render-thread state. slotLoad_ says which load a slot's content comes from (0 = empty).
+    static constexpr int kSlots = 8;
+    std::array<Scene, kSlots> slots_;
+    std::array<uint64_t, kSlots> slotLoad_{};
+    uint64_t loads_ = 0;
     int current_ = 0;
+    // A pipeline and the slots whose address its device scene may carry: the one it rendered
+    // last, plus the one it failed on (a failure may or may not have replaced its copy).
+    struct Held {
+        std::unique_ptr<Pipeline> pipeline;
+        std::set<int> slots;
+    };
+    Held mega_, wave_;
     std::optional<Animation> animation_;
     RenderOptions base_;
     dev::Camera fileCamera_{};
     // What a reload replaced, kept until the new scene renders once.
     struct Backup {
-        Scene scene;
+        int slot;
         std::optional<Animation> animation;
         RenderOptions base;
         dev::Camera fileCamera;
     };
     std::optional<Backup> backup_;
-    std::unique_ptr<Pipeline> mega_, wave_;
     std::pair<int, RenderOptions::Accel> good_;
     std::set<std::pair<int, RenderOptions::Accel>> refused_;
     uint64_t reloadsDone_ = 0, generation_ = 0;

@@ -136,6 +136,31 @@ TEST_F(Viewer, SceneErrorOnReloadKeepsTheOldSceneWithOneLine) {
     expectSame(shot, mega, 0, shot.width, "after the failed reload");
 }
 
+TEST_F(Viewer, AnimationMovesTheFirstSphereInBothPipelines) {
+    // --animate orbits sphere 0 on a 48-point circle of radius 0.8 once every 6 s, and automation
+    // advances the clock by 1/30 s per frame: frame 16 renders t = 0.5 s, exactly on point 4.
+    const double angle = 2 * M_PI * 4 / 48;
+    float x = -1.6f + 0.8f * float(std::cos(angle)), z = 7.f + 0.8f * float(std::sin(angle));
+    std::string text = slurp("scenes/spheres.json");
+    const std::string from = "{\"center\": [-1.6, 1.2, 7]";
+    size_t at = text.find(from);
+    ASSERT_NE(at, std::string::npos) << "scenes/spheres.json changed; update this test";
+    char moved[128];
+    std::snprintf(moved, sizeof moved, "{\"center\": [%.9g, 1.2, %.9g]", x, z);
+    std::string dir = ::testing::TempDir() + "viewer_animate/";
+    fs::create_directories(dir);
+    std::ofstream(dir + "spheres.json") << text.replace(at, from.size(), moved);
+
+    std::string shotPath = dir + "frame16.png";
+    Result r = run(kXvfb + kBin + "/rtlab-view scenes/spheres.json --animate --frames 16 --split " +
+                   "--no-overlay --scale 1 --screenshot " + shotPath);
+    ASSERT_EQ(r.status, 0) << r.out << r.err;
+    rt::Image shot = rt::readImage(shotPath);
+    rt::Image expected = rt::readImage(renderPng(dir + "spheres.json", "mega"));
+    ASSERT_EQ(shot.width, expected.width);
+    expectSame(shot, expected, 0, shot.width, "frame 16 of the orbit");
+}
+
 TEST(ViewerErrors, NoDisplayEndsInOneLine) {
     if (!fs::exists(kBin + "/rtlab-view")) GTEST_SKIP() << "rtlab-view was not built";
     Result r = run("env -u DISPLAY -u WAYLAND_DISPLAY " + kBin +
