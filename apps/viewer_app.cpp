@@ -9,7 +9,6 @@
 #include <cctype>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <filesystem>
 
 #include "apps/viewer_overlay.h"
@@ -78,8 +77,8 @@ App::App(GLFWwindow* window, GlDisplay& display, Renderer& renderer, ViewRequest
       config_(std::move(config)),
       showStats_(config_.overlay) {
     glfwSetWindowUserPointer(window_, this);
-    glfwSetKeyCallback(window_, [](GLFWwindow* w, int key, int, int action, int mods) {
-        if (action != GLFW_RELEASE) self(w)->onKey(key, mods);
+    glfwSetKeyCallback(window_, [](GLFWwindow* w, int key, int, int action, int) {
+        if (action != GLFW_RELEASE) self(w)->onKey(key);
     });
     glfwSetMouseButtonCallback(window_, [](GLFWwindow* w, int button, int action, int) {
         self(w)->onMouseButton(button, action);
@@ -96,7 +95,6 @@ App::App(GLFWwindow* window, GlDisplay& display, Renderer& renderer, ViewRequest
 }
 
 void App::send() {
-    ++req_.version;
     renderer_.request(req_);
 }
 
@@ -105,9 +103,8 @@ void App::message(const std::string& text) {
     while (messages_.size() > 4) messages_.pop_front();
 }
 
-void App::onKey(int key, int mods) {
-    (void)mods;
-    const char* pipelines = req_.kind == PipelineKind::Mega ? "megakernel" : "wavefront";
+void App::onKey(int key) {
+    const char* shown = req_.kind == PipelineKind::Mega ? "megakernel" : "wavefront";
     switch (key) {
         case GLFW_KEY_ESCAPE: glfwSetWindowShouldClose(window_, GLFW_TRUE); return;
         case GLFW_KEY_M:
@@ -119,7 +116,7 @@ void App::onKey(int key, int mods) {
         case GLFW_KEY_V:
             req_.split = !req_.split;
             message(req_.split ? "split: megakernel left, wavefront right"
-                               : std::string("showing the ") + pipelines);
+                               : std::string("showing the ") + shown);
             break;
         case GLFW_KEY_EQUAL:
         case GLFW_KEY_KP_ADD:
@@ -223,7 +220,8 @@ void App::receive() {
     }
     FrameOut f;
     if (!renderer_.takeFrame(f)) return;
-    arrivals_.push_back(Clock::now());
+    arrivals_.emplace_back(Clock::now(), f.index);
+    if (!haveFrame_) firstArrival_ = arrivals_.back();
     while (arrivals_.size() > 20) arrivals_.pop_front();
     display_.uploadFrame(0, f.pipelines[0].rgb, f.width, f.height);
     if (f.pipelines.size() > 1) display_.uploadFrame(1, f.pipelines[1].rgb, f.width, f.height);
@@ -244,8 +242,8 @@ void App::receive() {
 
 double App::fps() const {
     if (arrivals_.size() < 2) return 0;
-    double s = std::chrono::duration<double>(arrivals_.back() - arrivals_.front()).count();
-    return s > 0 ? double(arrivals_.size() - 1) / s : 0;
+    double s = std::chrono::duration<double>(arrivals_.back().first - arrivals_.front().first).count();
+    return s > 0 ? double(arrivals_.back().second - arrivals_.front().second) / s : 0;
 }
 
 void App::draw() {
@@ -307,17 +305,22 @@ int App::run() {
         if (!fatal_.empty()) throw Error(fatal_);
         while (!config_.keys.empty() && haveFrame_ &&
                (long long)frame_.index >= config_.keys.front().first) {
-            onKey(config_.keys.front().second, 0);
+            onKey(config_.keys.front().second);
             config_.keys.erase(config_.keys.begin());
         }
         if (config_.frames > 0 && haveFrame_ && (long long)frame_.index >= config_.frames) {
-            double s = std::chrono::duration<double>(Clock::now() - start).count();
+            auto now = Clock::now();
+            double total = std::chrono::duration<double>(now - start).count();
+            double first = std::chrono::duration<double>(firstArrival_.first - start).count();
+            double rest = std::chrono::duration<double>(now - firstArrival_.first).count();
             if (!config_.screenshot.empty()) {
                 saveScreenshot(config_.screenshot);
                 std::printf("rtlab-view: wrote %s\n", config_.screenshot.c_str());
             }
-            std::printf("rtlab-view: %lld frames in %.2f s (%.2f FPS)", config_.frames, s,
-                        double(config_.frames) / s);
+            std::printf("rtlab-view: %lld frames in %.2f s: the first after %.2f s", config_.frames,
+                        total, first);
+            if (frame_.index > firstArrival_.second && rest > 0)
+                std::printf(", then %.2f FPS", double(frame_.index - firstArrival_.second) / rest);
             for (const PipelineFrame& p : frame_.pipelines)
                 std::printf(", %s %.1f ms device", pipelineName(p.kind), p.stats.deviceMs);
             std::printf("\n");

@@ -39,7 +39,7 @@ public:
     int run();
 
     // GLFW callbacks (static trampolines find the App through the window's user pointer).
-    void onKey(int key, int mods);
+    void onKey(int key);
     void onMouseButton(int button, int action);
     void onCursor(double x, double y);
 
@@ -61,7 +61,10 @@ private:
     FrameOut frame_;  // the frame on screen (its pixels already uploaded)
     bool haveFrame_ = false;
     uint64_t sceneGeneration_ = 0;
-    std::deque<std::chrono::steady_clock::time_point> arrivals_;
+    // When frames arrived, with their index (the window may skip frames the device finished
+    // between two wake-ups), for the FPS.
+    std::deque<std::pair<std::chrono::steady_clock::time_point, uint64_t>> arrivals_;
+    std::pair<std::chrono::steady_clock::time_point, uint64_t> firstArrival_{};
 
     float divider_ = 0.5f;
     enum class Drag { None, View, Divider } drag_ = Drag::None;

@@ -46,7 +46,6 @@ Animation orbitFirstSphere(const Scene& scene, float radius, double period);
 
 // What the window wants rendered next; the latest request wins.
 struct ViewRequest {
-    uint64_t version = 0;
     dev::Camera camera{};
     bool split = false;                      // mega and wave, both full frame
     PipelineKind kind = PipelineKind::Mega;  // when not split
