@@ -47,29 +47,31 @@ struct Timed {
 }  // namespace
 
 std::vector<Measurement> measureCells(ClContext& cl, const Scene& scene,
-                                      const std::vector<PipelineKind>& kinds,
-                                      const RenderOptions& options, int warmup, int repeats,
-                                      bool countRays, bool keepImage) {
-    const size_t n = kinds.size();
+                                      const std::vector<Variant>& variants, int warmup,
+                                      int repeats, bool countRays, bool keepImage) {
+    const size_t n = variants.size();
     std::vector<Measurement> out(n);
     std::vector<std::unique_ptr<Pipeline>> pipelines(n);
     std::vector<Timed> timed(n);
-    RenderOptions o = options;
-    o.countRays = false;
-    // A fresh pipeline per cell: its buffers are its own, so the allocation delta is its memory,
-    // and a large wavefront tree does not outlive the cell. Programs stay cached in the context.
     std::vector<bool> rendered(n, false);
+    auto timedOptions = [&](size_t k) {
+        RenderOptions o = variants[k].options;
+        o.countRays = false;
+        return o;
+    };
     // The first frame allocates the pipeline's buffers: what it adds is the pipeline's memory.
     auto render = [&](size_t k) {
         size_t before = cl.allocatedBytes();
-        Image frame = pipelines[k]->render(scene, o);
+        Image frame = pipelines[k]->render(scene, timedOptions(k));
         if (!rendered[k]) out[k].deviceBytes = cl.allocatedBytes() - before;
         rendered[k] = true;
         return frame;
     };
+    // A fresh pipeline per cell: its buffers are its own, so the allocation delta is its memory,
+    // and a large wavefront tree does not outlive the cell. Programs stay cached in the context.
     for (size_t k = 0; k < n; ++k) {
         std::string error = attempt([&] {
-            pipelines[k] = makePipeline(kinds[k], &cl);
+            pipelines[k] = makePipeline(variants[k].kind, &cl);
             for (int i = 0; i < warmup; ++i) render(k);
         });
         if (!error.empty()) {
@@ -77,8 +79,8 @@ std::vector<Measurement> measureCells(ClContext& cl, const Scene& scene,
             pipelines[k].reset();
         }
     }
-    // Frames of the pipelines alternate, so that a burst of load on the machine or a clock change
-    // lands on both sides of their ratio.
+    // Frames of the variants alternate (round r renders each once), so that a burst of load on
+    // the machine or a clock change lands on every side of their ratios alike.
     for (int r = 0; r < repeats; ++r)
         for (size_t k = 0; k < n; ++k) {
             if (!pipelines[k]) continue;
@@ -111,6 +113,7 @@ std::vector<Measurement> measureCells(ClContext& cl, const Scene& scene,
         m.launches = s.launches;
         const Timed& t = timed[k];
         m.frames = repeats;
+        m.frameMs = t.device;
         m.deviceMs = median(t.device);
         m.deviceMsMin = *std::min_element(t.device.begin(), t.device.end());
         m.deviceMsMax = *std::max_element(t.device.begin(), t.device.end());
@@ -120,13 +123,13 @@ std::vector<Measurement> measureCells(ClContext& cl, const Scene& scene,
         if (countRays) {
             // Untimed, and with its own program (RT_COUNT_RAYS), after the timed frames.
             std::string error = attempt([&] {
-                RenderOptions counting = options;
+                RenderOptions counting = variants[k].options;
                 counting.countRays = true;
                 pipelines[k]->render(scene, counting);
                 m.rays = pipelines[k]->stats().rays;
                 m.raysCounted = pipelines[k]->stats().raysCounted;
             });
-            if (error.empty()) deriveRayCounters(m, kinds[k], options);
+            if (error.empty()) deriveRayCounters(m, variants[k].kind, variants[k].options);
         }
         m.ok = true;
         pipelines[k].reset();
@@ -137,7 +140,7 @@ std::vector<Measurement> measureCells(ClContext& cl, const Scene& scene,
 Measurement measureCell(ClContext& cl, const Scene& scene, PipelineKind kind,
                         const RenderOptions& options, int warmup, int repeats, bool countRays,
                         bool keepImage) {
-    return measureCells(cl, scene, {kind}, options, warmup, repeats, countRays, keepImage)[0];
+    return measureCells(cl, scene, {{kind, options}}, warmup, repeats, countRays, keepImage)[0];
 }
 
 void deriveRayCounters(Measurement& m, PipelineKind kind, const RenderOptions& o) {

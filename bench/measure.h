@@ -26,6 +26,7 @@ struct Measurement {
     double deviceMs = 0;        // median over the timed frames of the kernels' summed time
     double deviceMsMin = 0, deviceMsMax = 0;
     double wallMs = 0;          // median host wall time of render(), read-back included
+    std::vector<double> frameMs;  // device ms of each timed frame, in round order
     std::vector<std::pair<std::string, double>> kernelMs;  // median per kernel name
     size_t deviceBytes = 0;     // global memory the pipeline allocated for this frame
     size_t treeBytes = 0, privateBytes = 0;
@@ -43,12 +44,16 @@ Measurement measureCell(ClContext& cl, const Scene& scene, PipelineKind kind,
                         const RenderOptions& options, int warmup, int repeats, bool countRays,
                         bool keepImage);
 
-// Several pipelines on the same setting, their timed frames interleaved (mega, wave, mega, ...),
-// so that their ratio is measured under the same conditions. One result per kind.
+// Several variants of one scene (pipelines, accels) with their timed frames interleaved, round
+// by round (mega, wave, mega, wave, ...), so that their ratios see the same machine state; the
+// frames of one round are comparable one to one (Measurement::frameMs). One result per variant.
+struct Variant {
+    PipelineKind kind;
+    RenderOptions options;
+};
 std::vector<Measurement> measureCells(ClContext& cl, const Scene& scene,
-                                      const std::vector<PipelineKind>& kinds,
-                                      const RenderOptions& options, int warmup, int repeats,
-                                      bool countRays, bool keepImage);
+                                      const std::vector<Variant>& variants, int warmup,
+                                      int repeats, bool countRays, bool keepImage);
 
 // Fills mrays and treeUsed from the ray counts and the median device time.
 void deriveRayCounters(Measurement& m, PipelineKind kind, const RenderOptions& options);

@@ -239,6 +239,15 @@ std::string Cell::settingKey() const {
     return k.str();
 }
 
+std::string Cell::batchKey() const {
+    const RenderOptions& o = options;
+    std::ostringstream k;
+    k << scene << '|' << o.width << 'x' << o.height << '|' << o.bounces << '|' << o.shadowSamples
+      << '|' << o.aa << '|' << int(o.layout) << '|' << o.memoryBudget << '|' << o.adaptiveAa << '|'
+      << repeats << '|' << warmup << '|' << countRays << '|' << images;
+    return k.str();
+}
+
 std::string Cell::key() const { return std::string(pipelineName(pipeline)) + '|' + settingKey(); }
 
 std::string Cell::label() const {

@@ -60,8 +60,7 @@ public:
     void starting(size_t i, size_t j) {
         if (!tty_) return;
         std::string what = cells_[i].label();
-        for (size_t k = i + 1; k < j; ++k)
-            what += std::string(" + ") + pipelineName(cells_[k].pipeline);
+        if (j > i + 1) what += " (+" + std::to_string(j - i - 1) + " interleaved)";
         std::fprintf(stderr, "\r\033[K[%zu/%zu] %s ... | elapsed %s, ETA %s", i + 1, cells_.size(),
                      what.c_str(), formatDuration(elapsed()).c_str(),
                      doneCost_ > 0 ? formatDuration(remaining(i)).c_str() : "?");
@@ -134,6 +133,7 @@ nlohmann::json rowJson(const SweepConfig& config, const Cell& c, const Measureme
                     {"device_ms_min", m.deviceMsMin},
                     {"device_ms_max", m.deviceMsMax},
                     {"wall_ms", m.wallMs},
+                    {"frame_ms", m.frameMs},
                     {"kernel_ms", kernels},
                     {"device_bytes", m.deviceBytes},
                     {"tree_bytes", m.treeBytes},
@@ -255,13 +255,11 @@ SweepSummary runSweep(const SweepConfig& config, const SweepRunOptions& options,
 
     Progress progress(cells, config);
     for (size_t i = 0; i < cells.size();) {
-        // The pipelines of one setting are adjacent (expandCells) and measured together, their
-        // frames interleaved.
+        // Cells that differ only in pipeline and accel are adjacent (expandCells) and measured
+        // together, their frames interleaved, so that wave/mega and accel/none ratios compare
+        // frames taken moments apart.
         size_t j = i + 1;
-        while (j < cells.size() && cells[j].settingKey() == cells[i].settingKey() &&
-               cells[j].countRays == cells[i].countRays && cells[j].images == cells[i].images &&
-               cells[j].repeats == cells[i].repeats && cells[j].warmup == cells[i].warmup)
-            ++j;
+        while (j < cells.size() && cells[j].batchKey() == cells[i].batchKey()) ++j;
         if (options.timeLimitS > 0 && i > 0 &&
             progress.elapsed() + progress.predict(i, j) > options.timeLimitS) {
             std::fprintf(stderr, "\nsweep %s: stopping before cell %zu of %zu, the time limit of %s "
@@ -272,12 +270,12 @@ SweepSummary runSweep(const SweepConfig& config, const SweepRunOptions& options,
             break;
         }
         const Cell& c = cells[i];
-        std::vector<PipelineKind> kinds;
-        for (size_t k = i; k < j; ++k) kinds.push_back(cells[k].pipeline);
+        std::vector<Variant> variants;
+        for (size_t k = i; k < j; ++k) variants.push_back({cells[k].pipeline, cells[k].options});
         progress.starting(i, j);
         auto t0 = std::chrono::steady_clock::now();
-        std::vector<Measurement> ms = measureCells(cl, scenes.at(c.scene), kinds, c.options,
-                                                   c.warmup, c.repeats, c.countRays, c.images);
+        std::vector<Measurement> ms = measureCells(cl, scenes.at(c.scene), variants, c.warmup,
+                                                   c.repeats, c.countRays, c.images);
         double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         for (size_t k = i; k < j; ++k) {
             const Measurement& m = ms[k - i];
