@@ -242,9 +242,9 @@ std::string Cell::settingKey() const {
 std::string Cell::batchKey() const {
     const RenderOptions& o = options;
     std::ostringstream k;
-    k << scene << '|' << o.width << 'x' << o.height << '|' << o.bounces << '|' << o.shadowSamples
-      << '|' << o.aa << '|' << int(o.layout) << '|' << o.memoryBudget << '|' << o.adaptiveAa << '|'
-      << repeats << '|' << warmup << '|' << countRays << '|' << images;
+    k << scene << '|' << o.bounces << '|' << o.shadowSamples << '|' << o.aa << '|' << int(o.layout)
+      << '|' << o.memoryBudget << '|' << o.adaptiveAa << '|' << repeats << '|' << warmup << '|'
+      << countRays << '|' << images;
     return k.str();
 }
 

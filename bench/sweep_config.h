@@ -60,7 +60,7 @@ struct Cell {
     bool accelApplies = true;         // false when the scene has no spheres or triangles
     std::string key() const;          // identity, for de-duplication
     std::string settingKey() const;   // the same without the pipeline
-    // Cells of one batch differ only in pipeline and accel: their frames are interleaved.
+    // Cells of one batch differ only in pipeline, accel and size: their frames are interleaved.
     std::string batchKey() const;
     std::string label() const;        // "cornell wave 1280x720 b4 s8 aa1 bv"
 };

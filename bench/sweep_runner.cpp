@@ -255,9 +255,9 @@ SweepSummary runSweep(const SweepConfig& config, const SweepRunOptions& options,
 
     Progress progress(cells, config);
     for (size_t i = 0; i < cells.size();) {
-        // Cells that differ only in pipeline and accel are adjacent (expandCells) and measured
-        // together, their frames interleaved, so that wave/mega and accel/none ratios compare
-        // frames taken moments apart.
+        // Adjacent cells that differ only in pipeline, accel or size (expandCells puts a group's
+        // pipelines and accels innermost) are measured together, their frames interleaved, so
+        // that wave/mega, accel/none and resolution ratios compare frames taken moments apart.
         size_t j = i + 1;
         while (j < cells.size() && cells[j].batchKey() == cells[i].batchKey()) ++j;
         if (options.timeLimitS > 0 && i > 0 &&
