@@ -11,6 +11,7 @@ namespace rt {
 class MegakernelPipeline : public Pipeline {
 public:
     explicit MegakernelPipeline(ClContext& cl) : cl_(cl) {}
+    ~MegakernelPipeline() override { cl_.release(2 * imageBytes_); }  // keep the device-memory tally true
     PipelineKind kind() const override { return PipelineKind::Mega; }
     Image render(const Scene& scene, const RenderOptions& options) override;
 

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <string>
 #include <sys/wait.h>
+#include <unistd.h>
 
 namespace {
 
@@ -16,7 +17,10 @@ struct Result {
 };
 
 Result run(const std::string& args) {
-    std::string errFile = ::testing::TempDir() + "rtlab_cli_err.txt";
+    // One stderr file per call and process: CTest runs the cases in parallel.
+    static int calls = 0;
+    std::string errFile = ::testing::TempDir() + "rtlab_cli_err_" + std::to_string(getpid()) +
+                          "_" + std::to_string(++calls) + ".txt";
     std::string cmd = std::string(RTLAB_BIN_DIR) + "/rtlab " + args + " 2>" + errFile;
     Result r{};
     FILE* p = popen(cmd.c_str(), "r");
@@ -28,6 +32,7 @@ Result run(const std::string& args) {
         while (size_t n = fread(buf.data(), 1, buf.size(), f)) r.err.append(buf.data(), n);
         fclose(f);
     }
+    std::remove(errFile.c_str());
     return r;
 }
 
@@ -75,7 +80,7 @@ INSTANTIATE_TEST_SUITE_P(
                 "exceeds --memory-budget (10 B)"},
         BadCase{"render scenes/spheres.json --pipeline wave --memory-budget 100K --bounces 8 "
                 "-o /tmp/x.png",
-                "the highest bounce limit that fits is 4"},
+                "the highest bounce limit that fits is 1"},
         BadCase{"render scenes/spheres.json --pipeline wave --memory-budget lots -o /tmp/x.png",
                 "--memory-budget lots"},
         BadCase{"render scenes/spheres.json --pipeline mega --bounces 15 -o /tmp/x.png",

@@ -11,9 +11,11 @@ inline size_t Wavefront_Slice(const RenderSettings* s, int x, int y) {
 
 // Traces the primary ray and every secondary ray of the pixel's tree for AA sample
 // settings.sampleIndex. Untraced slots are left alone: reset has cleared their flags.
-kernel void Wavefront_Trace(RT_SCENE_PARAMS, global Node* tree) {
+// rowEnd: one past the tile's last row. GPU launches round the tile up to whole work-groups, and
+// rows past the tile have no slice in the tree buffer.
+kernel void Wavefront_Trace(RT_SCENE_PARAMS, global Node* tree, int rowEnd) {
     int x = get_global_id(0), y = get_global_id(1) + settings.rowOffset;
-    if (x >= settings.width || y >= settings.height) return;
+    if (x >= settings.width || y >= rowEnd) return;
     RT_SCENE_INIT(sc);
     global Node* slice = tree + Wavefront_Slice(&settings, x, y);
     slice[0] = RayTree_TraceNode(&sc, RayTree_PrimaryRay(&sc, x, y, settings.sampleIndex),
@@ -29,9 +31,10 @@ kernel void Wavefront_Trace(RT_SCENE_PARAMS, global Node* tree) {
 
 // Copies the pixel's slice to private memory, combines it bottom-up, and accumulates the AA
 // sample into the image: the first sample stores, later ones add, the last divides.
-kernel void Wavefront_Image(RT_SCENE_PARAMS, global const Node* tree, global float* image) {
+kernel void Wavefront_Image(RT_SCENE_PARAMS, global const Node* tree, global float* image,
+                            int rowEnd) {
     int x = get_global_id(0), y = get_global_id(1) + settings.rowOffset;
-    if (x >= settings.width || y >= settings.height) return;
+    if (x >= settings.width || y >= rowEnd) return;
     RT_SCENE_INIT(sc);
     global const Node* slice = tree + Wavefront_Slice(&settings, x, y);
     Node nodes[RT_TREE_NODES];

@@ -102,9 +102,11 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
                 settings.sampleIndex = s;
                 scene_->setArgs(trace, settings);
                 trace.setArg(DeviceScene::kFirstKernelArg, tree_);
+                trace.setArg(DeviceScene::kFirstKernelArg + 1, cl_int(row0 + tile));
                 scene_->setArgs(image, settings);
                 image.setArg(DeviceScene::kFirstKernelArg, tree_);
                 image.setArg(DeviceScene::kFirstKernelArg + 1, image_);
+                image.setArg(DeviceScene::kFirstKernelArg + 2, cl_int(row0 + tile));
                 cl::Event et, ei, er;
                 std::vector<cl::Event> waitTrace;
                 if (haveLast) waitTrace.push_back(last);

@@ -12,6 +12,7 @@ namespace rt {
 class WavefrontPipeline : public Pipeline {
 public:
     explicit WavefrontPipeline(ClContext& cl) : cl_(cl) {}
+    ~WavefrontPipeline() override { cl_.release(treeBytes_ + imageBytes_); }  // keep the device-memory tally true
     PipelineKind kind() const override { return PipelineKind::Wave; }
     Image render(const Scene& scene, const RenderOptions& options) override;
 
