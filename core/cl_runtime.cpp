@@ -308,6 +308,11 @@ cl::Buffer ClContext::allocate(size_t bytes, cl_mem_flags flags, const std::stri
                     mib(double(device_.globalMem - allocated_)) + " of " + device_.name +
                     "'s global memory is left");
     try {
+        // Fault injection (issue 8, tests/stability_test.cpp): RTLAB_FAIL_ALLOC_AFTER=n fails
+        // every allocation that would take this context past n bytes, as a driver would.
+        if (const char* limit = std::getenv("RTLAB_FAIL_ALLOC_AFTER"))
+            if (*limit && allocated_ + bytes > std::strtoull(limit, nullptr, 10))
+                throw cl::Error(CL_MEM_OBJECT_ALLOCATION_FAILURE, "clCreateBuffer");
         cl::Buffer b(context_, flags, std::max<size_t>(bytes, 16));
         allocated_ += bytes;
         return b;

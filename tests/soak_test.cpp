@@ -1,0 +1,94 @@
+// Soak (issue 8): many tiny frames per pipeline, resizing every 50 frames and reloading the scene
+// every 150, must not grow host memory (resident set, /proc/self/statm) or the device bytes the
+// OpenCL context holds (ClContext::allocatedBytes). 1050 frames (seven periods) per pipeline by
+// default, a few seconds each on PoCL; RTLAB_SOAK_FRAMES asks for more (scripts/soak).
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <cstdlib>
+#include <fstream>
+#include <memory>
+#include <string>
+
+#include "core/pipeline.h"
+#include "core/scene_loader.h"
+#include "test_device.h"
+
+namespace rt {
+namespace {
+
+size_t residentBytes() {
+    std::ifstream statm("/proc/self/statm");
+    size_t pages = 0, resident = 0;
+    statm >> pages >> resident;
+    return resident * size_t(sysconf(_SC_PAGESIZE));
+}
+
+int soakFrames() {
+    const char* env = std::getenv("RTLAB_SOAK_FRAMES");
+    int n = env && *env ? std::atoi(env) : 1000;
+    return std::max(n, 300);  // at least the warm-up period and one more
+}
+
+struct SoakResult {
+    size_t rssBase = 0, rssEnd = 0, rssPeak = 0, deviceBase = 0, deviceEnd = 0;
+    int frames = 0;
+};
+
+// Period of 150 frames: reload at its start (a new Scene object, so the pipeline rebuilds its
+// device copy), then 50 frames at each of three sizes. Measured at the end of the first period
+// (after every size and program has been seen once) and at the end of the last whole period.
+SoakResult soak(PipelineKind kind, int frames) {
+    const int sizes[3][2] = {{32, 24}, {40, 30}, {24, 18}};
+    const int period = 150;
+    ClContext& cl = test::device();
+    std::unique_ptr<Pipeline> pipeline = makePipeline(kind, &cl);
+    std::unique_ptr<Scene> scene;
+    SoakResult r;
+    const int last = (frames + period - 1) / period * period;  // whole periods
+    for (int f = 0; f < last; ++f) {
+        if (f % period == 0) scene = std::make_unique<Scene>(loadScene("scenes/cornell.json"));
+        RenderOptions o = scene->defaults;
+        o.width = sizes[f % period / 50][0];
+        o.height = sizes[f % period / 50][1];
+        o.bounces = 3;
+        o.shadowSamples = 2;
+        Image img = pipeline->render(*scene, o);
+        if (img.width != o.width) ADD_FAILURE() << "frame " << f;
+        if (f % period == period - 1) {
+            size_t rss = residentBytes();
+            r.rssPeak = std::max(r.rssPeak, rss);
+            if (f == period - 1) {
+                r.rssBase = rss;
+                r.deviceBase = cl.allocatedBytes();
+            }
+            r.rssEnd = rss;
+            r.deviceEnd = cl.allocatedBytes();
+        }
+        ++r.frames;
+    }
+    return r;
+}
+
+void check(PipelineKind kind) {
+    SoakResult r = soak(kind, soakFrames());
+    const double mib = 1.0 / (1 << 20);
+    ::testing::Test::RecordProperty("frames", r.frames);
+    ::testing::Test::RecordProperty("rss_base_mib", std::to_string(r.rssBase * mib));
+    ::testing::Test::RecordProperty("rss_growth_kib", std::to_string((double(r.rssEnd) - double(r.rssBase)) / 1024));
+    ::testing::Test::RecordProperty("device_bytes", std::to_string(r.deviceEnd));
+    EXPECT_EQ(r.deviceEnd, r.deviceBase) << pipelineName(kind) << ": device bytes grew";
+    // A leak of one image or device copy per reload or resize would be >= 9 KiB per period; the
+    // allowance covers allocator noise, not a per-frame leak (frames x 1 KiB would exceed it).
+    EXPECT_LE(double(r.rssEnd), double(r.rssBase) + 1.5 * (1 << 20))
+        << pipelineName(kind) << ": resident memory grew from " << r.rssBase * mib << " to "
+        << r.rssEnd * mib << " MiB over " << r.frames << " frames";
+}
+
+TEST(Soak, MegakernelDoesNotGrow) { check(PipelineKind::Mega); }
+TEST(Soak, WavefrontDoesNotGrow) { check(PipelineKind::Wave); }
+TEST(Soak, CpuReferenceDoesNotGrow) { check(PipelineKind::Cpu); }
+
+}  // namespace
+}  // namespace rt

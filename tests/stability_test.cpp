@@ -1,0 +1,382 @@
+// Stability (issue 8): the numerical stress suite asserts the robust methods' figures and records
+// the plain methods' (RecordProperty, in the gtest XML); garbage geometry is rejected with one
+// clear line or renders without a NaN pixel; device limits end in a clear error. The cases and
+// their probe kernels are those of rtlab-stress (apps/stress.cpp, core/cl/probe.cl), included
+// here so the tool and the test cannot drift apart; the tests use fewer rays.
+#define RTLAB_STRESS_NO_MAIN
+#include "apps/stress.cpp"
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+
+#include "megakernel/megakernel.h"
+#include "test_device.h"
+#include "wavefront/wavefront.h"
+
+namespace rt::stress {
+namespace {
+
+namespace fs = std::filesystem;
+
+void record(const std::string& key, const Counts& c) {
+    ::testing::Test::RecordProperty(key, std::to_string(c.bad) + "/" + std::to_string(c.rays));
+}
+
+const dvec3 kFar(148376, 1234, -223423);  // Embree's watertightness position
+
+// ---- (a) ----
+TEST(Stability, ClosedMeshFarFromTheOriginDoesNotLeak) {
+    // 32 x 64 segments and 20,000 random rays keep this under a minute on PoCL; with so few
+    // rays one miss already breaks the bar (5e-5), so it is "no miss" here. rtlab-stress runs
+    // 200,000 rays at 64 x 128.
+    for (dvec3 c : {dvec3(0), kFar}) {
+        LeakResult wt = leaks(test::device(), true, c, 20000, 32);
+        EXPECT_LE(wt.random.rate(), 2e-5) << "Embree's bar, centre x=" << c.x;
+        EXPECT_EQ(wt.edges.bad, 0) << "rays through shared edges leaked, centre x=" << c.x;
+        EXPECT_EQ(wt.vertices.bad, 0) << "rays through vertices leaked, centre x=" << c.x;
+        LeakResult mt = leaks(test::device(), false, c, 20000, 32);
+        std::string at = c.x == 0 ? "origin" : "far";
+        record("mt_" + at + "_random_leaks", mt.random);
+        record("mt_" + at + "_edge_leaks", mt.edges);
+        record("mt_" + at + "_vertex_leaks", mt.vertices);
+        record("wt_" + at + "_random_leaks", wt.random);
+    }
+}
+
+// ---- (b) ----
+TEST(Stability, TinySphereFarAwayIsHitByTheRobustTest) {
+    SphereResult robust = tinySpheres(test::device(), true, 1e3, 1e-2, 4000);
+    EXPECT_EQ(robust.misses.bad, 0);
+    EXPECT_EQ(robust.falseHits.bad, 0);
+    SphereResult plain = tinySpheres(test::device(), false, 1e3, 1e-2, 4000);
+    record("plain_misses", plain.misses);
+    record("plain_false_hits", plain.falseHits);
+    EXPECT_GT(plain.misses.bad + plain.falseHits.bad, 0) << "the plain test should fail here";
+}
+
+// ---- (c) ----
+TEST(Stability, ScaledOffsetHasNoAcneAtSmallAndLargeScales) {
+    for (double s : {1e-3, 1e5}) {
+        AcneResult a = acne(test::device(), s, true, 400, 32);
+        std::string at = " at scale " + std::to_string(s);
+        EXPECT_GT(a.meshOut.rays, 1000) << at;
+        EXPECT_GT(a.sphereOut.rays, 1000) << at;
+        EXPECT_EQ(a.meshOut.bad, 0) << "outward acne on the mesh" << at;
+        EXPECT_EQ(a.meshIn.bad, 0) << "inward acne on the mesh" << at;
+        EXPECT_EQ(a.meshEscape.bad, 0) << "refraction rays pushed out of the mesh" << at;
+        EXPECT_EQ(a.sphereOut.bad, 0) << "outward acne on the sphere" << at;
+        EXPECT_EQ(a.sphereIn.bad, 0) << "inward acne on the sphere" << at;
+        EXPECT_EQ(a.sphereEscape.bad, 0) << "refraction rays pushed out of the sphere" << at;
+        AcneResult f = acne(test::device(), s, false, 400, 32);
+        std::string key = s < 1 ? "fixed_1e-3_" : "fixed_1e5_";
+        record(key + "mesh_out_acne", f.meshOut);
+        record(key + "mesh_in_acne", f.meshIn);
+        record(key + "sphere_out_acne", f.sphereOut);
+        record(key + "mesh_escaped", f.meshEscape);
+    }
+}
+
+TEST(Stability, FixedEpsilonHasAcneFarFromTheOrigin) {
+    AcneResult f = acne(test::device(), 1e5, false, 400, 32);
+    EXPECT_GT(f.meshOut.rate() + f.sphereOut.rate(), 0.01) << "the report's epsilon at 1e5";
+}
+
+// pbrt-v4's Triangle.Reintersect with the scaled offset, at uniform scales 1e-8..1e8: 0 re-hits.
+// (Mixed scales, one triangle spanning 1e-8..1e8, are recorded only: see results/*/stability.md.)
+TEST(Stability, ReintersectHasNoRehitsAtEveryUniformScale) {
+    for (double e : {-8.0, -3.0, 0.0, 5.0, 8.0}) {
+        ReintersectResult r = reintersect(test::device(), true, e, e, false, 200, 200);
+        EXPECT_LT(r.missed, 20) << "scale 1e" << e;
+        EXPECT_EQ(r.rehits.bad, 0) << "scale 1e" << e << ": " << r.withRehits << " triangles";
+    }
+    ReintersectResult mixed = reintersect(test::device(), true, -8, 8, true, 200, 200);
+    record("scaled_mixed_rehits", mixed.rehits);
+    ReintersectResult fixed = reintersect(test::device(), false, 5, 5, false, 200, 200);
+    record("fixed_1e5_rehits", fixed.rehits);
+}
+
+// ---- (d) ----
+TEST(Stability, RefractionAtCriticalAngleIsTotalAndFinite) {
+    CriticalResult c = criticalAngle(test::device());
+    EXPECT_EQ(c.nonFinite, 0);
+    EXPECT_EQ(c.inconsistent, 0) << "no refracted ray but F < 1, or F outside [0, 1]";
+    EXPECT_EQ(c.nonUnit, 0);
+    EXPECT_GT(c.tirDevice, 0);
+    EXPECT_LT(c.tirDevice, c.cases);
+    ::testing::Test::RecordProperty("tir_differs_from_double", std::to_string(c.disagree));
+    // The double reference at exactly the critical angle: a tangent ray or TIR, and F = 1.
+    for (double ior : {1.1, 1.5, 2.42}) {
+        double theta = std::asin(1.0 / ior);
+        dvec3 d(std::sin(theta), -std::cos(theta), 0);
+        auto t = ref::refract(d, dvec3(0, 1, 0), ior);
+        if (t) EXPECT_NEAR(t->y, 0.0, 1e-6) << ior;
+        EXPECT_NEAR(ref::fresnel(std::cos(theta), ior, 1.0), 1.0, 1e-6) << ior;
+    }
+}
+
+TEST(Stability, GrazingRaysHitAndCoplanarRaysMiss) {
+    std::vector<Counts> wt = grazing(test::device(), true, 256);
+    std::vector<Counts> mt = grazing(test::device(), false, 256);
+    EXPECT_EQ(wt[0].bad, 0) << "a ray in the triangle's plane hit it (watertight)";
+    EXPECT_EQ(mt[0].bad, 0) << "a ray in the triangle's plane hit it (Moller-Trumbore)";
+    for (int k = 1; k <= 7; ++k) {
+        EXPECT_EQ(wt[k].bad, 0) << "watertight missed rays at elevation 1e-" << k;
+        record("mt_grazing_1e-" + std::to_string(k) + "_misses", mt[k]);
+    }
+}
+
+// A camera a hair above a large triangulated floor and a plane, looking along them.
+TEST(Stability, GrazingViewRendersFinite) {
+    Scene s = emptyScene("grazing");
+    s.materials.push_back(material(0.3f, 1.5f, 0.f));
+    const float L = 1e4f;
+    s.triangles.push_back({{-L, 0, -L}, {L, 0, -L}, {L, 0, L}, {0, 1, 0}, {0, 1, 0}, {0, 1, 0}, 1, 0});
+    s.triangles.push_back({{-L, 0, -L}, {L, 0, L}, {-L, 0, L}, {0, 1, 0}, {0, 1, 0}, {0, 1, 0}, 1, 0});
+    s.planes.push_back({{0, 1, 0}, -1e-6f, 0, {0, 0, 0}});
+    s.spheres.push_back({{0, 1, 50}, 1.f, 1, {0, 0, 0}});
+    s.lights.push_back({{0, 3, 10}, 0.f, {1, 1, 1}, 0.f});
+    s.camera = {{0, 1e-4f, 0}, 0.f, 0.f, 0.5f, {0, 0}};
+    finalizeScene(s);
+    RenderOptions o;
+    o.width = 32;
+    o.height = 24;
+    o.bounces = 4;
+    for (PipelineKind k : {PipelineKind::Cpu, PipelineKind::Mega, PipelineKind::Wave})
+        for (bool robust : {false, true}) {
+            o.watertight = o.robustSphere = o.scaledOffset = robust;
+            Image img = makePipeline(k, &test::device())->render(s, o);
+            for (float v : img.rgb) ASSERT_TRUE(std::isfinite(v)) << pipelineName(k);
+        }
+}
+
+// ---- (e) ----
+TEST(Stability, NestedDielectricsMatchTheReference) {
+    for (PipelineKind k : {PipelineKind::Mega, PipelineKind::Wave}) {
+        NestedResult n = nested(test::device(), k, 32, 24, 6);
+        EXPECT_EQ(n.nonFinite, 0) << pipelineName(k);
+        EXPECT_GE(double(n.within) / double(n.pixels), 0.99)
+            << pipelineName(k) << ": max " << n.maxAbs * 255 << "/255";
+    }
+}
+
+// ---- (f) ----
+TEST(Stability, NanAndInfRaysReturnWithoutBadHits) {
+    for (RenderOptions::Accel a : {RenderOptions::Accel::None, RenderOptions::Accel::Bv,
+                                   RenderOptions::Accel::Grid, RenderOptions::Accel::Bvh}) {
+        NanResult n = nanRays(test::device(), a);
+        EXPECT_EQ(n.badHits, 0) << accelName(a);
+        ::testing::Test::RecordProperty(std::string("nan_colours_") + accelName(a),
+                                        std::to_string(n.nanPixels) + "/" + std::to_string(n.rays));
+    }
+}
+
+// ---- garbage geometry ----
+fs::path writeFile(const std::string& name, const std::string& text) {
+    fs::path dir = fs::path(::testing::TempDir()) / "rtlab_stability";
+    fs::create_directories(dir);
+    std::ofstream(dir / name) << text;
+    return dir / name;
+}
+
+void expectNoNan(const Scene& scene, const std::string& what) {
+    RenderOptions o = scene.defaults;
+    o.width = 24;
+    o.height = 18;
+    o.bounces = 3;
+    o.shadowSamples = std::min(o.shadowSamples, 4);
+    for (RenderOptions::Accel a : {RenderOptions::Accel::None, RenderOptions::Accel::Bv,
+                                   RenderOptions::Accel::Grid, RenderOptions::Accel::Bvh}) {
+        o.accel = a;
+        for (PipelineKind k : {PipelineKind::Cpu, PipelineKind::Mega, PipelineKind::Wave}) {
+            Image img = makePipeline(k, &test::device())->render(scene, o);
+            size_t nan = 0;
+            for (float v : img.rgb) nan += !std::isfinite(v);
+            EXPECT_EQ(nan, 0u) << what << ": " << pipelineName(k) << " --accel " << accelName(a);
+        }
+    }
+}
+
+void expectRejected(const fs::path& file, const std::string& reason) {
+    try {
+        loadScene(file);
+        ADD_FAILURE() << file << " loaded";
+    } catch (const Error& e) {
+        std::string msg = e.what();
+        EXPECT_NE(msg.find(file.filename().string()), std::string::npos) << msg;
+        EXPECT_NE(msg.find(reason), std::string::npos) << msg;
+        EXPECT_EQ(msg.find('\n'), std::string::npos) << "one line: " << msg;
+    }
+}
+
+TEST(Stability, NonFiniteAndOutOfRangeGeometryIsRejected) {
+    expectRejected(writeFile("nan.obj", "v 0 0 0\nv 1 nan 0\nv 0 1 0\nf 1 2 3\n"), "bad number");
+    expectRejected(writeFile("inf.obj", "v 0 0 0\nv 1 inf 0\nv 0 1 0\nf 1 2 3\n"), "bad number");
+    expectRejected(writeFile("big.obj", "v 0 0 0\nv 1 1e39 0\nv 0 1 0\nf 1 2 3\n"), "finite");
+    expectRejected(writeFile("index.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n"), "out of range");
+    expectRejected(writeFile("negative.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -4\n"), "before");
+    expectRejected(writeFile("normal.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1//1 2//1 3//1\n"),
+                   "out of range");
+    expectRejected(writeFile("flat.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n"), "degenerate");
+    // Finite vertices whose transform overflows float.
+    writeFile("tri.obj", "v 0 0 0\nv 1e30 0 0\nv 0 1 0\nf 1 2 3\n");
+    expectRejected(writeFile("overflow.json",
+                             R"({"camera": {"position": [0, 0, -5]}, "materials": {"m": {}},
+                                 "meshes": [{"file": "tri.obj", "material": "m",
+                                             "transform": {"scale": 1e10}}]})"),
+                   "non-finite");
+    // Hand-built scenes go through finalizeScene, which checks what the loader would.
+    Scene s = emptyScene("nan-vertex");
+    s.triangles.push_back({{0, 0, 4}, {1, NAN, 4}, {0, 1, 4}, {}, {}, {}, 0, 0});
+    EXPECT_THROW(finalizeScene(s), Error);
+}
+
+TEST(Stability, DegenerateAndExtremeGeometrySurvivesWithoutNan) {
+    // Collinear, repeated-vertex, 1e-30-sized and opposite-normal triangles beside a good one.
+    fs::path obj = writeFile("degenerate.obj",
+                             "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 2 0 0\nv 1e-30 0 0\nv 0 1e-30 0\n"
+                             "vn 0 0 1\nvn 0 0 -1\n"
+                             "f 1//1 2//2 3//1\nf 1//1 2//1 4//1\nf 1//1 1//1 3//1\n"
+                             "f 1//1 5//1 6//2\n");
+    expectNoNan(loadScene(obj), "degenerate.obj");
+    // Spheres, planes and lights at the edge of float range, a denormal radius.
+    fs::path json = writeFile("extreme.json", R"({
+        "camera": {"position": [0, 1, -5]},
+        "materials": {"m": {"reflectance": 0.3}, "g": {"opacity": 0.2, "ior": 1.5}},
+        "spheres": [{"center": [0, 0, 3e38], "radius": 3e38, "material": "m"},
+                    {"center": [0, 1, 0], "radius": 1e-38, "material": "g"},
+                    {"center": [1, 1, 0], "radius": 1e-20, "material": "m"},
+                    {"center": [-3e38, 0, 0], "radius": 1e30, "material": "g"}],
+        "planes": [{"normal": [0, 1, 0], "offset": -3e38, "material": "m"},
+                   {"normal": [1e-38, 1, 0], "offset": 3e38, "material": "g"}],
+        "lights": [{"position": [3e38, 3e38, -3e38], "radius": 3e38}, {"position": [0, 5, 0]}],
+        "render": {"shadow_samples": 4}})");
+    expectNoNan(loadScene(json), "extreme.json");
+    // A mesh spanning the float range, with a small triangle beside a huge one.
+    fs::path huge = writeFile("huge.obj",
+                              "v 1e37 1e37 1e37\nv -1e37 -1e37 1e37\nv 1e37 -1e37 -1e37\n"
+                              "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 4 5 6\nf 1 2 3\n");
+    expectNoNan(loadScene(huge), "huge.obj");
+}
+
+// ---- device limits ----
+// A device that allows only 4 MiB per buffer (some drivers allow little and do not report a
+// failed allocation): the wavefront tiles under it, a row that does not fit is refused with the
+// bounce limit that would, and the megakernel's image buffer is refused, all before any buffer
+// is created.
+TEST(Stability, RayTreeAboveMaxAllocIsTiledOrRefusedBeforeAllocation) {
+    DeviceInfo info = test::device().device();
+    info.maxAlloc = 4 << 20;
+    ClContext small(info);
+    Scene scene = loadScene("scenes/spheres.json");  // glass: C = 2
+    RenderOptions o = scene.defaults;
+    o.width = 64;
+    o.height = 48;
+    o.bounces = 5;  // 63 nodes, 193,536 B per row: 21 rows per tile
+    WavefrontPipeline tiled(small), whole(test::device());
+    Image a = tiled.render(scene, o), b = whole.render(scene, o);
+    EXPECT_EQ(tiled.stats().tiles, 3);
+    EXPECT_LE(tiled.stats().treeBytes, info.maxAlloc);
+    EXPECT_EQ(std::memcmp(a.rgb.data(), b.rgb.data(), a.rgb.size() * 4), 0) << "tiled != whole";
+
+    size_t before = small.allocatedBytes();
+    o.width = 4096;
+    o.bounces = 10;  // 2,047 nodes: one row is 402 MB
+    try {
+        tiled.render(scene, o);
+        FAIL() << "a 402 MB row rendered under a 4 MiB limit";
+    } catch (const Error& e) {
+        std::string msg = e.what();
+        EXPECT_NE(msg.find("one row of the wavefront ray tree"), std::string::npos) << msg;
+        EXPECT_NE(msg.find("max allocation"), std::string::npos) << msg;
+        EXPECT_NE(msg.find("the highest bounce limit that fits is 3"), std::string::npos) << msg;
+    }
+    EXPECT_EQ(small.allocatedBytes(), before) << "nothing new was allocated";
+
+    o.width = o.height = 1024;  // a 12 MiB image buffer
+    o.bounces = 1;
+    MegakernelPipeline mega(small);
+    try {
+        mega.render(scene, o);
+        FAIL() << "a 12 MiB image buffer was created under a 4 MiB limit";
+    } catch (const Error& e) {
+        std::string msg = e.what();
+        EXPECT_NE(msg.find("the image buffer"), std::string::npos) << msg;
+        EXPECT_NE(msg.find("CL_DEVICE_MAX_MEM_ALLOC_SIZE"), std::string::npos) << msg;
+    }
+    // At the real limit, the largest frame the CLI allows is tiled, never over the limit.
+    const size_t maxAlloc = test::device().device().maxAlloc;
+    int rows = WavefrontPipeline::tileRows(16384, 16384, 2, 11, maxAlloc, "max");
+    EXPECT_LE(size_t(rows) * 16384 * treeNodeCount(2, 11) * sizeof(dev::Node), maxAlloc);
+}
+
+// RTLAB_FAIL_ALLOC_AFTER=n (core/cl_runtime.cpp) fails every allocation that would take the
+// context past n bytes, as a driver's clCreateBuffer would fail: the frame ends in one clear
+// line, holds nothing it allocated, and the same pipeline renders once allocations work again.
+TEST(Stability, AllocationFailureEndsTheFrameWithAClearError) {
+    Scene scene = loadScene("scenes/spheres.json");
+    RenderOptions o = scene.defaults;
+    o.width = 16;
+    o.height = 12;
+    o.bounces = 2;
+    ClContext& cl = test::device();
+    for (PipelineKind k : {PipelineKind::Mega, PipelineKind::Wave}) {
+        size_t before = cl.allocatedBytes();
+        std::unique_ptr<Pipeline> p = makePipeline(k, &cl);
+        setenv("RTLAB_FAIL_ALLOC_AFTER", std::to_string(before + 1024).c_str(), 1);
+        try {
+            p->render(scene, o);
+            ADD_FAILURE() << pipelineName(k) << " rendered with allocations failing";
+        } catch (const Error& e) {
+            std::string msg = e.what();
+            EXPECT_NE(msg.find("CL_MEM_OBJECT_ALLOCATION_FAILURE"), std::string::npos) << msg;
+            EXPECT_NE(msg.find("allocating"), std::string::npos) << msg;
+            EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
+        }
+        unsetenv("RTLAB_FAIL_ALLOC_AFTER");
+        EXPECT_EQ(cl.allocatedBytes(), before) << pipelineName(k) << ": the failed frame holds bytes";
+        Image img = p->render(scene, o);
+        EXPECT_EQ(img.width, 16) << pipelineName(k);
+    }
+}
+
+// A failure while a pipeline resizes its buffers must leave it able to render both sizes.
+// DISABLED until megakernel.cpp and wavefront.cpp forget the old size when they release it
+// (issue 8 report): the wavefront keeps treeBytes_ after dropping tree_, so the next frame at the
+// old size runs Wavefront_Trace on a null buffer (SIGSEGV on PoCL); the megakernel keeps
+// imageBytes_ when its second buffer fails, so the next frame at the old size writes a
+// 32x24 image into the 16x12 buffer it did get.
+TEST(Stability, DISABLED_AllocationFailureOnResizeRecovers) {
+    Scene scene = loadScene("scenes/spheres.json");
+    RenderOptions o = scene.defaults;
+    o.bounces = 2;
+    ClContext& cl = test::device();
+    auto size = [&](int w, int h) {
+        o.width = w;
+        o.height = h;
+    };
+    for (PipelineKind k : {PipelineKind::Mega, PipelineKind::Wave}) {
+        std::unique_ptr<Pipeline> p = makePipeline(k, &cl);
+        size(32, 24);
+        Image first = p->render(scene, o);
+        const size_t image = 32 * 24 * 12, smaller = 16 * 12 * 12;
+        // Mega: the new image buffer fits, its centre buffer does not. Wave: the tree fails.
+        size_t limit = k == PipelineKind::Mega ? cl.allocatedBytes() - 2 * image + smaller
+                                               : cl.allocatedBytes();
+        setenv("RTLAB_FAIL_ALLOC_AFTER", std::to_string(limit).c_str(), 1);
+        k == PipelineKind::Mega ? size(16, 12) : size(40, 30);
+        EXPECT_THROW(p->render(scene, o), Error) << pipelineName(k);
+        unsetenv("RTLAB_FAIL_ALLOC_AFTER");
+        size(32, 24);
+        Image again = p->render(scene, o);
+        EXPECT_EQ(std::memcmp(first.rgb.data(), again.rgb.data(), first.rgb.size() * 4), 0)
+            << pipelineName(k) << ": the old size renders differently after the failure";
+        size(16, 12);
+        EXPECT_EQ(p->render(scene, o).width, 16) << pipelineName(k);
+    }
+}
+
+}  // namespace
+}  // namespace rt::stress
