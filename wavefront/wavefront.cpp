@@ -62,8 +62,7 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
             tree_ = cl::Buffer();
             tree_ = cl_.allocate(treeBytes, CL_MEM_READ_WRITE, "the wavefront ray tree");
             treeBytes_ = treeBytes;
-            // Every slot starts untraced; from then on the reset kernel keeps it so.
-            cl_.queue().enqueueFillBuffer(tree_, cl_uchar(0), 0, treeBytes);
+            needsClear_ = true;
         }
         if (imageBytes != imageBytes_) {
             if (imageBytes_) cl_.release(imageBytes_);
@@ -78,6 +77,18 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
     cl::Kernel trace(program, "Wavefront_Trace"), image(program, "Wavefront_Image"),
         reset(program, "Wavefront_Reset");
     reset.setArg(0, tree_);
+    if (needsClear_) {
+        // Every slot starts untraced; from then on the reset kernel keeps it so. The reset kernel
+        // (64-bit indices) clears a new buffer rather than clEnqueueFillBuffer, which left stale
+        // "traced" flags in trees over 2 GiB on NVIDIA's OpenCL (illegal-address failures).
+        try {
+            reset.setArg(1, cl_uint(nodes));
+            cl_.queue().enqueueNDRangeKernel(reset, cl::NullRange, cl::NDRange(nodes));
+        } catch (const cl::Error& e) {
+            throwClError(e, "clearing the wavefront ray tree");
+        }
+        needsClear_ = false;
+    }
     dev::RenderSettings settings = makeSettings(scene, o);
     int samples = o.aa * o.aa;
     std::vector<cl::Event> events;  // trace, image, reset per pass, for the profile

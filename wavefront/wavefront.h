@@ -26,6 +26,7 @@ private:
     std::unique_ptr<DeviceScene> scene_;
     cl::Buffer tree_, image_;
     size_t treeBytes_ = 0, imageBytes_ = 0;
+    bool needsClear_ = false;  // a new tree buffer whose flags are not yet cleared
     LaunchPlanner planner_;
 };
 
