@@ -301,6 +301,7 @@ std::vector<Cell> expandCells(const SweepConfig& config,
                                     c.options.memoryBudget = g.memoryBudget;
                                     c.options.adaptiveAa = g.adaptive;
                                     c.accelApplies = prims;
+                                    c.branching = scene.branching();
                                     c.groups = {g.name};
                                     c.images = g.images;
                                     c.repeats = g.repeats > 0 ? g.repeats : config.repeats;

@@ -56,6 +56,7 @@ struct Cell {
     std::vector<std::string> groups;  // every group that asked for this cell
     bool images = false;
     int repeats = 5, warmup = 2;
+    int branching = 1;                // the scene's C, for cost estimates
     bool countRays = true;
     bool accelApplies = true;         // false when the scene has no spheres or triangles
     std::string key() const;          // identity, for de-duplication

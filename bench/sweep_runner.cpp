@@ -28,20 +28,20 @@ std::string utcNow() {
 }
 
 // A rough relative cost of a cell, scaled per scene by what was measured so far, for the ETA.
-double cellCost(const Cell& c, const SweepConfig& config) {
+double cellCost(const Cell& c) {
     const RenderOptions& o = c.options;
-    (void)config;
     double frames = c.warmup + c.repeats + (c.countRays ? 1 : 0);
-    return double(o.width) * o.height * o.aa * o.aa * (1.0 + o.bounces) * frames;
+    // Rays grow about with the bounce limit; the wavefront also walks every slot of its tree.
+    double work = 1.0 + o.bounces;
+    if (c.pipeline == PipelineKind::Wave) work += double(treeNodeCount(c.branching, o.bounces)) / 16;
+    return double(o.width) * o.height * o.aa * o.aa * work * frames;
 }
 
 class Progress {
 public:
-    Progress(const std::vector<Cell>& cells, const SweepConfig& config)
-        : cells_(cells), config_(config), tty_(isatty(fileno(stderr))),
-          start_(std::chrono::steady_clock::now()) {
-        for (const Cell& c : cells) total_ += cellCost(c, config);
-    }
+    explicit Progress(const std::vector<Cell>& cells)
+        : cells_(cells), tty_(isatty(fileno(stderr))),
+          start_(std::chrono::steady_clock::now()) {}
     double elapsed() const {
         return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
     }
@@ -52,7 +52,7 @@ public:
         for (size_t j = i; j < cells_.size(); ++j) {
             auto it = sceneRate_.find(cells_[j].scene);
             double rate = it != sceneRate_.end() ? it->second.first / it->second.second : overall;
-            eta += rate * cellCost(cells_[j], config_);
+            eta += rate * cellCost(cells_[j]);
         }
         return eta;
     }
@@ -68,7 +68,7 @@ public:
     }
     void finished(size_t i, double seconds, const Measurement& m) {
         const Cell& c = cells_[i];
-        double cost = cellCost(c, config_);
+        double cost = cellCost(c);
         spent_ += seconds;
         doneCost_ += cost;
         auto& r = sceneRate_[c.scene];
@@ -92,10 +92,9 @@ public:
 
 private:
     const std::vector<Cell>& cells_;
-    const SweepConfig& config_;
     bool tty_;
     std::chrono::steady_clock::time_point start_;
-    double total_ = 0, spent_ = 0, doneCost_ = 0;
+    double spent_ = 0, doneCost_ = 0;
     std::map<std::string, std::pair<double, double>> sceneRate_;  // seconds, cost
 };
 
@@ -253,7 +252,7 @@ SweepSummary runSweep(const SweepConfig& config, const SweepRunOptions& options,
                  cl.device().label().c_str(), RTLAB_COMMIT);
     if (onStart) onStart(summary.meta);
 
-    Progress progress(cells, config);
+    Progress progress(cells);
     for (size_t i = 0; i < cells.size();) {
         // Adjacent cells that differ only in pipeline, accel or size (expandCells puts a group's
         // pipelines and accels innermost) are measured together, their frames interleaved, so
@@ -277,9 +276,12 @@ SweepSummary runSweep(const SweepConfig& config, const SweepRunOptions& options,
         std::vector<Measurement> ms = measureCells(cl, scenes.at(c.scene), variants, c.warmup,
                                                    c.repeats, c.countRays, c.images);
         double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        double batchCost = 0;
+        for (size_t k = i; k < j; ++k) batchCost += cellCost(cells[k]);
         for (size_t k = i; k < j; ++k) {
             const Measurement& m = ms[k - i];
-            progress.finished(k, seconds / double(j - i), m);
+            // The batch's time, shared out by the cost model (a 4K cell outweighs a 640x360 one).
+            progress.finished(k, seconds * cellCost(cells[k]) / batchCost, m);
             ++(m.ok ? summary.measured : summary.failed);
             sink(rowJson(config, cells[k], m, device, sceneInfo.at(c.scene)),
                  m.ok && cells[k].images ? &m.image : nullptr);
