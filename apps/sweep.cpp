@@ -40,7 +40,11 @@ std::string csvField(const nlohmann::json& v) {
     if (v.is_null()) return "";
     if (v.is_string()) s = v.get<std::string>();
     else if (v.is_boolean()) s = v.get<bool>() ? "1" : "0";
-    else s = v.dump();
+    else if (v.is_number_float()) {
+        char buf[32];
+        std::snprintf(buf, sizeof buf, "%.7g", v.get<double>());  // times to 0.1 us and better
+        s = buf;
+    } else s = v.dump();
     if (s.find_first_of(",\"\n") == std::string::npos) return s;
     std::string q = "\"";
     for (char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c == '\n' ? ' ' : c);
