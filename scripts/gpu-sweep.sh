@@ -26,6 +26,7 @@ cd "$(dirname "$0")/.."
 ROOT=$PWD
 BUILD=$ROOT/build-gpu
 CARRY=carry/gpu-sweep
+RESULTS=$(realpath -m "${RTLAB_RESULTS_DIR:-results}")  # import writes $RESULTS/<device-slug>/
 
 die() { echo "gpu-sweep: $*" >&2; exit 1; }
 
@@ -117,19 +118,20 @@ import() {
     done
     sweep=$(json_field "$1/sweep.json" sweep)
     slug=$(json_field "$1/sweep.json" device_slug)
-    mkdir -p "results/$slug"
+    local dest=$RESULTS/$slug
+    mkdir -p "$dest"
     # Scenes and the reference renderer come from the commit that was measured.
     (cd "$BUILD/src" && "$BUILD/build/bin/rtlab" sweep "bench/sweeps/$sweep" \
-        --import "${staged[@]}" --out "$ROOT/results/$slug" --no-charts)
+        --import "${staged[@]}" --out "$dest" --no-charts)
     n=0
     for dir in "$@"; do
         n=$((n + 1))
-        [ ! -f "$dir/gbench.json" ] || cp "$dir/gbench.json" "results/$slug/google-benchmark-$n.json"
-        [ ! -f "$dir/log.txt" ] || cp "$dir/log.txt" "results/$slug/device-log-$n.txt"
+        [ ! -f "$dir/gbench.json" ] || cp "$dir/gbench.json" "$dest/google-benchmark-$n.json"
+        [ ! -f "$dir/log.txt" ] || cp "$dir/log.txt" "$dest/device-log-$n.txt"
     done
-    /usr/bin/python3 scripts/charts.py "results/$slug/$sweep.json"
-    /usr/bin/python3 scripts/results-readme.py "results/$slug/$sweep.json"
-    echo "gpu-sweep: results/$slug/ ready"
+    /usr/bin/python3 scripts/charts.py "$dest/$sweep.json"
+    /usr/bin/python3 scripts/results-readme.py "$dest/$sweep.json"
+    echo "gpu-sweep: $dest/ ready"
 }
 
 case ${1:-} in
