@@ -12,6 +12,7 @@
 #include <functional>
 #include <string>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include "image/compare.h"
 #include "image/image_io.h"
@@ -37,7 +38,10 @@ std::string slurp(const std::string& path) {
 
 // Runs a shell command; onFirstLine (if any) is called once the first stdout line arrives.
 Result run(const std::string& cmd, const std::function<void()>& onFirstLine = {}) {
-    std::string errFile = ::testing::TempDir() + "rtlab_view_err.txt";
+    // One stderr file per call and process: CTest runs the cases in parallel.
+    static int calls = 0;
+    std::string errFile = ::testing::TempDir() + "rtlab_view_err_" + std::to_string(getpid()) +
+                          "_" + std::to_string(++calls) + ".txt";
     Result r{};
     FILE* p = popen((cmd + " 2>" + errFile).c_str(), "r");
     std::array<char, 4096> line;
