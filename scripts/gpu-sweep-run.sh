@@ -14,7 +14,7 @@ export LD_LIBRARY_PATH=$C/bin${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}
 export RTLAB_CACHE_DIR=/tmp/rtlab-cache
 
 find_nvidia_opencl() {
-    # The ICD loader carried beside rtlab-bench finds vendors through .icd files, which a
+    # The ICD loader (the machine's own; none is carried) finds vendors through .icd files, which a
     # container image may lack although the driver brings libnvidia-opencl.
     grep -qsi nvidia /etc/OpenCL/vendors/*.icd && return 0
     local lib

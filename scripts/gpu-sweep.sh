@@ -5,7 +5,8 @@
 #   scripts/gpu-sweep.sh prepare [SWEEP] [--resume DIR]...
 #       Builds rtlab and rtlab-bench from a clean clone of HEAD (so every result names an exact
 #       commit) in build-gpu/, and fills carry/gpu-sweep/ (git-ignored) with rtlab-bench, the
-#       libraries it needs beside it (libbenchmark.so.1debian, libOpenCL.so.1, libtinyobjloader),
+#       libraries it needs beside it (libbenchmark.so.1debian, libtinyobjloader; not libOpenCL.so.1:
+#       the GPU machine's own ICD loader is used),
 #       the scenes with .pfm cubemap faces, the sweep file and run.sh. --resume DIR (a folder
 #       fetched from an earlier run) makes the new run skip the cells that one measured.
 #   scripts/gpu-sweep.sh command
@@ -62,12 +63,12 @@ prepare() {
     rm -rf "$CARRY"
     mkdir -p "$CARRY/bin" "$CARRY/sweeps" "$CARRY/resume"
     cp "$BUILD/build/bin/rtlab-bench" "$CARRY/bin/"
-    for lib in libbenchmark.so.1debian libOpenCL.so.1 libtinyobjloader.so.2rc10; do
+    for lib in libbenchmark.so.1debian libtinyobjloader.so.2rc10; do
         path=$(lib_path "$BUILD/build/bin/rtlab-bench" "$lib")
         [ -z "$path" ] || cp -L "$path" "$CARRY/bin/$lib"
     done
     missing=$(ldd "$CARRY/bin/rtlab-bench" | grep -v -e libc.so -e libm.so -e libstdc++ \
-              -e libgcc_s -e ld-linux -e vdso -e "=> $ROOT/$CARRY/bin/" || true)
+              -e libgcc_s -e ld-linux -e vdso -e libOpenCL.so.1 -e "=> $ROOT/$CARRY/bin/" || true)
     [ -z "$missing" ] || echo "gpu-sweep: rtlab-bench also needs (not carried): $missing" >&2
     (cd "$BUILD/src" && "$BUILD/build/bin/rtlab" sweep --export-scenes "$ROOT/$CARRY/scenes") >/dev/null
     cp "$BUILD/src/bench/sweeps/$sweep" "$CARRY/sweeps/"
