@@ -1,10 +1,13 @@
 #include "core/cl_runtime.h"
 
+#include <pthread.h>
+
 #include <algorithm>
 #include <cctype>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <mutex>
 #include <sstream>
 
 #include "core/error.h"
@@ -99,9 +102,30 @@ static std::string trim(std::string s) {
     return s.substr(i);
 }
 
+// PoCL's CPU device runs work-groups on threads it starts when the platform is first listed, with
+// the default attributes, so glibc's default stack (ulimit -s, usually 8 MiB). Its work-group
+// function lays the private arrays of the 64 work-items of a group side by side: the wavefront
+// image kernel's private tree (up to kPrivateTreeLimit, 256 KiB) then needs 16 MiB, and bounce
+// limits 10 and 11 crashed the process (SIGSEGV in Wavefront_Image). Threads started from here on
+// get at least 64 MiB of stack (address space; pages are committed only when touched).
+static void widenThreadStacks() {
+    static std::once_flag once;
+    std::call_once(once, [] {
+        constexpr size_t kStack = size_t(64) << 20;
+        pthread_attr_t attr;
+        if (pthread_getattr_default_np(&attr) != 0) return;
+        size_t size = 0;
+        if (pthread_attr_getstacksize(&attr, &size) == 0 && size < kStack &&
+            pthread_attr_setstacksize(&attr, kStack) == 0)
+            pthread_setattr_default_np(&attr);
+        pthread_attr_destroy(&attr);
+    });
+}
+
 std::vector<DeviceInfo> listDevices() {
     std::vector<DeviceInfo> out;
     std::vector<cl::Platform> platforms;
+    widenThreadStacks();
     try {
         cl::Platform::get(&platforms);
     } catch (const cl::Error& e) {

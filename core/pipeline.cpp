@@ -1,5 +1,6 @@
 #include "core/pipeline.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cstring>
 
@@ -29,6 +30,7 @@ const char* pipelineName(PipelineKind kind) {
 
 void FrameStats::addKernel(const std::string& name, double ms) {
     deviceMs += ms;
+    longestLaunchMs = std::max(longestLaunchMs, ms);  // both pipelines add once per launch
     for (auto& [n, t] : kernelMs)
         if (n == name) {
             t += ms;

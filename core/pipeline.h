@@ -32,6 +32,7 @@ struct FrameStats {
     int branching = 1;          // C
     int tiles = 1;              // row tiles the frame was split into
     int launches = 0;           // kernel launches (time-bounded tiles x passes)
+    double longestLaunchMs = 0; // the longest single launch of the frame (watchdog margin)
     std::string program;        // how the program was obtained: built, disk or memory cache
     // Rays traced on the device by type (primary, reflection, refraction, shadow); filled only
     // when RenderOptions::countRays is set, because the atomics cost time.
