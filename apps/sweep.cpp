@@ -67,7 +67,10 @@ void writeCsv(const nlohmann::json& rows, const fs::path& path) {
         "device_bytes", "tree_bytes", "private_bytes", "tree_nodes", "branching", "tiles",
         "mrays_per_s", "tree_used", "rmse", "mean_abs", "max_abs", "psnr_db", "warmup", "repeats",
         "robust_sphere", "watertight", "scaled_offset", "device", "platform", "driver", "commit",
-        "error"};
+        "error",
+        // Added with the limits sweep (after the old columns, so old readers keep their places).
+        "end", "failure", "skip_reason", "memory_tiles", "launches", "longest_launch_ms",
+        "max_launch_ms", "frames", "image_max_diff"};
     const char* rays[4] = {"primary", "reflection", "refraction", "shadow"};
     const char* counts[6] = {"objects", "spheres", "planes", "triangles", "meshes", "lights"};
     std::ofstream f(path);
@@ -177,7 +180,7 @@ void addSweep(CLI::App& app) {
     sweepCmd = app.add_subcommand(
         "sweep", "Run a named benchmark sweep and write results/<device>/ (CSV, JSON, charts, README)");
     sweepCmd->add_option("config", a.config,
-                         "Sweep file, or a name in bench/sweeps/ (quick, full, cpu); format in "
+                         "Sweep file, or a name in bench/sweeps/ (quick, full, cpu, limits); format in "
                          "bench/sweeps/README.md");
     sweepCmd->add_option("--device", a.device,
                          "OpenCL device: index or name substring [$RTLAB_DEVICE, else first GPU]");
@@ -218,7 +221,7 @@ int runSweepCommand() {
                 meta = part;
             } else {
                 // A continued run: its cells add to the first run's; the sums and the end move.
-                for (const char* k : {"measured", "failed", "seconds"})
+                for (const char* k : {"measured", "failed", "not_run", "seconds"})
                     meta[k] = meta.value(k, 0.0) + part.value(k, 0.0);
                 meta["finished"] = part.value("finished", "");
                 meta["complete"] = part.value("complete", false);

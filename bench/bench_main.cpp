@@ -195,8 +195,9 @@ int sweepCommand(const Flags& f) {
         rows << r.dump() << "\n" << std::flush;
     });
     writeMeta(s.meta);
-    std::fprintf(stderr, "sweep %s: %d of %d cells measured, %d failed, %d done before, in %s%s -> %s\n",
-                 config.name.c_str(), s.measured, s.cells, s.failed, s.skipped,
+    std::fprintf(stderr, "sweep %s: %d of %d cells measured, %d failed, %d not run after a failure, "
+                         "%d done before, in %s%s -> %s\n",
+                 config.name.c_str(), s.measured, s.cells, s.failed, s.notRun, s.skipped,
                  formatDuration(s.seconds).c_str(), s.complete ? "" : " (stopped by the time limit)",
                  out.string().c_str());
     return 0;

@@ -48,8 +48,10 @@ struct Timed {
 
 std::vector<Measurement> measureCells(ClContext& cl, const Scene& scene,
                                       const std::vector<Variant>& variants, int warmup,
-                                      int repeats, bool countRays, bool keepImage) {
+                                      int repeats, bool countRays, bool keepImage,
+                                      double frameCapS) {
     const size_t n = variants.size();
+    std::vector<double> warmupWall(n, 0);
     std::vector<Measurement> out(n);
     std::vector<std::unique_ptr<Pipeline>> pipelines(n);
     std::vector<Timed> timed(n);
@@ -72,7 +74,10 @@ std::vector<Measurement> measureCells(ClContext& cl, const Scene& scene,
     for (size_t k = 0; k < n; ++k) {
         std::string error = attempt([&] {
             pipelines[k] = makePipeline(variants[k].kind, &cl);
-            for (int i = 0; i < warmup; ++i) render(k);
+            for (int i = 0; i < warmup; ++i) {
+                render(k);
+                warmupWall[k] = pipelines[k]->stats().hostMs;
+            }
         });
         if (!error.empty()) {
             out[k] = failure(error);
@@ -81,9 +86,16 @@ std::vector<Measurement> measureCells(ClContext& cl, const Scene& scene,
     }
     // Frames of the variants alternate (round r renders each once), so that a burst of load on
     // the machine or a clock change lands on every side of their ratios alike.
+    auto capped = [&](size_t k) {
+        const Timed& t = timed[k];
+        if (frameCapS <= 0 || t.device.empty()) return false;
+        double wall = 0;
+        for (double w : t.wall) wall += w;
+        return wall > frameCapS * 1e3 || warmupWall[k] > frameCapS * 1e3;
+    };
     for (int r = 0; r < repeats; ++r)
         for (size_t k = 0; k < n; ++k) {
-            if (!pipelines[k]) continue;
+            if (!pipelines[k] || capped(k)) continue;
             std::string error = attempt([&] {
                 Image frame = render(k);
                 const FrameStats& s = pipelines[k]->stats();
@@ -94,7 +106,8 @@ std::vector<Measurement> measureCells(ClContext& cl, const Scene& scene,
                     if (!t.kernels.count(name)) t.kernelOrder.push_back(name);
                     t.kernels[name].push_back(ms);
                 }
-                if (keepImage && r == repeats - 1) out[k].image = std::move(frame);
+                out[k].longestLaunchMs = std::max(out[k].longestLaunchMs, s.longestLaunchMs);
+                if (keepImage) out[k].image = std::move(frame);  // the last timed frame
             });
             if (!error.empty()) {
                 out[k] = failure(error);
@@ -112,7 +125,7 @@ std::vector<Measurement> measureCells(ClContext& cl, const Scene& scene,
         m.tiles = s.tiles;
         m.launches = s.launches;
         const Timed& t = timed[k];
-        m.frames = repeats;
+        m.frames = int(t.device.size());
         m.frameMs = t.device;
         m.deviceMs = median(t.device);
         m.deviceMsMin = *std::min_element(t.device.begin(), t.device.end());

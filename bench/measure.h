@@ -32,6 +32,7 @@ struct Measurement {
     size_t treeBytes = 0, privateBytes = 0;
     long long treeNodes = 0;
     int branching = 1, tiles = 1, launches = 0;
+    double longestLaunchMs = 0; // the longest single kernel launch of any timed frame
     std::array<uint64_t, 4> rays{};  // primary, reflection, refraction, shadow
     bool raysCounted = false;
     double mrays = 0;           // million rays per second of device time (when counted)
@@ -51,9 +52,12 @@ struct Variant {
     PipelineKind kind;
     RenderOptions options;
 };
+// frameCapS > 0 bounds a variant's timed frames: once they add up to more than that many seconds
+// of wall time (or its last warm-up frame alone took longer), it stops after at least one.
 std::vector<Measurement> measureCells(ClContext& cl, const Scene& scene,
                                       const std::vector<Variant>& variants, int warmup,
-                                      int repeats, bool countRays, bool keepImage);
+                                      int repeats, bool countRays, bool keepImage,
+                                      double frameCapS = 0);
 
 // Fills mrays and treeUsed from the ray counts and the median device time.
 void deriveRayCounters(Measurement& m, PipelineKind kind, const RenderOptions& options);

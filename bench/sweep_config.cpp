@@ -80,6 +80,19 @@ public:
         double scale = m[3] == "K" ? 1024.0 : m[3] == "M" ? 1048576.0 : m[3] == "G" ? 1073741824.0 : 1;
         return size_t(std::llround(std::stod(m[1]) * scale));
     }
+    double number(const std::string& w, double lo, double hi) const {
+        size_t used = 0;
+        double v = 0;
+        try {
+            v = std::stod(w, &used);
+        } catch (const std::exception&) {
+            used = 0;
+        }
+        if (used != w.size() || w.empty() || !std::isfinite(v)) fail("'" + w + "' is not a number");
+        if (v < lo || v > hi)
+            fail(w + " is out of range " + std::to_string(int(lo)) + ".." + std::to_string(int(hi)));
+        return v;
+    }
     bool boolean(const std::string& value) const {
         if (value == "yes" || value == "true" || value == "on") return true;
         if (value == "no" || value == "false" || value == "off") return false;
@@ -101,7 +114,8 @@ private:
 const std::set<std::string> kGroupKeys = {"scenes", "pipelines", "sizes",  "bounces",
                                           "shadow-samples", "aa", "accel", "layout",
                                           "memory-budget", "adaptive", "images",
-                                          "repeats", "warmup", "count-rays"};
+                                          "repeats", "warmup", "count-rays",
+                                          "max-launch-ms", "stop-after-failure", "max-frame-s"};
 const std::set<std::string> kTopKeys = {"reference-bounces",
                                         "reference-shadow-samples", "reference-aa"};
 
@@ -150,6 +164,12 @@ void applyGroupKey(SweepGroup& g, const std::string& key, const std::string& val
         g.warmup = p.integer(value, 0, 100);
     } else if (key == "count-rays") {
         g.countRays = p.boolean(value) ? 1 : 0;
+    } else if (key == "max-launch-ms") {
+        g.maxLaunchMs = p.number(value, 0, 1e6);
+    } else if (key == "stop-after-failure") {
+        g.stopAfterFailure = p.boolean(value);
+    } else if (key == "max-frame-s") {
+        g.maxFrameS = p.number(value, 0, 1e6);
     }
 }
 
@@ -236,6 +256,7 @@ std::string Cell::settingKey() const {
     k << scene << '|' << o.width << 'x' << o.height << '|' << o.bounces << '|' << o.shadowSamples
       << '|' << o.aa << '|' << (accelApplies ? accelName(o.accel) : "-") << '|' << int(o.layout)
       << '|' << o.memoryBudget << '|' << o.adaptiveAa;
+    if (o.maxLaunchMs > 0) k << "|L" << o.maxLaunchMs;  // absent before max-launch-ms existed
     return k.str();
 }
 
@@ -244,7 +265,9 @@ std::string Cell::batchKey() const {
     std::ostringstream k;
     k << scene << '|' << o.bounces << '|' << o.shadowSamples << '|' << o.aa << '|' << int(o.layout)
       << '|' << o.memoryBudget << '|' << o.adaptiveAa << '|' << repeats << '|' << warmup << '|'
-      << countRays << '|' << images;
+      << countRays << '|' << images << '|' << o.maxLaunchMs;
+    // A cell that may be skipped depends on the smaller sizes' outcome: one size per batch.
+    if (stopAfterFailure) k << '|' << o.width << 'x' << o.height;
     return k.str();
 }
 
@@ -258,6 +281,7 @@ std::string Cell::label() const {
     if (accelApplies) l << ' ' << accelName(o.accel);
     if (o.layout == RenderOptions::Layout::Weighted) l << " weighted";
     if (o.adaptiveAa) l << " adaptive";
+    if (o.memoryBudget) l << " budget " << (o.memoryBudget >> 20) << "M";
     return l.str();
 }
 
@@ -265,7 +289,8 @@ std::vector<Cell> expandCells(const SweepConfig& config,
                               const std::function<const Scene&(const std::string&)>& sceneFor) {
     std::vector<Cell> cells;
     std::map<std::string, size_t> index;
-    for (const SweepGroup& g : config.groups) {
+    for (size_t gi = 0; gi < config.groups.size(); ++gi) {
+        const SweepGroup& g = config.groups[gi];
         for (const std::string& name : g.scenes) {
             const Scene& scene = sceneFor(name);
             const RenderOptions& d = scene.defaults;
@@ -300,9 +325,13 @@ std::vector<Cell> expandCells(const SweepConfig& config,
                                     c.options.layout = g.layout;
                                     c.options.memoryBudget = g.memoryBudget;
                                     c.options.adaptiveAa = g.adaptive;
+                                    c.options.maxLaunchMs = g.maxLaunchMs;
                                     c.accelApplies = prims;
                                     c.branching = scene.branching();
                                     c.groups = {g.name};
+                                    c.groupIds = {int(gi)};
+                                    c.stopAfterFailure = g.stopAfterFailure;
+                                    c.maxFrameS = g.maxFrameS;
                                     c.images = g.images;
                                     c.repeats = g.repeats > 0 ? g.repeats : config.repeats;
                                     c.warmup = g.warmup >= 0 ? g.warmup : config.warmup;
@@ -317,6 +346,12 @@ std::vector<Cell> expandCells(const SweepConfig& config,
                                     if (std::find(old.groups.begin(), old.groups.end(), g.name) ==
                                         old.groups.end())
                                         old.groups.push_back(g.name);
+                                    old.groupIds.push_back(int(gi));
+                                    old.stopAfterFailure = old.stopAfterFailure || g.stopAfterFailure;
+                                    if (g.maxFrameS > 0)
+                                        old.maxFrameS = old.maxFrameS > 0
+                                                            ? std::min(old.maxFrameS, g.maxFrameS)
+                                                            : g.maxFrameS;
                                     old.images = old.images || g.images;
                                     old.repeats = std::max(old.repeats, c.repeats);
                                     old.warmup = std::max(old.warmup, c.warmup);
@@ -325,6 +360,33 @@ std::vector<Cell> expandCells(const SweepConfig& config,
         }
     }
     return cells;
+}
+
+std::string skipReason(const SweepConfig& config, const Cell& cell, const std::vector<Stop>& stops) {
+    // Every setting but size and bounce limit must match: the same key with those blanked.
+    auto others = [](const Cell& c) {
+        Cell o = c;
+        o.options.width = o.options.height = 0;
+        o.options.bounces = 0;
+        return o.key();
+    };
+    const std::string mine = others(cell);
+    for (const Stop& s : stops) {
+        const RenderOptions &a = s.cell.options, &b = cell.options;
+        if (s.cell.key() == cell.key() || others(s.cell) != mine) continue;
+        if (b.width < a.width || b.height < a.height || b.bounces < a.bounces) continue;
+        bool shared = false;
+        for (int g : s.cell.groupIds)
+            if (g >= 0 && size_t(g) < config.groups.size() && config.groups[size_t(g)].stopAfterFailure &&
+                std::find(cell.groupIds.begin(), cell.groupIds.end(), g) != cell.groupIds.end())
+                shared = true;
+        if (!shared) continue;
+        std::ostringstream why;
+        why << pipelineName(cell.pipeline) << " stopped at " << a.width << 'x' << a.height << " B="
+            << a.bounces << " (" << s.why << "); this setting is no smaller";
+        return why.str();
+    }
+    return "";
 }
 
 std::vector<std::string> sweepScenes(const SweepConfig& config) {

@@ -27,6 +27,11 @@ struct SweepGroup {
     bool images = false;  // keep the frame for the accuracy comparison
     int repeats = -1, warmup = -1;  // -1: the sweep's
     int countRays = -1;             // -1: the sweep's, else 0 or 1
+    double maxLaunchMs = 0;         // split frames so no launch runs past this (0: one launch)
+    // Once a pipeline fails at a setting (or a frame takes longer than maxFrameS), the group's
+    // settings of that pipeline that are no smaller (size, bounce limit) are skipped.
+    bool stopAfterFailure = false;
+    double maxFrameS = 0;           // 0: no cap
 };
 
 struct SweepConfig {
@@ -59,6 +64,9 @@ struct Cell {
     int branching = 1;                // the scene's C, for cost estimates
     bool countRays = true;
     bool accelApplies = true;         // false when the scene has no spheres or triangles
+    std::vector<int> groupIds;        // indices into SweepConfig::groups, parallel to `groups`
+    bool stopAfterFailure = false;    // some group of this cell stops after a failure
+    double maxFrameS = 0;             // the smallest cap of its groups (0: none)
     std::string key() const;          // identity, for de-duplication
     std::string settingKey() const;   // the same without the pipeline
     // Cells of one batch differ only in pipeline, accel and size: their frames are interleaved.
@@ -73,5 +81,15 @@ std::vector<Cell> expandCells(const SweepConfig& config,
 
 // Every scene name the sweep uses, in first-use order.
 std::vector<std::string> sweepScenes(const SweepConfig& config);
+
+// stop-after-failure: why `cell` is not worth running, given the cells that stopped before it
+// (failed, or ran past max-frame-s), or "" to run it. A stopped cell rules out the cells of a
+// group (with stop-after-failure) it shares, of the same pipeline and scene and every other
+// setting alike, whose width, height and bounce limit are each at least its own.
+struct Stop {
+    Cell cell;
+    std::string why;  // "error: ..." or "time: ..."
+};
+std::string skipReason(const SweepConfig& config, const Cell& cell, const std::vector<Stop>& stops);
 
 }  // namespace rt::bench

@@ -66,6 +66,13 @@ public:
                      doneCost_ > 0 ? formatDuration(remaining(i)).c_str() : "?");
         std::fflush(stderr);
     }
+    void skipped(size_t i, const std::string& why) {
+        const Cell& c = cells_[i];
+        std::fprintf(stderr, "%s[%zu/%zu] %s: skipped | elapsed %s\n    %s\n", tty_ ? "\r\033[K" : "",
+                     i + 1, cells_.size(), c.label().c_str(), formatDuration(elapsed()).c_str(),
+                     why.c_str());
+        std::fflush(stderr);
+    }
     void finished(size_t i, double seconds, const Measurement& m) {
         const Cell& c = cells_[i];
         double cost = cellCost(c);
@@ -99,7 +106,8 @@ private:
 };
 
 nlohmann::json rowJson(const SweepConfig& config, const Cell& c, const Measurement& m,
-                       const nlohmann::json& device, const nlohmann::json& scene) {
+                       const nlohmann::json& device, const nlohmann::json& scene,
+                       const std::string& skipped = "") {
     const RenderOptions& o = c.options;
     nlohmann::json row = {
         {"sweep", config.name},
@@ -122,9 +130,13 @@ nlohmann::json rowJson(const SweepConfig& config, const Cell& c, const Measureme
         {"scaled_offset", o.scaledOffset},
         {"warmup", c.warmup},
         {"repeats", c.repeats},
-        {"status", m.ok ? "ok" : "error"},
+        {"status", m.ok ? "ok" : skipped.empty() ? "error" : "skipped"},
         {"error", m.error},
     };
+    if (c.stopAfterFailure) row["stop_after_failure"] = true;
+    if (c.maxFrameS > 0) row["max_frame_s"] = c.maxFrameS;
+    if (!skipped.empty()) row["skip_reason"] = skipped;
+    if (!m.ok && skipped.empty()) row["failure"] = failureKind(m.error);
     if (m.ok) {
         nlohmann::json kernels = nlohmann::json::object();
         for (const auto& [name, ms] : m.kernelMs) kernels[name] = ms;
@@ -140,7 +152,10 @@ nlohmann::json rowJson(const SweepConfig& config, const Cell& c, const Measureme
                     {"tree_nodes", m.treeNodes},
                     {"branching", m.branching},
                     {"tiles", m.tiles},
-                    {"launches", m.launches}});
+                    {"launches", m.launches},
+                    {"longest_launch_ms", m.longestLaunchMs},
+                    {"frames", m.frames}});
+        row["memory_tiles"] = memoryTiles(row);
         if (m.raysCounted) {
             row["rays"] = {{"primary", m.rays[0]},
                            {"reflection", m.rays[1]},
@@ -150,9 +165,21 @@ nlohmann::json rowJson(const SweepConfig& config, const Cell& c, const Measureme
             if (m.treeUsed >= 0) row["tree_used"] = m.treeUsed;
         }
     }
+    row["end"] = endState(row);
     row["scene_info"] = scene;
     row.update(device);  // device, driver, platform, commit on every row
     return row;
+}
+
+// The largest |difference| of two frames of one size, or -1 when the sizes differ.
+double maxDifference(const Image& a, const Image& b) {
+    if (a.width != b.width || a.height != b.height || a.rgb.size() != b.rgb.size()) return -1;
+    double worst = 0;
+    for (size_t i = 0; i < a.rgb.size(); ++i) {
+        double d = std::fabs(double(a.rgb[i]) - double(b.rgb[i]));
+        if (!(d <= worst)) worst = std::isnan(d) ? INFINITY : d;
+    }
+    return worst;
 }
 
 // The host's load averages: other work on the machine skews CPU-device timings (PoCL) most.
@@ -164,6 +191,36 @@ std::string loadAverage() {
 }
 
 }  // namespace
+
+int memoryTiles(const nlohmann::json& row) {
+    if (row.value("pipeline", "") != "wave" || !row.contains("tree_bytes")) return 1;
+    double perRow = double(row.value("width", 0)) * double(row.value("tree_nodes", 0LL)) *
+                    double(sizeof(dev::Node));
+    double treeBytes = row.value("tree_bytes", 0.0);
+    if (perRow <= 0 || treeBytes <= 0) return 1;
+    long long rows = std::llround(treeBytes / perRow);
+    long long height = row.value("height", 1);
+    return rows <= 0 ? 1 : int((height + rows - 1) / rows);
+}
+
+std::string endState(const nlohmann::json& row) {
+    std::string status = row.value("status", "");
+    if (status == "skipped") return "skipped";
+    if (status != "ok") return "error: " + row.value("error", std::string());
+    int tiles = memoryTiles(row);
+    return tiles > 1 ? "ran (tiled into " + std::to_string(tiles) + " tiles)" : "ran";
+}
+
+std::string failureKind(const std::string& e) {
+    if (e.find("in private memory") != std::string::npos) return "private tree";
+    if (e.find("one row of the wavefront ray tree") != std::string::npos) return "tree row";
+    if (e.find("ALLOCATION") != std::string::npos || e.find("OUT_OF_RESOURCES") != std::string::npos ||
+        e.find("OUT_OF_HOST_MEMORY") != std::string::npos || e.find("out of host memory") != std::string::npos ||
+        e.find("per allocation") != std::string::npos || e.find("memory is left") != std::string::npos)
+        return "allocation";
+    if (e.find("CL_") != std::string::npos) return "OpenCL error";
+    return "other";
+}
 
 std::string formatDuration(double s) {
     if (!(s >= 0) || s > 1e7) return "?";
@@ -253,13 +310,21 @@ SweepSummary runSweep(const SweepConfig& config, const SweepRunOptions& options,
     if (onStart) onStart(summary.meta);
 
     Progress progress(cells);
+    std::vector<Stop> stops;  // cells that failed or ran past max-frame-s (stop-after-failure)
     for (size_t i = 0; i < cells.size();) {
         // Adjacent cells that differ only in pipeline, accel or size (expandCells puts a group's
         // pipelines and accels innermost) are measured together, their frames interleaved, so
         // that wave/mega, accel/none and resolution ratios compare frames taken moments apart.
         size_t j = i + 1;
         while (j < cells.size() && cells[j].batchKey() == cells[i].batchKey()) ++j;
-        if (options.timeLimitS > 0 && i > 0 &&
+        // stop-after-failure: cells no smaller than one that stopped are recorded, not run.
+        std::vector<size_t> run;
+        std::vector<std::string> skipWhy(j - i);
+        for (size_t k = i; k < j; ++k) {
+            if (cells[k].stopAfterFailure) skipWhy[k - i] = skipReason(config, cells[k], stops);
+            if (skipWhy[k - i].empty()) run.push_back(k);
+        }
+        if (!run.empty() && options.timeLimitS > 0 && i > 0 &&
             progress.elapsed() + progress.predict(i, j) > options.timeLimitS) {
             std::fprintf(stderr, "\nsweep %s: stopping before cell %zu of %zu, the time limit of %s "
                                  "would pass\n",
@@ -269,22 +334,74 @@ SweepSummary runSweep(const SweepConfig& config, const SweepRunOptions& options,
             break;
         }
         const Cell& c = cells[i];
-        std::vector<Variant> variants;
-        for (size_t k = i; k < j; ++k) variants.push_back({cells[k].pipeline, cells[k].options});
-        progress.starting(i, j);
-        auto t0 = std::chrono::steady_clock::now();
-        std::vector<Measurement> ms = measureCells(cl, scenes.at(c.scene), variants, c.warmup,
-                                                   c.repeats, c.countRays, c.images);
-        double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        std::vector<Measurement> ms(j - i);
+        double seconds = 0;
+        if (!run.empty()) {
+            std::vector<Variant> variants;
+            bool keep = false;
+            double cap = 0;
+            for (size_t k : run) {
+                variants.push_back({cells[k].pipeline, cells[k].options});
+                // The limits cells keep their frames: the pipelines' images must agree.
+                keep = keep || cells[k].images || cells[k].stopAfterFailure;
+                if (cells[k].maxFrameS > 0) cap = cap > 0 ? std::min(cap, cells[k].maxFrameS)
+                                                          : cells[k].maxFrameS;
+            }
+            progress.starting(run.front(), run.back() + 1);
+            auto t0 = std::chrono::steady_clock::now();
+            std::vector<Measurement> got = measureCells(cl, scenes.at(c.scene), variants, c.warmup,
+                                                        c.repeats, c.countRays, keep, cap);
+            seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+            for (size_t r = 0; r < run.size(); ++r) ms[run[r] - i] = std::move(got[r]);
+        }
         double batchCost = 0;
-        for (size_t k = i; k < j; ++k) batchCost += cellCost(cells[k]);
+        for (size_t k : run) batchCost += cellCost(cells[k]);
+        // Frames of the same setting from both pipelines: they must agree (bit-identical by
+        // design), which catches a silent wrong image at a limit (tiling, launch splitting).
+        std::map<std::string, size_t> bySetting;
+        std::map<size_t, std::pair<std::string, double>> diff;  // cell -> (other pipeline, max |d|)
+        for (size_t k : run) {
+            const Measurement& m = ms[k - i];
+            if (!m.ok || !cells[k].stopAfterFailure || m.image.rgb.empty()) continue;
+            auto [it, fresh] = bySetting.emplace(cells[k].settingKey(), k);
+            if (fresh) continue;
+            double d = maxDifference(ms[it->second - i].image, m.image);
+            diff[k] = {pipelineName(cells[it->second].pipeline), d};
+            diff[it->second] = {pipelineName(cells[k].pipeline), d};
+        }
         for (size_t k = i; k < j; ++k) {
             const Measurement& m = ms[k - i];
+            nlohmann::json row;
+            if (!skipWhy[k - i].empty()) {
+                progress.skipped(k, skipWhy[k - i]);
+                ++summary.notRun;
+                row = rowJson(config, cells[k], m, device, sceneInfo.at(c.scene), skipWhy[k - i]);
+                sink(row, nullptr);
+                continue;
+            }
             // The batch's time, shared out by the cost model (a 4K cell outweighs a 640x360 one).
             progress.finished(k, seconds * cellCost(cells[k]) / batchCost, m);
             ++(m.ok ? summary.measured : summary.failed);
-            sink(rowJson(config, cells[k], m, device, sceneInfo.at(c.scene)),
-                 m.ok && cells[k].images ? &m.image : nullptr);
+            row = rowJson(config, cells[k], m, device, sceneInfo.at(c.scene));
+            if (auto it = diff.find(k); it != diff.end()) {
+                row["image_compared_with"] = it->second.first;
+                row["image_max_diff"] = it->second.second;
+                if (it->second.second != 0)
+                    std::fprintf(stderr, "    WARNING: %s and %s frames differ by up to %g\n",
+                                 pipelineName(cells[k].pipeline), it->second.first.c_str(),
+                                 it->second.second);
+            }
+            if (cells[k].stopAfterFailure) {
+                if (!m.ok) {
+                    stops.push_back({cells[k], "error: " + failureKind(m.error)});
+                } else if (cells[k].maxFrameS > 0 && m.wallMs > cells[k].maxFrameS * 1e3) {
+                    char why[96];
+                    std::snprintf(why, sizeof why, "a frame took %.1f s, over max-frame-s %g",
+                                  m.wallMs / 1e3, cells[k].maxFrameS);
+                    stops.push_back({cells[k], why});
+                }
+            }
+            sink(row, m.ok && cells[k].images ? &m.image : nullptr);
         }
         i = j;
     }
@@ -296,6 +413,7 @@ SweepSummary runSweep(const SweepConfig& config, const SweepRunOptions& options,
     summary.meta["complete"] = summary.complete;
     summary.meta["measured"] = summary.measured;
     summary.meta["failed"] = summary.failed;
+    summary.meta["not_run"] = summary.notRun;
     return summary;
 }
 

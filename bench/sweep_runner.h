@@ -33,6 +33,7 @@ using RowSink = std::function<void(const nlohmann::json& row, const Image* image
 struct SweepSummary {
     nlohmann::json meta;   // sweep, config text, device, commit, settings, start and end time
     int cells = 0, measured = 0, failed = 0, skipped = 0;
+    int notRun = 0;        // skipped by stop-after-failure (a row with status "skipped" each)
     bool complete = true;  // false when the time limit stopped it
     double seconds = 0;
 };
@@ -53,5 +54,19 @@ nlohmann::json sweepSettingsJson(const SweepConfig& config);
 
 // "2m05s"
 std::string formatDuration(double seconds);
+
+// How a row's cell ended, for the limits sweep: "ran", "ran (tiled into K tiles)" (the wavefront
+// tree did not fit the device's max allocation or the memory budget in one piece),
+// "error: <the message>" or "skipped".
+std::string endState(const nlohmann::json& row);
+
+// Rows of the wavefront tree one memory tile holds, from the row's tree bytes: the frame's tiles
+// forced by memory (not by the launch-time planner). 1 when the whole tree fits or for the
+// megakernel.
+int memoryTiles(const nlohmann::json& row);
+
+// A short class of a failure message: "private tree", "tree row", "allocation", "OpenCL error",
+// "other".
+std::string failureKind(const std::string& error);
 
 }  // namespace rt::bench
