@@ -88,14 +88,14 @@ inline bool RayTree_ChildRay(const SceneData* sc, const Node* parent, int depth,
     float3 p = f3(parent->point), n = f3(parent->normal), d = f3(parent->dir);
     if (slot == 0) {
         if (!(m.reflectance > 0.0f || m.opacity < 1.0f)) return false;
-        *out = makeRay(p + Shade_Offset(p) * n, Shade_Reflect(d, n));
+        *out = makeRay(p + Shade_Offset(p) * n, normalize(Shade_Reflect(d, n)));
         return true;
     }
     if (!(m.opacity < 1.0f)) return false;
     float eta = (parent->flags & RT_NODE_INSIDE) ? m.ior : 1.0f / m.ior;
     float3 t;
     if (!Shade_Refract(d, n, eta, &t)) return false;
-    *out = makeRay(p - Shade_Offset(p) * n, t);
+    *out = makeRay(p - Shade_Offset(p) * n, normalize(t));
     return true;
 }
 
