@@ -171,15 +171,30 @@ nlohmann::json rowJson(const SweepConfig& config, const Cell& c, const Measureme
     return row;
 }
 
-// The largest |difference| of two frames of one size, or -1 when the sizes differ.
+// The largest |difference| of two frames of one size (NaN in both at one place counts as equal,
+// in one only as infinite), or -1 when the sizes differ.
 double maxDifference(const Image& a, const Image& b) {
     if (a.width != b.width || a.height != b.height || a.rgb.size() != b.rgb.size()) return -1;
     double worst = 0;
     for (size_t i = 0; i < a.rgb.size(); ++i) {
-        double d = std::fabs(double(a.rgb[i]) - double(b.rgb[i]));
-        if (!(d <= worst)) worst = std::isnan(d) ? INFINITY : d;
+        float x = a.rgb[i], y = b.rgb[i];
+        if (std::isnan(x) || std::isnan(y)) {
+            if (std::isnan(x) != std::isnan(y)) worst = INFINITY;
+            continue;
+        }
+        worst = std::max(worst, x == y ? 0.0 : std::fabs(double(x) - double(y)));
     }
     return worst;
+}
+
+// Pixels with a channel that is NaN or infinite: never right, whatever the scene.
+long long nonFinitePixels(const Image& image) {
+    long long bad = 0;
+    for (size_t i = 0; i + 2 < image.rgb.size(); i += 3)
+        if (!std::isfinite(image.rgb[i]) || !std::isfinite(image.rgb[i + 1]) ||
+            !std::isfinite(image.rgb[i + 2]))
+            ++bad;
+    return bad;
 }
 
 // The host's load averages: other work on the machine skews CPU-device timings (PoCL) most.
@@ -383,6 +398,12 @@ SweepSummary runSweep(const SweepConfig& config, const SweepRunOptions& options,
             progress.finished(k, seconds * cellCost(cells[k]) / batchCost, m);
             ++(m.ok ? summary.measured : summary.failed);
             row = rowJson(config, cells[k], m, device, sceneInfo.at(c.scene));
+            if (m.ok && cells[k].stopAfterFailure && !m.image.rgb.empty()) {
+                row["image_nonfinite"] = nonFinitePixels(m.image);
+                if (row["image_nonfinite"].get<long long>() > 0)
+                    std::fprintf(stderr, "    WARNING: %lld pixels are NaN or infinite\n",
+                                 row["image_nonfinite"].get<long long>());
+            }
             if (auto it = diff.find(k); it != diff.end()) {
                 row["image_compared_with"] = it->second.first;
                 row["image_max_diff"] = it->second.second;
