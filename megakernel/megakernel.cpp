@@ -33,9 +33,19 @@ Image MegakernelPipeline::render(const Scene& scene, const RenderOptions& o) {
     stats_.accel = scene_->accelStats();
     size_t bytes = size_t(o.width) * o.height * 3 * sizeof(float);
     if (bytes != imageBytes_) {
+        // Forget the old size before allocating, so that a failure below leaves no buffer and no
+        // size behind: the next frame then allocates afresh instead of using a stale buffer.
         if (imageBytes_) cl_.release(2 * imageBytes_);
-        image_ = cl_.allocate(bytes, CL_MEM_READ_WRITE, "the image buffer");
-        centers_ = cl_.allocate(bytes, CL_MEM_READ_WRITE, "the adaptive-AA centre buffer");
+        image_ = centers_ = cl::Buffer();
+        imageBytes_ = 0;
+        cl::Buffer image = cl_.allocate(bytes, CL_MEM_READ_WRITE, "the image buffer");
+        try {
+            centers_ = cl_.allocate(bytes, CL_MEM_READ_WRITE, "the adaptive-AA centre buffer");
+        } catch (...) {
+            cl_.release(bytes);
+            throw;
+        }
+        image_ = image;
         imageBytes_ = bytes;
     }
 

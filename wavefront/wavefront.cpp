@@ -58,14 +58,19 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
     size_t imageBytes = size_t(o.width) * o.height * 3 * sizeof(float);
     try {
         if (treeBytes != treeBytes_) {
+            // Forget the old size first: after a failed allocation no stale size names a buffer
+            // that is gone, and the next frame allocates afresh.
             if (treeBytes_) cl_.release(treeBytes_);
             tree_ = cl::Buffer();
+            treeBytes_ = 0;
             tree_ = cl_.allocate(treeBytes, CL_MEM_READ_WRITE, "the wavefront ray tree");
             treeBytes_ = treeBytes;
             needsClear_ = true;
         }
         if (imageBytes != imageBytes_) {
             if (imageBytes_) cl_.release(imageBytes_);
+            image_ = cl::Buffer();
+            imageBytes_ = 0;
             image_ = cl_.allocate(imageBytes, CL_MEM_READ_WRITE, "the image buffer");
             imageBytes_ = imageBytes;
         }
