@@ -42,7 +42,8 @@ Google Benchmark mode (every --benchmark_* flag works, e.g. --benchmark_filter=R
   --sizes=WxH,...       [640x360,1280x720,1920x1080,3840x2160]
   --bounces=0..8        list and/or ranges [0..8]
   --accels=bvh,...      none, bv, grid, bvh [each scene's default]
-  --cells=SWEEP         instead of the lists above: the cells of a sweep file
+  --cells=SWEEP         instead of the lists above: the cells of a sweep file (every cell:
+                        stop-after-failure applies in sweep mode only)
   --devices=SPEC,...    OpenCL devices by index or name [$RTLAB_DEVICE, else first GPU]
   --repeats=N           repetitions per benchmark; the median is reported [5]
   --warmup=N            untimed frames before timing [2]
@@ -50,7 +51,9 @@ Google Benchmark mode (every --benchmark_* flag works, e.g. --benchmark_filter=R
 Sweep mode (no Google Benchmark; what `rtlab sweep --import` reads):
   --sweep=SWEEP --out=DIR [--time-limit=SECONDS] [--device=SPEC] [--resume=ROWS,...]
                         --resume skips the cells an earlier run's rows.jsonl measured; give
-                        `rtlab sweep --import` both output folders afterwards
+                        `rtlab sweep --import` both output folders afterwards. Groups with
+                        stop-after-failure (bench/sweeps/limits) skip the settings no smaller
+                        than one that failed and write them as rows with status "skipped"
 Both:
   --scene-dir=DIR       where <scene>.json are [scenes/ of the checkout]; cubemap faces must be
                         .pfm (rtlab-bench reads no PNG: see `rtlab sweep --export-scenes`)

@@ -281,7 +281,10 @@ std::string Cell::label() const {
     if (accelApplies) l << ' ' << accelName(o.accel);
     if (o.layout == RenderOptions::Layout::Weighted) l << " weighted";
     if (o.adaptiveAa) l << " adaptive";
-    if (o.memoryBudget) l << " budget " << (o.memoryBudget >> 20) << "M";
+    if (o.memoryBudget)
+        l << " budget "
+          << (o.memoryBudget % (1 << 20) ? std::to_string(o.memoryBudget >> 10) + "K"
+                                         : std::to_string(o.memoryBudget >> 20) + "M");
     return l.str();
 }
 

@@ -41,7 +41,10 @@ class Progress {
 public:
     explicit Progress(const std::vector<Cell>& cells)
         : cells_(cells), tty_(isatty(fileno(stderr))),
-          start_(std::chrono::steady_clock::now()) {}
+          start_(std::chrono::steady_clock::now()) {
+        // Cells that stop-after-failure may skip are counted in: the ETA is then a bound.
+        for (const Cell& c : cells) mayStop_ = mayStop_ || c.stopAfterFailure;
+    }
     double elapsed() const {
         return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
     }
@@ -61,8 +64,8 @@ public:
         if (!tty_) return;
         std::string what = cells_[i].label();
         if (j > i + 1) what += " (+" + std::to_string(j - i - 1) + " interleaved)";
-        std::fprintf(stderr, "\r\033[K[%zu/%zu] %s ... | elapsed %s, ETA %s", i + 1, cells_.size(),
-                     what.c_str(), formatDuration(elapsed()).c_str(),
+        std::fprintf(stderr, "\r\033[K[%zu/%zu] %s ... | elapsed %s, ETA %s%s", i + 1, cells_.size(),
+                     what.c_str(), formatDuration(elapsed()).c_str(), mayStop_ ? "<= " : "",
                      doneCost_ > 0 ? formatDuration(remaining(i)).c_str() : "?");
         std::fflush(stderr);
     }
@@ -86,9 +89,10 @@ public:
             std::snprintf(result, sizeof result, "%.3f ms", m.deviceMs);
         else
             std::snprintf(result, sizeof result, "failed");
-        std::fprintf(stderr, "%s[%zu/%zu] %s: %s | elapsed %s, ETA %s%s", tty_ ? "\r\033[K" : "",
+        std::fprintf(stderr, "%s[%zu/%zu] %s: %s | elapsed %s, ETA %s%s%s", tty_ ? "\r\033[K" : "",
                      i + 1, cells_.size(), c.label().c_str(), result,
-                     formatDuration(elapsed()).c_str(), formatDuration(remaining(i + 1)).c_str(),
+                     formatDuration(elapsed()).c_str(), mayStop_ ? "<= " : "",
+                     formatDuration(remaining(i + 1)).c_str(),
                      tty_ ? "" : "\n");
         if (!m.ok) std::fprintf(stderr, "%s    %s\n", tty_ ? "\n" : "", m.error.c_str());
         std::fflush(stderr);
@@ -99,7 +103,7 @@ public:
 
 private:
     const std::vector<Cell>& cells_;
-    bool tty_;
+    bool tty_, mayStop_ = false;
     std::chrono::steady_clock::time_point start_;
     double spent_ = 0, doneCost_ = 0;
     std::map<std::string, std::pair<double, double>> sceneRate_;  // seconds, cost
