@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Draws the five result charts of a sweep from the JSON that `rtlab sweep` writes.
+"""Draws the result charts of a sweep from the JSON that `rtlab sweep` writes.
 
 Usage: /usr/bin/python3 scripts/charts.py results/<device-slug>/<sweep>.json [--out DIR]
 
@@ -10,11 +10,17 @@ Writes, next to the JSON unless --out says otherwise:
   kernel-breakdown.png     device ms per kernel, stacked, per bounce limit ([bounces])
   speed-vs-accuracy.png    device ms against RMSE from the converged reference, with the
                            Pareto front marked ([accuracy])
-A chart whose group the sweep lacks is still written, saying so, so that a result set always has
-all five. Every chart's footer names the device, driver, commit and timing settings.
+  limits.png               how far each pipeline goes: device time, memory and the longest launch
+                           against the bounce limit and the resolution, where the wavefront tree
+                           starts to tile and where (and how) each pipeline first fails ([limits])
+A chart whose group the sweep lacks is written as a placeholder saying so, unless the folder has
+that chart already (from another sweep of the same device, e.g. `cpu` beside `limits`), so that a
+result set always has the five and a second sweep never blanks the first one's charts.
+Every chart's footer names the device, driver, commit and timing settings.
 Needs Debian's python3-matplotlib (scripts/setup), hence /usr/bin/python3.
 """
 import argparse
+import importlib.util
 import json
 import math
 import os
@@ -24,7 +30,7 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-from matplotlib.ticker import MaxNLocator  # noqa: E402
+from matplotlib.ticker import LogFormatter, MaxNLocator, NullLocator  # noqa: E402
 
 COLORS = {"mega": "#1f77b4", "wave": "#d62728"}
 NAMES = {"mega": "megakernel", "wave": "wavefront"}
@@ -32,10 +38,10 @@ KERNEL_COLORS = {"megakernel": "#1f77b4", "centers": "#6baed6", "edges": "#08519
                  "trace": "#d62728", "image": "#ff9896", "reset": "#7f7f7f"}
 
 
-def load(path):
+def load(path, every=False):
     with open(path) as f:
         data = json.load(f)
-    rows = [r for r in data["rows"] if r.get("status") == "ok"]
+    rows = [r for r in data["rows"] if every or r.get("status") == "ok"]
     return data["meta"], rows
 
 
@@ -73,6 +79,9 @@ def grid(n):
 
 
 def empty_chart(path, meta, title, why):
+    if os.path.exists(path):
+        print(f"charts: kept {os.path.basename(path)} ({why})")
+        return
     fig, ax = plt.subplots(figsize=(7, 3))
     ax.axis("off")
     ax.text(0.5, 0.5, f"{title}\n\n{why}", ha="center", va="center", fontsize=11)
@@ -305,19 +314,163 @@ def speed_vs_accuracy(meta, rows, out):
            f"m/w megakernel/wavefront, B bounce limit, s shadow samples, aa N (NxN samples)")
     save(fig, meta, path, title + "\n" + sub)
 
+def readme_module():
+    """scripts/results-readme.py (standard library only): the limits analysis both scripts share."""
+    path = os.path.join(os.path.dirname(os.path.abspath(__file__)), "results-readme.py")
+    spec = importlib.util.spec_from_file_location("results_readme", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+LIMIT_STYLES = {("mega", "tree", False): dict(color="#1f77b4", linestyle="-"),
+                ("mega", "weighted", False): dict(color="#17becf", linestyle="-."),
+                ("wave", "tree", False): dict(color="#d62728", linestyle="--"),
+                ("wave", "tree", True): dict(color="#ff7f0e", linestyle=":")}
+HOW_SHORT = {"private tree": "private tree > limit", "tree row": "tree row > budget",
+             "allocation": "allocation failed", "OpenCL error": "OpenCL error",
+             "time cap": "frame > time cap", "other": "error", "skipped": "not run"}
+
+
+def limits_chart(meta, all_rows, out):
+    """Per scene: columns bounce limit and resolution; rows device time, global memory and the
+    longest launch. Filled circles ran, squares ran with the wavefront tree in row tiles (K
+    printed beside), a cross at the top marks each series' first failure (or where it was not
+    run because a frame took longer than max-frame-s), with the kind."""
+    rr = readme_module()
+    series = rr.limit_series(all_rows)
+    path = os.path.join(out, "limits.png")
+    if not series:
+        return
+    scenes = []
+    for s in series:
+        if s["scene"] not in scenes:
+            scenes.append(s["scene"])
+    axes_kinds = [k for k in ("bounces", "size") if any(s["axis"] == k for s in series)]
+    ncol = len(axes_kinds) * len(scenes)
+    fig, grid_axes = plt.subplots(3, ncol, figsize=(6.4 * ncol, 11.5), squeeze=False)
+    limit_rows = in_group(all_rows, "limits")
+    target = next((r.get("max_launch_ms") for r in limit_rows if r.get("max_launch_ms")), 0)
+    budgets = sorted({r.get("memory_budget") for r in limit_rows if r.get("memory_budget")})
+    col = 0
+    for scene in scenes:
+        for kind in axes_kinds:
+            t_ax, m_ax, l_ax = (grid_axes[i][col] for i in range(3))
+            col += 1
+            group = [s for s in series if s["scene"] == scene and s["axis"] == kind]
+            if kind == "bounces":
+                x = lambda r: r["bounces"]  # noqa: E731
+                fixed = sorted({s["fixed"] for s in group})
+                t_ax.set_title(f"{scene}: bounce limit up ({', '.join(f[3:] for f in fixed)})")
+            else:
+                x = lambda r: r["width"] * r["height"] / 1e6  # noqa: E731
+                fixed = sorted({s["fixed"] for s in group})
+                t_ax.set_title(f"{scene}: resolution up ({', '.join(f[3:] for f in fixed)})")
+            stops = []
+            for s in group:
+                style = LIMIT_STYLES.get((s["pipeline"], s["layout"], bool(s["budget"])),
+                                         dict(color="#7f7f7f", linestyle="-"))
+                ran = s["ran"]
+                tiled = [r for r in ran if rr.memory_tiles(r) > 1]
+                plain = [r for r in ran if rr.memory_tiles(r) <= 1]
+                for ax, val in ((t_ax, lambda r: r["device_ms"]),
+                                (m_ax, lambda r: r.get("device_bytes", 0) / 2**20),
+                                (l_ax, lambda r: r.get("longest_launch_ms") or float("nan"))):
+                    ax.plot([x(r) for r in ran], [val(r) for r in ran], linewidth=1.4,
+                            label=s["label"] if ax is t_ax else None, **style)
+                    ax.plot([x(r) for r in plain], [val(r) for r in plain], "o", ms=4.5,
+                            color=style["color"])
+                    ax.plot([x(r) for r in tiled], [val(r) for r in tiled], "s", ms=6,
+                            color=style["color"], markeredgecolor="black", markeredgewidth=0.6)
+                # K tiles beside the memory points (the first, then every other one).
+                for i, r in enumerate(tiled):
+                    if i == 0 or i == len(tiled) - 1 or i % 2 == 0:
+                        m_ax.annotate(f"{rr.memory_tiles(r)}", (x(r), r["device_bytes"] / 2**20),
+                                      textcoords="offset points", xytext=(4, -9), fontsize=6.5,
+                                      color=style["color"])
+                if s["stop"] is not None:
+                    stops.append((x(s["stop"]), s, style))
+            # First failures: a dotted line through all three panels, a cross and the kind on top.
+            stops.sort(key=lambda t: t[0])
+            for n, (sx, s, style) in enumerate(stops):
+                for ax in (t_ax, m_ax, l_ax):
+                    ax.axvline(sx, color=style["color"], linestyle=":", linewidth=1.0, alpha=0.8)
+                ypos = 0.96 - 0.085 * n
+                t_ax.plot([sx], [ypos], marker="X", ms=9, color=style["color"],
+                          markeredgecolor="black", markeredgewidth=0.6,
+                          transform=t_ax.get_xaxis_transform(), clip_on=False)
+                where = f"B={s['stop']['bounces']}" if kind == "bounces" else \
+                    f"{s['stop']['width']}×{s['stop']['height']}"
+                t_ax.text(sx, ypos, f"{where}: {HOW_SHORT.get(s['how'], s['how'])}   ",
+                          transform=t_ax.get_xaxis_transform(), fontsize=7, va="center",
+                          ha="right", color=style["color"],
+                          bbox=dict(boxstyle="round,pad=0.15", fc="white", ec="none", alpha=0.8))
+            # Where the device (or the budget) stops one wavefront tree buffer.
+            alloc = meta.get("max_alloc_bytes")
+            if alloc:
+                m_ax.axhline(alloc / 2**20, color="#555555", linewidth=0.9, linestyle="--")
+                m_ax.text(0.01, alloc / 2**20, f" device max allocation {alloc / 2**30:.3g} GiB",
+                          transform=m_ax.get_yaxis_transform(), fontsize=7, va="bottom",
+                          color="#555555")
+            for b in budgets:
+                if any(s["budget"] == b for s in group):
+                    m_ax.axhline(b / 2**20, color="#ff7f0e", linewidth=0.9, linestyle=":")
+                    m_ax.text(0.01, b / 2**20, f" memory budget {b / 2**20:g} MiB",
+                              transform=m_ax.get_yaxis_transform(), fontsize=7, va="bottom",
+                              color="#b35900")
+            if target:
+                l_ax.axhline(target, color="#555555", linewidth=0.9, linestyle="--")
+                l_ax.text(0.01, target, f" max-launch-ms {target:g}",
+                          transform=l_ax.get_yaxis_transform(), fontsize=7, va="bottom",
+                          color="#555555")
+            t_ax.set_ylabel("device ms per frame")
+            m_ax.set_ylabel("global memory allocated, MiB")
+            l_ax.set_ylabel("longest single launch, ms")
+            for ax in (t_ax, m_ax, l_ax):
+                ax.set_yscale("log")
+                ax.margins(x=0.04)
+                ax.grid(True, which="both", alpha=0.25)
+                if kind == "bounces":
+                    ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+                    ax.set_xlabel("bounce limit B")
+                else:
+                    ax.set_xscale("log")
+                    sizes = sorted({(r["width"], r["height"]) for s in group for r in s["rows"]},
+                                   key=lambda wh: wh[0] * wh[1])
+                    ax.set_xticks([w * h / 1e6 for w, h in sizes])
+                    ax.set_xticklabels([f"{w}×{h}" for w, h in sizes], fontsize=7, rotation=30)
+                    ax.xaxis.set_minor_locator(NullLocator())
+                    ax.set_xlabel("resolution")
+            for ax in (t_ax, m_ax, l_ax):
+                lo, hi = ax.get_ylim()
+                if hi / lo < 30:  # under ~1.5 decades: label the minor ticks too
+                    ax.yaxis.set_minor_formatter(LogFormatter(labelOnlyBase=False,
+                                                              minor_thresholds=(2, 0.4)))
+                    ax.tick_params(axis="y", which="minor", labelsize=7)
+            t_ax.legend(fontsize=7, loc="lower right")
+    fig.suptitle("Limits: how far each pipeline goes\n● ran   ■ ran with the wavefront "
+         "tree in K row tiles (K beside the memory point)   ✕ first failure, or first setting not "
+         "run after a too-long frame", fontsize=11)
+    footer(fig, meta)
+    fig.tight_layout(rect=(0, 0.035, 1, 0.955))
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("json")
     ap.add_argument("--out", help="output folder [the JSON's folder]")
     args = ap.parse_args()
-    meta, rows = load(args.json)
+    meta, all_rows = load(args.json, every=True)
+    rows = [r for r in all_rows if r.get("status") == "ok"]
     out = args.out or os.path.dirname(os.path.abspath(args.json))
     os.makedirs(out, exist_ok=True)
     for chart in (time_vs_resolution, time_vs_bounces, memory_vs_bounces, kernel_breakdown,
                   speed_vs_accuracy):
         chart(meta, rows, out)
-    print(f"charts: wrote 5 PNGs to {out}")
+    limits_chart(meta, all_rows, out)
+    print(f"charts: done in {out}")
 
 
 if __name__ == "__main__":
