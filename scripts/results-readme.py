@@ -355,15 +355,19 @@ def limits_section(data, json_rel, chart_exists):
             doc.append(f"Every launch of the {len(timed)} cells that ran stayed under "
                        f"max-launch-ms = {launch:g} (longest {ms(worst['longest_launch_ms'])} ms).")
         else:
+            longest = sorted(r["longest_launch_ms"] for r in over)
             doc.append(f"**Launches over max-launch-ms = {launch:g}:** {len(over)} of the {len(timed)} "
-                       f"cells that ran had a longer one; the worst took "
-                       f"{ms(worst['longest_launch_ms'])} ms ({worst['pipeline']} "
+                       f"cells that ran had a longer one (median of their longest launches "
+                       f"{ms(longest[len(longest) // 2])} ms; the worst "
+                       f"{ms(worst['longest_launch_ms'])} ms, {worst['pipeline']} "
                        f"{size_label(worst)} B={worst['bounces']}"
-                       f"{', ' + worst['layout'] if worst.get('layout') == 'weighted' else ''}). "
-                       "The planner sizes a tile from the cost per row of the launches before it, "
-                       "so a frame whose cheap rows (sky) come first gets one long launch over "
-                       "its costly rows (the glass spheres); where a single row costs more than "
-                       "the target, no row tile can stay under it.")
+                       f"{' weighted' if worst.get('layout') == 'weighted' else ''}). Tiles are "
+                       "planned from each row's cost measured in the earlier frames of the same "
+                       "setting, aiming at 80% of the target; a launch runs over when its rows "
+                       "cost more than they did a frame before (other load on the machine: host "
+                       f"load average {meta.get('host_load_start', '?')} at the start, "
+                       f"{meta.get('host_load_end', '?')} at the end) or when a single row costs "
+                       "more than the target.")
         doc.append("")
     if chart_exists:
         doc += ["![Limits: time, memory and longest launch against bounce limit and resolution]"
