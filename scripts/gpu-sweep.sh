@@ -127,8 +127,8 @@ import() {
     n=0
     for dir in "$@"; do
         n=$((n + 1))
-        [ ! -f "$dir/gbench.json" ] || cp "$dir/gbench.json" "$dest/google-benchmark-$n.json"
-        [ ! -f "$dir/log.txt" ] || cp "$dir/log.txt" "$dest/device-log-$n.txt"
+        [ ! -f "$dir/gbench.json" ] || cp "$dir/gbench.json" "$dest/$sweep-google-benchmark-$n.json"
+        [ ! -f "$dir/log.txt" ] || cp "$dir/log.txt" "$dest/$sweep-device-log-$n.txt"
     done
     /usr/bin/python3 scripts/charts.py "$dest/$sweep.json"
     /usr/bin/python3 scripts/results-readme.py "$dest/$sweep.json"
