@@ -412,6 +412,16 @@ def limits_section(data, json_rel, chart_exists):
     return doc
 
 
+def write_readme(out, doc):
+    """Writes a result set's README and, when the set lies in results/, the index beside it."""
+    with open(out, "w") as f:
+        f.write("\n".join(doc))
+    print(f"results-readme: wrote {out}")
+    results = os.path.dirname(os.path.dirname(os.path.abspath(out)))
+    if os.path.basename(results) == "results":
+        write_index(results)
+
+
 def device_rows(meta):
     """The device, platform and driver rows that head every result README."""
     return [["Device", f"{meta.get('device')} ({meta.get('device_type')}, "
@@ -512,13 +522,7 @@ def main():
         limit_docs += limits_section(d, os.path.relpath(path, here),
                                      os.path.exists(os.path.join(here, "limits.png")))
     if not others:
-        doc = limits_only_doc(given, limit_docs)
-        with open(out, "w") as f:
-            f.write("\n".join(doc))
-        print(f"results-readme: wrote {out}")
-        results = os.path.dirname(here)
-        if os.path.basename(results) == "results":
-            write_index(results)
+        write_readme(out, limits_only_doc(given, limit_docs))
         return 0
     main_path, data = others[0]
     meta, all_rows = clean_meta(data["meta"], data["rows"]), data["rows"]
@@ -593,12 +597,7 @@ def main():
                       [[r["scene"], r["pipeline"], f"{r['width']}×{r['height']}", r["bounces"],
                         r["accel"], r.get("error", "").replace("|", "/")] for r in failed]), ""]
     doc += limit_docs
-    with open(out, "w") as f:
-        f.write("\n".join(doc))
-    print(f"results-readme: wrote {out}")
-    results = os.path.dirname(here)
-    if os.path.basename(results) == "results":
-        write_index(results)
+    write_readme(out, doc)
 
 
 if __name__ == "__main__":
