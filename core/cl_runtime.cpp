@@ -84,10 +84,13 @@ const char* clErrorName(cl_int code) {
     }
 }
 
-void throwClError(const cl::Error& e, const std::string& what) {
+void throwClError(const cl::Error& e, const std::string& what, const std::string& memoryHint) {
     std::ostringstream msg;
     msg << what << ": " << e.what() << " failed with " << clErrorName(e.err()) << " (" << e.err()
         << ")";
+    const bool outOfMemory = e.err() == CL_OUT_OF_RESOURCES || e.err() == CL_OUT_OF_HOST_MEMORY ||
+                             e.err() == CL_MEM_OBJECT_ALLOCATION_FAILURE;
+    if (outOfMemory && !memoryHint.empty()) msg << "; " << memoryHint;
     throw Error(msg.str());
 }
 

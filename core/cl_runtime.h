@@ -16,8 +16,11 @@ namespace rt {
 // "CL_OUT_OF_RESOURCES" for -5, etc.
 const char* clErrorName(cl_int code);
 
-// Turns a cl::Error into rt::Error: "<what>: <call> failed with CL_..." .
-[[noreturn]] void throwClError(const cl::Error& e, const std::string& what);
+// Turns a cl::Error into rt::Error: "<what>: <call> failed with CL_..." . When the error says the
+// device ran out of memory or resources, `memoryHint` (what the frame needed and how to ask for
+// less) follows after "; ", so that the one line tells the user what to change.
+[[noreturn]] void throwClError(const cl::Error& e, const std::string& what,
+                               const std::string& memoryHint = "");
 
 struct DeviceInfo {
     int index = -1;  // position in listDevices()

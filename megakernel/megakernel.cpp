@@ -94,7 +94,10 @@ Image MegakernelPipeline::render(const Scene& scene, const RenderOptions& o) {
             stats_.raysCounted = true;
         }
     } catch (const cl::Error& e) {
-        throwClError(e, "megakernel frame on " + cl_.device().name);
+        throwClError(e, "megakernel frame on " + cl_.device().name,
+                     "the megakernel keeps " + std::to_string(stats_.privateBytes / 1024) +
+                         " KiB of private ray storage per work-item; lower --bounces or --size, "
+                         "or use --layout weighted");
     }
     stats_.hostMs =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();

@@ -28,6 +28,28 @@ TEST(Runtime, ErrorNames) {
     }
 }
 
+// Out-of-memory errors from a launch carry what the frame needed; other errors do not.
+TEST(Runtime, OutOfMemoryErrorsCarryTheHint) {
+    for (cl_int code : {CL_OUT_OF_RESOURCES, CL_OUT_OF_HOST_MEMORY, CL_MEM_OBJECT_ALLOCATION_FAILURE}) {
+        try {
+            throwClError(cl::Error(code, "clEnqueueNDRangeKernel"), "frame", "lower --bounces");
+            FAIL();
+        } catch (const Error& e) {
+            EXPECT_EQ(std::string(e.what()), std::string("frame: clEnqueueNDRangeKernel failed with ") +
+                                                 clErrorName(code) + " (" + std::to_string(code) +
+                                                 "); lower --bounces");
+        }
+    }
+    try {
+        throwClError(cl::Error(CL_INVALID_KERNEL_ARGS, "clEnqueueNDRangeKernel"), "frame",
+                     "lower --bounces");
+        FAIL();
+    } catch (const Error& e) {
+        EXPECT_STREQ(e.what(),
+                     "frame: clEnqueueNDRangeKernel failed with CL_INVALID_KERNEL_ARGS (-52)");
+    }
+}
+
 TEST(Runtime, RepeatBuildsComeFromTheCache) {
     fs::path dir = fs::path(::testing::TempDir()) / "rtlab_cache_test";
     fs::remove_all(dir);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 
 #include "core/error.h"
 
@@ -46,6 +47,20 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
         budgetName = "--memory-budget";
     }
     int rows = tileRows(o.width, o.height, C, o.bounces, budget, budgetName);
+    // What an out-of-memory error from the driver is told about the frame (NVIDIA's, for one, can
+    // fail at launch when the image kernel's private trees and the global tree together do not fit).
+    auto memoryHint = [&] {
+        const double gib = double(size_t(o.width) * rows * stats_.treeNodes * sizeof(dev::Node)) /
+                           double(1ull << 30);
+        char buf[256];
+        std::snprintf(buf, sizeof buf,
+                      "the frame needs a %.2f GiB ray tree (%d row tile%s) and %zu KiB of private "
+                      "tree per work-item in the image kernel; lower --bounces or --size, or set "
+                      "--memory-budget",
+                      gib, (o.height + rows - 1) / rows, (o.height + rows - 1) / rows == 1 ? "" : "s",
+                      stats_.privateBytes / 1024);
+        return std::string(buf);
+    };
 
     cl::Program program = cl_.program("wavefront.cl", featureDefines(scene, o));
     stats_.program = cl_.lastProgramSource();
@@ -75,7 +90,7 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
             imageBytes_ = imageBytes;
         }
     } catch (const cl::Error& e) {
-        throwClError(e, "preparing wavefront buffers");
+        throwClError(e, "preparing wavefront buffers", memoryHint());
     }
     stats_.treeBytes = treeBytes;
 
@@ -90,7 +105,7 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
             reset.setArg(1, cl_uint(nodes));
             cl_.queue().enqueueNDRangeKernel(reset, cl::NullRange, cl::NDRange(nodes));
         } catch (const cl::Error& e) {
-            throwClError(e, "clearing the wavefront ray tree");
+            throwClError(e, "clearing the wavefront ray tree", memoryHint());
         }
         needsClear_ = false;
     }
@@ -159,7 +174,7 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
         static const char* names[3] = {"trace", "image", "reset"};
         for (size_t i = 0; i < events.size(); ++i) stats_.addKernel(names[i % 3], eventMs(events[i]));
     } catch (const cl::Error& e) {
-        throwClError(e, "wavefront frame on " + dev.name);
+        throwClError(e, "wavefront frame on " + dev.name, memoryHint());
     }
     stats_.hostMs =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
