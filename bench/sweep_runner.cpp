@@ -10,6 +10,7 @@
 #include <fstream>
 #include <map>
 #include <memory>
+#include <optional>
 
 #include "bench/measure.h"
 #include "core/accel.h"
@@ -368,8 +369,13 @@ SweepSummary runSweep(const SweepConfig& config, const SweepRunOptions& options,
             }
             progress.starting(run.front(), run.back() + 1);
             auto t0 = std::chrono::steady_clock::now();
-            std::vector<Measurement> got = measureCells(cl, scenes.at(c.scene), variants, c.warmup,
-                                                        c.repeats, c.countRays, keep, cap);
+            // A limits batch gets a context of its own: drivers keep memory per context (NVIDIA
+            // reserves private memory for the largest kernel it ran), and on the H100 that made
+            // a wavefront cell fail after the megakernel's B=11 cells, yet run in a new process.
+            std::optional<ClContext> own;
+            if (c.stopAfterFailure) own.emplace(cl.device(), options.sources);
+            std::vector<Measurement> got = measureCells(own ? *own : cl, scenes.at(c.scene), variants,
+                                                        c.warmup, c.repeats, c.countRays, keep, cap);
             seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
             for (size_t r = 0; r < run.size(); ++r) ms[run[r] - i] = std::move(got[r]);
         }
