@@ -89,10 +89,18 @@ void scoreFrames(nlohmann::json& rows, std::vector<PendingFrame>& frames,
         if (!references.count(key)) references.emplace(key, reference(scene, file, o));
         // Linear values clamped to [0, 1], as every accuracy figure of the project.
         ImageDiff d = compareImages(f.image, references.at(key), 1.0 / 255.0, true);
-        row["rmse"] = d.rmse;
-        row["mean_abs"] = d.meanAbs;
-        row["max_abs"] = d.maxAbs;
-        row["psnr_db"] = d.rmse > 0 ? 20.0 * std::log10(1.0 / d.rmse) : 999.0;
+        // A frame with a NaN or infinite pixel has no accuracy score: its error figures are
+        // written as null (JSON has no infinity) and the row says why.
+        row["nonfinite_pixels"] = d.nonfinite;
+        row["accuracy_ok"] = d.nonfinite == 0;
+        if (d.nonfinite) {
+            row["rmse"] = row["mean_abs"] = row["max_abs"] = row["psnr_db"] = nullptr;
+        } else {
+            row["rmse"] = d.rmse;
+            row["mean_abs"] = d.meanAbs;
+            row["max_abs"] = d.maxAbs;
+            row["psnr_db"] = d.rmse > 0 ? 20.0 * std::log10(1.0 / d.rmse) : 999.0;
+        }
         row["fraction_within_1_255"] = d.fractionWithin;
         row["reference"] = {{"pipeline", "cpu"},
                             {"bounces", o.bounces},

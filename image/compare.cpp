@@ -7,6 +7,7 @@
 #include <OpenImageIO/imagebufalgo.h>
 
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include "core/error.h"
@@ -30,11 +31,24 @@ OIIO::ImageBuf toBuffer(const Image& image, bool clampToUnit) {
 
 }  // namespace
 
+long long countNonFinite(const Image& image) {
+    if (image.width <= 0 || image.height <= 0) return 0;
+    const OIIO::ImageBuf raw = toBuffer(image, false);
+    // Sum the channels: a pixel with a NaN or infinite channel has a non-finite sum (Inf - Inf is
+    // NaN), so OIIO's NaN and Inf counts of the sum count such pixels once each.
+    OIIO::ImageBuf sum = OIIO::ImageBufAlgo::channel_sum(raw);
+    const OIIO::ImageBufAlgo::PixelStats stats = OIIO::ImageBufAlgo::computePixelStats(sum);
+    if (sum.has_error() || stats.nancount.empty())
+        throw Error("countNonFinite: " + sum.geterror());
+    return (long long)(stats.nancount[0] + stats.infcount[0]);
+}
+
 ImageDiff compareImages(const Image& a, const Image& b, double tolerance, bool clampToUnit) {
     if (a.width != b.width || a.height != b.height)
         throw Error("compareImages: size mismatch, " + sizeOf(a) + " vs " + sizeOf(b));
     ImageDiff diff;
     if (a.width <= 0 || a.height <= 0) return diff;
+    const long long pixels = (long long)a.width * a.height;
 
     const OIIO::ImageBuf bufA = toBuffer(a, clampToUnit);
     const OIIO::ImageBuf bufB = toBuffer(b, clampToUnit);
@@ -51,8 +65,17 @@ ImageDiff compareImages(const Image& a, const Image& b, double tolerance, bool c
     const float* pa = static_cast<const float*>(bufA.localpixels());
     const float* pb = static_cast<const float*>(bufB.localpixels());
     if (!pa || !pb) throw Error("compareImages: image buffers are not in memory");
-    const long long pixels = (long long)a.width * a.height;
+    const float* ra = a.rgb.data();
+    const float* rb = b.rgb.data();
     for (long long i = 0; i < pixels; ++i) {
+        bool finite = true;
+        for (int c = 0; c < 3; ++c)
+            finite = finite && std::isfinite(ra[i * 3 + c]) && std::isfinite(rb[i * 3 + c]);
+        if (!finite) {
+            ++diff.nonfinite;
+            ++diff.pixelsOver;
+            continue;
+        }
         for (int c = 0; c < 3; ++c) {
             const double d = std::abs(double(pa[i * 3 + c]) - double(pb[i * 3 + c]));
             if (!(d <= tolerance)) {  // NaN counts as over
@@ -62,6 +85,11 @@ ImageDiff compareImages(const Image& a, const Image& b, double tolerance, bool c
         }
     }
     diff.fractionWithin = double(pixels - diff.pixelsOver) / double(pixels);
+    if (diff.nonfinite) {
+        // OIIO compared clamped (or NaN-poisoned) values; no error figure of a frame with a
+        // non-finite pixel is meaningful, so none may look small.
+        diff.meanAbs = diff.maxAbs = diff.rmse = std::numeric_limits<double>::infinity();
+    }
     return diff;
 }
 

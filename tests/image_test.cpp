@@ -5,10 +5,12 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <filesystem>
 #include <fstream>
 #include <functional>
 #include <string>
+#include <unistd.h>
 
 #include "core/error.h"
 #include "image/compare.h"
@@ -23,7 +25,7 @@ class ImageIoTest : public ::testing::Test {
   protected:
     void SetUp() override {
         const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-        dir_ = fs::path(::testing::TempDir()) / ("rtlab_image_test_" + std::string(info->name()));
+        dir_ = fs::path(::testing::TempDir()) / ("rtlab_image_test_" + std::string(info->name()) + "_" + std::to_string(getpid()));
         fs::remove_all(dir_);
         fs::create_directories(dir_);
     }
@@ -200,6 +202,41 @@ TEST(CompareImages, ClampsToUnitUnlessAskedNotTo) {
     EXPECT_EQ(raw.fractionWithin, 0);
     // Negative values clamp to 0 as well.
     EXPECT_EQ(rt::compareImages(constant(3, 3, -2.f), constant(3, 3, 0.f), 0.0).maxAbs, 0);
+}
+
+// A clamp would turn NaN into 0 and +Inf into 1, so a frame full of NaN would match a black one.
+// Non-finite pixels are counted before any clamp and fail every comparison, clamped or raw.
+TEST(CompareImages, NonFinitePixelsAreNeverHidden) {
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    const float inf = std::numeric_limits<float>::infinity();
+    for (bool clamp : {true, false}) {
+        const Image black = constant(4, 4, 0.f);
+        const rt::ImageDiff allNan = rt::compareImages(constant(4, 4, nan), black, 0.5, clamp);
+        EXPECT_EQ(allNan.nonfinite, 16) << "clamp " << clamp;
+        EXPECT_EQ(allNan.pixelsOver, 16);
+        EXPECT_EQ(allNan.fractionWithin, 0);
+        EXPECT_TRUE(std::isinf(allNan.maxAbs));
+        EXPECT_TRUE(std::isinf(allNan.meanAbs));
+        EXPECT_FALSE(allNan.allWithin());
+
+        Image one = constant(4, 4, 1.f), withInf = one;
+        withInf.pixel(2, 1)[0] = inf;
+        withInf.pixel(3, 3)[2] = -inf;
+        const rt::ImageDiff d = rt::compareImages(withInf, one, 0.5, clamp);
+        EXPECT_EQ(d.nonfinite, 2);
+        EXPECT_EQ(d.pixelsOver, 2);
+        EXPECT_DOUBLE_EQ(d.fractionWithin, 14.0 / 16);
+        EXPECT_FALSE(d.allWithin());
+        // Both images NaN at the same place still fail: NaN is no value to agree on.
+        EXPECT_EQ(rt::compareImages(withInf, withInf, 1.0, clamp).nonfinite, 2);
+    }
+    Image mixed = constant(3, 2, 0.25f);
+    mixed.pixel(0, 0)[1] = nan;
+    mixed.pixel(1, 1)[0] = inf;
+    mixed.pixel(1, 1)[2] = -inf;  // Inf - Inf in one pixel: still one pixel
+    EXPECT_EQ(rt::countNonFinite(mixed), 2);
+    EXPECT_EQ(rt::countNonFinite(constant(3, 2, 0.25f)), 0);
+    EXPECT_TRUE(rt::compareImages(constant(3, 2, 0.25f), constant(3, 2, 0.25f), 0.0).allWithin());
 }
 
 TEST(CompareImages, SizeMismatchThrows) {
