@@ -1,6 +1,6 @@
 // rtlab — command-line front end: `rtlab render`, `rtlab devices`, `rtlab sweep`.
-// Every failure ends in one line on stderr ("rtlab: <reason>") and exit status 1; CLI11 usage
-// errors exit with its own code (106 etc.) after naming the flag.
+// Every failure, a usage error included, ends in one line on stderr ("rtlab: <reason>") and exit
+// status 1.
 #include <CLI/CLI.hpp>
 
 #include <cstdio>
@@ -8,6 +8,7 @@
 #include <string>
 
 #include "apps/commands.h"
+#include "apps/parse_error.h"
 #include "core/error.h"
 
 int main(int argc, char** argv) {
@@ -29,15 +30,13 @@ int main(int argc, char** argv) {
     if (argc > 1 && argv[1][0] != '-' && !known) {
         std::fprintf(stderr, "rtlab: unknown command '%s' (commands: %s; see rtlab --help)\n",
                      argv[1], names.c_str());
-        return 2;
+        return rt::cli::kUsageError;
     }
     try {
         app.parse(argc, argv);
         return rt::cli::run(app);
     } catch (const CLI::ParseError& e) {
-        if (e.get_exit_code() == 0) return app.exit(e);  // --help
-        std::fprintf(stderr, "rtlab: %s (see rtlab --help)\n", e.what());
-        return e.get_exit_code();
+        return rt::cli::reportParseError(app, e, "rtlab", argc, argv);
     } catch (const rt::Error& e) {
         std::fprintf(stderr, "rtlab: %s\n", e.what());
         return 1;

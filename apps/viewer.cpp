@@ -1,7 +1,7 @@
 // rtlab-view SCENE — a real-time window on the two pipelines: the megakernel or the wavefront, or
 // both side by side. Sets up GLFW (OpenGL 3.3 core), the OpenCL device and the render thread,
 // then hands over to App (viewer_app.h). Every failure ends in one line on stderr
-// ("rtlab-view: <reason>") and exit status 1; CLI11 usage errors exit with its own code.
+// ("rtlab-view: <reason>") and exit status 1, usage errors included.
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>
 
@@ -11,6 +11,7 @@
 #include <string>
 
 #include "apps/options.h"
+#include "apps/parse_error.h"
 #include "apps/viewer_app.h"
 #include "apps/viewer_gl.h"
 #include "apps/viewer_overlay.h"
@@ -161,9 +162,7 @@ int main(int argc, char** argv) {
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
-        if (e.get_exit_code() == 0) return app.exit(e);
-        std::fprintf(stderr, "rtlab-view: %s (see rtlab-view --help)\n", e.what());
-        return e.get_exit_code();
+        return cli::reportParseError(app, e, "rtlab-view", argc, argv);
     }
     try {
         return runViewer(a);
