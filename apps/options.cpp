@@ -19,7 +19,7 @@ void SceneFlags::add(CLI::App& cmd) {
                    "Shadow rays per light of non-zero radius, 1..255 [scene default]");
     cmd.add_option("--aa", aa, "Anti-aliasing: N x N samples per pixel, 1..16 [scene default]");
     cmd.add_flag("--adaptive", adaptive,
-                 "Supersample only edge pixels (report 2.1.2; megakernel and cpu)");
+                 "Supersample only edge pixels (report 2.1.2); megakernel and cpu only: the wavefront refuses it");
     cmd.add_option("--shadow-strength", shadowStrength,
                    "How much a fully occluded light darkens, 0..1 [scene default]");
     cmd.add_option("--layout", layout,

@@ -32,6 +32,11 @@ int WavefrontPipeline::tileRows(int width, int height, int branching, int bounce
 Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
     auto t0 = std::chrono::steady_clock::now();
     checkOptions(scene, o);
+    // The report's wavefront renders every AA sample of every pixel in fixed passes over the tree;
+    // it has no centre-then-edges pass, so adaptive anti-aliasing is refused rather than ignored.
+    if (o.adaptiveAa)
+        throw Error("--adaptive: the wavefront pipeline has no adaptive anti-aliasing (the "
+                    "megakernel and cpu pipelines do); drop the flag or use --pipeline mega");
     stats_ = {};
     int C = scene.branching();
     stats_.branching = C;
