@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <string>
+#include <unistd.h>
 
 #include "core/reference.h"
 #include "core/scene_loader.h"
@@ -61,7 +62,7 @@ TEST_P(GoldenTest, ReferenceMatchesGolden) {
     const rt::ImageDiff diff = rt::compareImages(image, rt::readImage(golden), kTolerance);
     const bool ok = diff.fractionWithin >= kMinFractionWithin && diff.meanAbs <= kMaxMeanAbs;
     if (!ok) {
-        const fs::path actual = fs::path(::testing::TempDir()) / (GetParam() + "_actual.png");
+        const fs::path actual = fs::path(::testing::TempDir()) / (GetParam() + "_actual_" + std::to_string(getpid()) + ".png");
         rt::writeImage(image, actual);
         ADD_FAILURE() << "render differs from " << golden << ": within " << diff.fractionWithin
                       << ", mean " << diff.meanAbs * 255 << "/255, max " << diff.maxAbs * 255

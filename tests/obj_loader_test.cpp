@@ -9,6 +9,7 @@
 #include <string>
 
 #include "core/error.h"
+#include "tests/test_device.h"
 
 namespace rt {
 namespace {
@@ -139,8 +140,8 @@ TEST(ObjLoader, KnotModelHasTenThousandTrianglesWithFileNormals) {
 }
 
 TEST(ObjLoader, StanfordBunnyLoads) {
-    const fs::path bunny = "../shared/models/bunny.obj";
-    if (!fs::exists(bunny)) GTEST_SKIP() << bunny << " not present";
+    const fs::path bunny = rt::test::sharedFile("models/bunny.obj");
+    RTLAB_REQUIRE_FILE(bunny);
     ObjMesh mesh = loadObj(bunny);
     EXPECT_EQ(mesh.positions.size() / 3, 69630u);
     for (const glm::vec3& n : mesh.normals) ASSERT_NEAR(glm::length(n), 1.f, 1e-5f);
@@ -149,7 +150,7 @@ TEST(ObjLoader, StanfordBunnyLoads) {
 // The assimp corpus (scripts/setup installs it): valid files load, broken ones fail cleanly.
 TEST(ObjLoader, AssimpCorpusLoadsOrFailsCleanly) {
     const fs::path dir = "/usr/share/assimp/models";
-    if (!fs::exists(dir / "OBJ")) GTEST_SKIP() << "assimp-testmodels not installed";
+    RTLAB_REQUIRE_FILE(dir / "OBJ");  // assimp-testmodels, installed by scripts/setup
     struct Case {
         const char* file;
         int triangles;  // -1: must fail

@@ -1,9 +1,11 @@
 // The OpenCL runtime: program cache, build logs, error names, checked allocations, device choice.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <unistd.h>
 
 #include "core/cl_runtime.h"
 #include "core/error.h"
@@ -51,7 +53,7 @@ TEST(Runtime, OutOfMemoryErrorsCarryTheHint) {
 }
 
 TEST(Runtime, RepeatBuildsComeFromTheCache) {
-    fs::path dir = fs::path(::testing::TempDir()) / "rtlab_cache_test";
+    fs::path dir = fs::path(::testing::TempDir()) / ("rtlab_cache_test_" + std::to_string(getpid()));
     fs::remove_all(dir);
     setenv("RTLAB_CACHE_DIR", dir.c_str(), 1);
     DeviceInfo d = test::device().device();
@@ -73,7 +75,7 @@ TEST(Runtime, RepeatBuildsComeFromTheCache) {
 
 TEST(Runtime, BuildFailureCarriesTheBuildLog) {
     // A copy of the kernel tree with a syntax error injected into intersect.cl.
-    fs::path dir = fs::path(::testing::TempDir()) / "rtlab_broken_kernels";
+    fs::path dir = fs::path(::testing::TempDir()) / ("rtlab_broken_kernels_" + std::to_string(getpid()));
     fs::remove_all(dir);
     fs::create_directories(dir);
     for (const EmbeddedSource& s : embeddedKernelSources()) {
@@ -123,11 +125,23 @@ TEST(Runtime, DeviceSelection) {
     std::vector<DeviceInfo> all = listDevices();
     ASSERT_FALSE(all.empty());
     EXPECT_EQ(selectDevice("0").name, all[0].name);
-    EXPECT_EQ(selectDevice("cpu").type, "CPU");
+    // "cpu" and "gpu" pick a device of that type where the machine has one, and fail clearly
+    // where it has none (a GPU host may list no CPU device at all).
+    for (const char* type : {"cpu", "gpu"}) {
+        const std::string upper = std::string(type) == "cpu" ? "CPU" : "GPU";
+        const bool present = std::any_of(all.begin(), all.end(),
+                                         [&](const DeviceInfo& d) { return d.type == upper; });
+        if (present) {
+            EXPECT_EQ(selectDevice(type).type, upper);
+            setenv("RTLAB_DEVICE", type, 1);
+            EXPECT_EQ(selectDevice("").type, upper);
+            unsetenv("RTLAB_DEVICE");
+        } else {
+            EXPECT_THROW(selectDevice(type), Error) << type;
+        }
+    }
     EXPECT_THROW(selectDevice("12345"), Error);
     EXPECT_THROW(selectDevice("no-such-device-name"), Error);
-    setenv("RTLAB_DEVICE", "cpu", 1);
-    EXPECT_EQ(selectDevice("").type, "CPU");
     setenv("RTLAB_DEVICE", "no-such-device-name", 1);
     try {
         selectDevice("");

@@ -11,7 +11,10 @@
 #include <fstream>
 #include <functional>
 #include <string>
+#include <fcntl.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
+#include <thread>
 #include <unistd.h>
 
 #include "image/compare.h"
@@ -64,6 +67,30 @@ int lines(const std::string& s) {
     return n;
 }
 
+// A folder of this process's own under the test temp folder: CTest runs the cases in parallel,
+// and two processes must never share a file.
+std::string privateDir(const std::string& name) {
+    std::string dir = ::testing::TempDir() + "rtlab_view_" + std::to_string(getpid()) + "_" + name + "/";
+    fs::create_directories(dir);
+    return dir;
+}
+
+// Writes `text` into a FIFO as soon as a reader opens it, so that a reader sees exactly this text
+// at its next open, whatever the speed of the device; gives up after two minutes (reader died).
+bool feedFifo(const std::string& fifo, const std::string& text) {
+    for (int attempt = 0; attempt < 12000; ++attempt) {
+        int fd = open(fifo.c_str(), O_WRONLY | O_NONBLOCK);  // fails with ENXIO until a reader opens
+        if (fd >= 0) {
+            fcntl(fd, F_SETFL, 0);
+            bool ok = write(fd, text.data(), text.size()) == ssize_t(text.size());
+            close(fd);
+            return ok;
+        }
+        usleep(10000);
+    }
+    return false;
+}
+
 bool haveXvfb() { return std::system("command -v xvfb-run >/dev/null 2>&1") == 0; }
 
 rt::Image columns(const rt::Image& image, int x0, int x1) {
@@ -82,7 +109,7 @@ double oneSrgbStep() {
 }
 
 std::string renderPng(const std::string& scene, const std::string& pipeline) {
-    std::string out = ::testing::TempDir() + "viewer_" + pipeline + ".png";
+    std::string out = privateDir("render") + fs::path(scene).stem().string() + "_" + pipeline + ".png";
     Result r = run(kBin + "/rtlab render " + scene + " --pipeline " + pipeline + " -o " + out);
     EXPECT_EQ(r.status, 0) << r.err;
     return out;
@@ -104,8 +131,7 @@ protected:
 
 TEST_F(Viewer, SplitViewHalvesMatchTheirPipelinesRenders) {
     const std::string scene = "scenes/spheres.json";
-    std::string shotPath = ::testing::TempDir() + "viewer_split.png";
-    fs::remove(shotPath);
+    std::string shotPath = privateDir("split") + "split.png";
     Result r = run(kXvfb + kBin + "/rtlab-view " + scene +
                    " --frames 30 --split --no-overlay --scale 1 --screenshot " + shotPath);
     ASSERT_EQ(r.status, 0) << r.out << r.err;
@@ -121,16 +147,20 @@ TEST_F(Viewer, SplitViewHalvesMatchTheirPipelinesRenders) {
 }
 
 TEST_F(Viewer, SceneErrorOnReloadKeepsTheOldSceneWithOneLine) {
-    std::string dir = ::testing::TempDir() + "viewer_reload/";
-    fs::create_directories(dir);
+    std::string dir = privateDir("reload");
     std::string scene = dir + "scene.json", shotPath = dir + "after.png";
-    fs::copy_file("scenes/spheres.json", scene, fs::copy_options::overwrite_existing);
-    fs::remove(shotPath);
-    // The viewer prints its first line after loading the scene; break the file then, well
-    // before the reload at frame 6 (PoCL takes over a second for those frames).
+    // The scene is a FIFO: the viewer's first read gets the good scene, and the reload at
+    // frame 6 gets a broken one. Each open blocks until the other side is there, so the order
+    // holds on a slow CPU and on a GPU that renders the six frames in milliseconds alike.
+    ASSERT_EQ(mkfifo(scene.c_str(), 0600), 0) << scene;
+    std::thread good([&] { EXPECT_TRUE(feedFifo(scene, slurp("scenes/spheres.json"))); });
+    std::thread broken;
+    // The first stdout line comes after the scene was read and closed.
     Result r = run(kXvfb + kBin + "/rtlab-view " + scene +
                        " --frames 10 --keys 6:R --no-overlay --scale 1 --screenshot " + shotPath,
-                   [&] { std::ofstream(scene) << "{\"spheres\": [\n"; });
+                   [&] { broken = std::thread([&] { EXPECT_TRUE(feedFifo(scene, "{\"spheres\": [\n")); }); });
+    good.join();
+    if (broken.joinable()) broken.join();
     ASSERT_EQ(r.status, 0) << r.out << r.err;
     EXPECT_EQ(lines(r.err), 1) << r.err;
     EXPECT_NE(r.err.find("reload failed, kept the previous scene"), std::string::npos) << r.err;
@@ -151,8 +181,7 @@ TEST_F(Viewer, AnimationMovesTheFirstSphereInBothPipelines) {
     ASSERT_NE(at, std::string::npos) << "scenes/spheres.json changed; update this test";
     char moved[128];
     std::snprintf(moved, sizeof moved, "{\"center\": [%.9g, 1.2, %.9g]", x, z);
-    std::string dir = ::testing::TempDir() + "viewer_animate/";
-    fs::create_directories(dir);
+    std::string dir = privateDir("animate");
     std::ofstream(dir + "spheres.json") << text.replace(at, from.size(), moved);
 
     std::string shotPath = dir + "frame16.png";
