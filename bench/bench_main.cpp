@@ -10,6 +10,8 @@
 //       compares the frames and draws the charts afterwards, elsewhere.
 #include <benchmark/benchmark.h>
 
+#include <chrono>
+#include <csignal>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -46,6 +48,8 @@ Google Benchmark mode (every --benchmark_* flag works, e.g. --benchmark_filter=R
                         stop-after-failure applies in sweep mode only)
   --devices=SPEC,...    OpenCL devices by index or name [$RTLAB_DEVICE, else first GPU]
   --repeats=N           repetitions per benchmark; the median is reported [5]
+  --frames=N            timed frames per repetition (fixed, so that sub-millisecond cells do
+                        not auto-iterate for minutes) [10]
   --warmup=N            untimed frames before timing [2]
   --count-rays=yes|no   one untimed frame with device ray counters [yes]
 Sweep mode (no Google Benchmark; what `rtlab sweep --import` reads):
@@ -59,6 +63,11 @@ Both:
                         .pfm (rtlab-bench reads no PNG: see `rtlab sweep --export-scenes`)
   --kernel-dir=DIR      read kernel sources from a source tree [embedded]
   --list-devices        print the OpenCL devices and exit
+  --version             print the commit this binary was built from and exit
+Exit status: 0 when every benchmark or cell ran; 1 for a bad flag, a selection that matches no
+benchmark, a scene that cannot be loaded, or a benchmark or cell that failed (in sweep mode,
+cells of stop-after-failure groups may fail: that is what they measure); 130 after Ctrl-C, with
+--benchmark_out written for the benchmarks that finished.
 )";
 
 struct Flags {
@@ -69,7 +78,7 @@ struct Flags {
     std::vector<std::string> accels;  // empty: each scene's default
     std::string cells, sweep, out, device, sceneDir, kernelDir, resume;
     std::vector<std::string> devices;
-    int repeats = 5, warmup = 2;
+    int repeats = 5, warmup = 2, frames = 10;
     bool countRays = true, listDevices = false;
     double timeLimit = 0;
 };
@@ -92,6 +101,10 @@ Flags parseFlags(int argc, char** argv) {
         std::string a = argv[i];
         if (a == "--help" || a == "-h") {
             std::fputs(kUsage, stdout);
+            std::exit(0);
+        }
+        if (a == "--version") {
+            std::printf("rtlab-bench %s\n", RTLAB_COMMIT);
             std::exit(0);
         }
         if (a == "--list-devices") {
@@ -129,6 +142,7 @@ Flags parseFlags(int argc, char** argv) {
         else if (key == "--scene-dir") f.sceneDir = value;
         else if (key == "--kernel-dir") f.kernelDir = value;
         else if (key == "--repeats") f.repeats = integer(1, 1000);
+        else if (key == "--frames") f.frames = integer(1, 100000);
         else if (key == "--warmup") f.warmup = integer(0, 100);
         else if (key == "--count-rays") f.countRays = value == "yes" || value == "true";
         else if (key == "--time-limit") f.timeLimit = std::atof(value.c_str());
@@ -181,6 +195,7 @@ int sweepCommand(const Flags& f) {
     // Frames that are bit-identical (the two pipelines share their stage code, so they often
     // are) are stored once: the file count and size that travel back stay small.
     std::map<uint64_t, std::string> stored;
+    int unexpectedErrors = 0;  // failed cells outside stop-after-failure groups
     auto writeMeta = [&](const nlohmann::json& meta) {
         std::ofstream(out / "sweep.json") << meta.dump(2) << "\n";
     };
@@ -196,6 +211,7 @@ int sweepCommand(const Flags& f) {
             if (fresh) writePfm(*image, out / it->second);
         }
         rows << r.dump() << "\n" << std::flush;
+        unexpectedErrors += row.value("status", "") == "error" && !row.value("stop_after_failure", false);
     });
     writeMeta(s.meta);
     std::fprintf(stderr, "sweep %s: %d of %d cells measured, %d failed, %d not run after a failure, "
@@ -203,6 +219,10 @@ int sweepCommand(const Flags& f) {
                  config.name.c_str(), s.measured, s.cells, s.failed, s.notRun, s.skipped,
                  formatDuration(s.seconds).c_str(), s.complete ? "" : " (stopped by the time limit)",
                  out.string().c_str());
+    if (unexpectedErrors) {
+        std::fprintf(stderr, "rtlab-bench: %d cell(s) failed (their rows say why)\n", unexpectedErrors);
+        return 1;
+    }
     return 0;
 }
 
@@ -213,8 +233,43 @@ struct Target {
     std::string tag;  // "" for one device, else "/dev<index>"
 };
 
-void renderBenchmark(benchmark::State& state, ClContext* cl, const Scene* scene, PipelineKind kind,
-                     RenderOptions o, int warmup, bool countRays) {
+// Progress over every registered repetition, and Ctrl-C: once interrupted, the running and
+// every later benchmark ends at once with an error, so Google Benchmark still writes
+// --benchmark_out for the ones that finished.
+struct Progress {
+    int total = 0, done = 0, failed = 0;
+    bool filtered = false;  // --benchmark_filter may leave fewer than `total` to run
+    std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
+} progress;
+volatile std::sig_atomic_t interrupted = 0;
+void onInterrupt(int) { interrupted = 1; }
+
+void reportProgress(const std::string& name, double msPerFrame, bool ok) {
+    ++progress.done;
+    progress.failed += !ok;
+    double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() -
+                                                   progress.start).count();
+    double left = elapsed / progress.done * std::max(0, progress.total - progress.done);
+    std::fprintf(stderr, "[%d/%s%d] %s: %s | elapsed %s, ETA %s%s\n", progress.done,
+                 progress.filtered ? "at most " : "", progress.total, name.c_str(),
+                 ok ? (std::to_string(msPerFrame) + " ms/frame").c_str() : "failed",
+                 formatDuration(elapsed).c_str(), progress.filtered ? "<= " : "",
+                 formatDuration(left).c_str());
+}
+
+void renderBenchmark(benchmark::State& state, const std::string& name, ClContext* cl,
+                     const Scene* scene, PipelineKind kind, RenderOptions o, int warmup,
+                     bool countRays) {
+    if (interrupted) {
+        state.SkipWithError("interrupted");
+        return;
+    }
+    struct Report {  // one progress line per repetition, however it ends
+        benchmark::State& state;
+        const std::string& name;
+        double ms = 0;
+        ~Report() { reportProgress(name, ms, !state.error_occurred()); }
+    } report{state, name};
     size_t before = cl->allocatedBytes();
     std::unique_ptr<Pipeline> pipeline;
     try {
@@ -228,6 +283,10 @@ void renderBenchmark(benchmark::State& state, ClContext* cl, const Scene* scene,
     double wall = 0;
     std::map<std::string, double> kernels;
     for (auto _ : state) {
+        if (interrupted) {
+            state.SkipWithError("interrupted");
+            break;
+        }
         try {
             pipeline->render(*scene, o);
         } catch (const std::exception& e) {
@@ -248,6 +307,7 @@ void renderBenchmark(benchmark::State& state, ClContext* cl, const Scene* scene,
         state.counters["k_" + name + "_ms"] = Counter(ms, Counter::kAvgIterations);
     }
     state.counters["ms_per_frame"] = Counter(devSum, Counter::kAvgIterations);
+    report.ms = state.iterations() ? devSum / double(state.iterations()) : 0;
     state.counters["wall_ms"] = Counter(wall, Counter::kAvgIterations);
     state.counters["device_bytes"] = double(cl->allocatedBytes() - before);
     state.counters["private_bytes"] = double(s.privateBytes);
@@ -281,7 +341,7 @@ std::vector<int> bounceList(const std::string& spec) {
     return c.groups[0].bounces;
 }
 
-int benchmarkCommand(const Flags& f, int argc, char** argv) {
+int benchmarkCommand(const Flags& f) {
     std::vector<std::string> deviceSpecs = f.devices;
     if (deviceSpecs.empty()) deviceSpecs.push_back(f.device);
     std::vector<Target> targets;
@@ -302,15 +362,15 @@ int benchmarkCommand(const Flags& f, int argc, char** argv) {
                                 "events, sum over kernels) after " + std::to_string(f.warmup) +
                                 " warm-up frames");
 
-    // Scenes that fail to load (a PNG cubemap, say) are reported and left out.
+    // A scene that cannot be loaded (a PNG cubemap, say) ends the run with its reason: a
+    // benchmark that silently leaves a scene out reads as a complete one.
     static std::map<std::string, Scene> scenes;
     auto scene = [&](const std::string& name) -> const Scene* {
         if (auto it = scenes.find(name); it != scenes.end()) return &it->second;
         try {
             return &scenes.emplace(name, loadScene(scenePath(name, f.sceneDir), readFace)).first->second;
         } catch (const Error& e) {
-            std::fprintf(stderr, "rtlab-bench: skipping scene %s: %s\n", name.c_str(), e.what());
-            return nullptr;
+            throw Error("scene " + name + ": " + e.what());
         }
     };
 
@@ -338,8 +398,9 @@ int benchmarkCommand(const Flags& f, int argc, char** argv) {
                             c.pipeline = parsePipeline(p);
                             c.options = s->defaults;
                             if (std::sscanf(size.c_str(), "%dx%d", &c.options.width,
-                                            &c.options.height) != 2)
-                                throw Error("--sizes " + size + ": expected WIDTHxHEIGHT");
+                                            &c.options.height) != 2 ||
+                                c.options.width < 1 || c.options.height < 1)
+                                throw Error("--sizes " + size + ": expected WIDTHxHEIGHT, both at least 1");
                             c.options.bounces = b;
                             c.options.accel = parseAccel(accel);
                             c.accelApplies = !s->triangles.empty() || !s->spheres.empty();
@@ -355,18 +416,31 @@ int benchmarkCommand(const Flags& f, int argc, char** argv) {
                                std::to_string(o.bounces) + "/s" + std::to_string(o.shadowSamples) +
                                "/aa" + std::to_string(o.aa) + "/" +
                                (c.accelApplies ? accelName(o.accel) : "-") + t.tag;
-            benchmark::RegisterBenchmark(name.c_str(), renderBenchmark, t.cl.get(),
+            benchmark::RegisterBenchmark(name.c_str(), renderBenchmark, name, t.cl.get(),
                                          scene(c.scene), c.pipeline, o, f.warmup,
                                          f.countRays && c.countRays)
                 ->UseManualTime()
+                ->Iterations(f.frames)
                 ->Unit(benchmark::kMillisecond)
                 ->Repetitions(f.repeats)
                 ->DisplayAggregatesOnly(f.repeats > 1);
         }
-    (void)argc;
-    (void)argv;
-    benchmark::RunSpecifiedBenchmarks();
+    if (cells.empty()) throw Error("no benchmark matches the selection (see --help)");
+    progress.total = int(cells.size() * targets.size()) * f.repeats;
+    std::signal(SIGINT, onInterrupt);
+    size_t ran = benchmark::RunSpecifiedBenchmarks();
     benchmark::Shutdown();
+    if (interrupted) {
+        std::fprintf(stderr, "rtlab-bench: interrupted after %d repetitions; results so far written\n",
+                     progress.done);
+        return 130;
+    }
+    if (ran == 0) throw Error("no benchmark matches --benchmark_filter");
+    if (progress.failed) {
+        std::fprintf(stderr, "rtlab-bench: %d of %d repetitions failed (their errors are above)\n",
+                     progress.failed, progress.done);
+        return 1;
+    }
     return 0;
 }
 
@@ -381,11 +455,13 @@ int main(int argc, char** argv) {
         }
     try {
         // Google Benchmark takes its --benchmark_* flags out of argv; the rest are ours.
+        for (int i = 1; i < argc; ++i)
+            progress.filtered |= std::strncmp(argv[i], "--benchmark_filter", 18) == 0;
         benchmark::Initialize(&argc, argv);
         Flags f = parseFlags(argc, argv);
         if (f.listDevices) return listDevicesCommand();
         if (!f.sweep.empty()) return sweepCommand(f);
-        return benchmarkCommand(f, argc, argv);
+        return benchmarkCommand(f);
     } catch (const std::exception& e) {
         std::fprintf(stderr, "rtlab-bench: %s\n", e.what());
         return 1;
