@@ -63,17 +63,21 @@ def plain(v, _pos=None):
 
 
 def log_ticks(ax, which="y"):
-    """A log axis labelled in one style. Over fewer than ~2 decades the 2x and 5x ticks carry
-    numbers too (else an axis may show one label), and every label is a plain number, so that
-    `90, 10^2, 110` cannot happen."""
+    """A log axis labelled in plain numbers (0.1, 1, 10) in one style, so that `90, 10^2, 110`
+    cannot happen, and with at least three labels (matplotlib may give a short axis one).
+    Past 4 decades matplotlib's 10^n labels stay."""
     axis = ax.yaxis if which == "y" else ax.xaxis
     lo, hi = ax.get_ylim() if which == "y" else ax.get_xlim()
-    if lo <= 0 or hi / lo >= 100:
+    if lo <= 0 or hi / lo >= 1e4:
         return
-    subs = (1, 2, 5) if hi / lo >= 8 else (1, 1.5, 2, 3, 5, 7)
-    ticks = [m * 10.0**k for k in range(math.floor(math.log10(lo)), math.ceil(math.log10(hi)) + 1)
-             for m in subs if lo <= m * 10.0**k <= hi]
-    if hi / lo < 3:  # under half a decade: evenly spaced round numbers
+    decades = range(math.floor(math.log10(lo)), math.ceil(math.log10(hi)) + 1)
+    ticks = []
+    # The coarsest set of round numbers that puts at least three labels on the axis.
+    for subs in ((1,), (1, 2, 5), (1, 1.5, 2, 3, 5, 7), (1, 1.2, 1.5, 2, 2.5, 3, 4, 5, 6, 7, 8, 9)):
+        ticks = [m * 10.0**k for k in decades for m in subs if lo <= m * 10.0**k <= hi]
+        if len(ticks) >= 3:
+            break
+    else:  # under ~a third of a decade: evenly spaced round numbers
         ticks = [t for t in MaxNLocator(nbins=5).tick_values(lo, hi) if lo <= t <= hi]
     axis.set_major_locator(FixedLocator(ticks))
     axis.set_major_formatter(FuncFormatter(plain))

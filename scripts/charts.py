@@ -153,16 +153,16 @@ def memory_vs_bounces(meta, rows):
         return None
     series, every = Series(rows), scenes_of(rows)
     sizes = sorted({f"{r['width']}×{r['height']}" for r in rows})
-    fig, (left, right), legend_ax = figure(
+    panels = [("global memory allocated per frame", "MiB", lambda r: r["device_bytes"] / 2**20),
+              ("private ray storage per work-item", "KiB", lambda r: r["private_bytes"] / 1024)]
+    lines = [curves(rows, series, y) for _, _, y in panels]
+    fig, axes, legend_ax = figure(
         meta, f"Device memory against bounce limit ({', '.join(sizes)})", 2, cols=2,
-        panel=(6, 3.8), legend_rows=3)
+        panel=(6, 3.8), legend_rows=1 + 0.5 * max(len(c) for c in lines))
     legends = []
-    for ax, y, unit, what in ((left, lambda r: r["device_bytes"] / 2**20, "MiB",
-                               "global memory allocated per frame"),
-                              (right, lambda r: r["private_bytes"] / 1024, "KiB",
-                               "private ray storage per work-item")):
+    for ax, (what, unit, _), found in zip(axes, panels, lines):
         handles = []
-        for n, (xs, ys, keys, scenes) in enumerate(curves(rows, series, y)):
+        for n, (xs, ys, keys, scenes) in enumerate(found):
             color = series.color(keys[0]) if len(keys) == 1 else "#333333"
             style = series.linestyle(keys[0]) if len(keys) == 1 else "-"
             label = f"{', '.join(series.label(k) for k in keys)}: {scene_list(scenes, every)}"
@@ -176,7 +176,7 @@ def memory_vs_bounces(meta, rows):
         ax.grid(True, which="both", alpha=0.3)
         log_ticks(ax)
         legends.append(legend_ax.legend(handles=handles, loc="upper center",
-                                        bbox_to_anchor=(0.25 if ax is left else 0.75, 1.0),
+                                        bbox_to_anchor=(0.25 if ax is axes[0] else 0.75, 1.0),
                                         fontsize=7.5, frameon=False, title_fontsize=7.5,
                                         title=f"{what} (lines within {MERGE:.0%} merged)"))
     legend_ax.add_artist(legends[0])

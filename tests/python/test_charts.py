@@ -20,7 +20,6 @@ sys.path.insert(0, SCRIPTS)
 import sweep_rows  # noqa: E402
 
 try:
-    import matplotlib  # noqa: F401
     import charts  # noqa: E402
     import chart_style  # noqa: E402
     HAVE_MPL = True
