@@ -37,9 +37,13 @@ SETTING_KEYS = ("size", "bounces", "shadow_samples", "aa", "accel")
 
 
 def load(path):
-    with open(path) as f:
-        data = json.load(f)
-    return data["meta"], data["rows"]
+    """(meta, rows) of a sweep JSON, or None when the file is not one."""
+    try:
+        with open(path) as f:
+            data = json.load(f)
+        return data["meta"], data["rows"]
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
 
 
 def scenes_of(rows):
@@ -370,7 +374,10 @@ def main():
     ap.add_argument("json")
     ap.add_argument("--out", help="output folder [the JSON's folder]")
     args = ap.parse_args()
-    meta, all_rows = load(args.json)
+    sweep = load(args.json)
+    if sweep is None:
+        sys.exit(f"{ap.prog}: {args.json}: not a sweep JSON (one with \"meta\" and \"rows\")")
+    meta, all_rows = sweep
     out = args.out or os.path.dirname(os.path.abspath(args.json))
     os.makedirs(out, exist_ok=True)
     for name, fig in draw_all(meta, all_rows).items():

@@ -22,13 +22,14 @@ Standard library only.
 """
 import argparse
 import json
-import math
 import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from sweep_rows import (FAILURES, Series, by_setting, failure, fastest,  # noqa: E402
-                        in_group, limit_series, setting, tree_sizes)
+from readme_format import (accel_label, clean_meta, geomean, ms, size_label,  # noqa: E402
+                           table, tree_text)
+from readme_limits import limits_section, limits_summary  # noqa: E402
+from sweep_rows import Series, by_setting, failure, fastest, in_group  # noqa: E402
 
 CHARTS = [("time-vs-resolution.png", "Frame time against resolution"),
           ("time-vs-bounces.png", "Frame time against bounce limit"),
@@ -38,58 +39,6 @@ CHARTS = [("time-vs-resolution.png", "Frame time against resolution"),
 RATIO_TEXT = ("Times are compared per setting with the fastest series (pipeline, and layout where "
               "one pipeline ran several) measured at that setting: 1.00 is the fastest, 2.00 "
               "twice its time.")
-
-
-def clean_meta(meta, rows=None):
-    """The sweep's metadata as the README shows it: counts as integers (an import that joins a
-    continued run sums them as floats), the sweep file by its place in the repository (rtlab-bench
-    on a GPU machine ran a copy), and how many device runs were joined instead of local paths."""
-    m = dict(meta)
-    if rows is not None:
-        # Count from the rows: a continued run re-measures the cells that failed before, so the
-        # sums of the runs' own counts would count those cells twice.
-        count = lambda status: sum(1 for r in rows if r.get("status") == status)
-        m.update(measured=count("ok"), failed=count("error"), not_run=count("skipped"))
-    for k in ("measured", "failed", "not_run", "cells"):
-        if isinstance(m.get(k), float) and m[k].is_integer():
-            m[k] = int(m[k])
-    if m.get("config_file") and os.path.isabs(m["config_file"]):
-        m["config_file"] = "bench/sweeps/" + os.path.basename(m["config_file"])
-    if m.get("imported_from"):
-        n = len(m["imported_from"].split(" + "))
-        m["imported_from"] = (f"{n} device runs, each continuing the one before"
-                              if n > 1 else "one device run")
-    return m
-
-
-def geomean(xs):
-    return math.exp(sum(math.log(x) for x in xs) / len(xs)) if xs else float("nan")
-
-
-def ms(x):
-    if x is None:
-        return "—"
-    return f"{x:.3g}" if x < 100 else f"{x:.0f}"
-
-
-def table(head, body):
-    lines = ["| " + " | ".join(head) + " |", "|" + "|".join("---" for _ in head) + "|"]
-    lines += ["| " + " | ".join(str(c) for c in row) + " |" for row in body]
-    return "\n".join(lines)
-
-
-def accel_label(r):
-    return "—" if r["accel"] == "-" else r["accel"]
-
-
-def size_label(r):
-    return f"{r['width']}×{r['height']}"
-
-
-def gib(b):
-    if not b:
-        return "?"
-    return f"{b / 2**30:.3g} GiB" if b >= 2**30 else f"{b / 2**20:.3g} MiB"
 
 
 def fastest_text(cells, series):
@@ -154,19 +103,6 @@ def winner_table(rows):
             + ["Winner"])
     return table(head, body), notes
 
-
-def tree_text(cells):
-    """The global ray tree of a setting: one tile's allocation and the whole frame's tree."""
-    out = []
-    for r in cells.values():
-        sizes = tree_sizes(r)
-        if sizes:
-            tile, whole, tiles = sizes
-            out.append(f"{gib(whole)} whole" if tiles <= 1 else
-                       f"{tiles} tiles of {gib(tile)}; {gib(whole)} whole")
-    return "; ".join(out) or "—"
-
-
 def bounce_table(rows):
     chosen = in_group(rows, "bounces")
     series = Series(chosen)
@@ -222,148 +158,6 @@ def pareto_table(rows):
     return table(["Scene", "Pipeline", "B", "Shadow samples", "AA", "Device ms", "RMSE",
                   "PSNR dB"], body)
 
-
-# ---- limits (bench/sweeps/limits): how far each pipeline goes ----
-
-def setting_of(r, axis):
-    return f"B={r['bounces']}" if axis == "bounces" else size_label(r)
-
-
-def how_text(series):
-    how = series["how"]
-    if how is None:
-        return "— (every setting ran)"
-    if how == "skipped":
-        # Why it was not run (an earlier failure, or a frame past max-frame-s) in the sweep's words.
-        reason = series["stop"].get("skip_reason", "")
-        return f"not run: {reason.split('(', 1)[-1].split(')')[0]}" if "(" in reason else "not run"
-    return f"error: {FAILURES.get(how, how)}"
-
-
-def limits_table(all_rows):
-    body = []
-    for s in limit_series(all_rows):
-        last, tiled, stop, axis = s["last"], s["tiled"], s["stop"], s["axis"]
-        lr = "—"
-        if last:
-            launches = f"{last.get('launches', '?')}"
-            if last.get("longest_launch_ms") is not None:
-                launches += f" (longest {ms(last['longest_launch_ms'])} ms)"
-            lr = (f"{setting_of(last, axis)}: {ms(last['device_ms'])} ms, "
-                  f"{gib(last.get('device_bytes'))}, {launches} launches")
-        tiles = "—"
-        if tiled:
-            tiles = f"{setting_of(tiled, axis)} ({tree_text({0: tiled})})"
-        body.append([s["scene"], s["label"], f"{'bounce limit' if axis == 'bounces' else 'resolution'} "
-                     f"{s['fixed']}", lr, tiles, setting_of(stop, axis) if stop else "—", how_text(s)])
-    return table(["Scene", "Pipeline", "Axis (fixed)", "Last that ran: device ms, global memory, "
-                  "launches", "Global ray tree tiled from", "First failure", "How it failed"], body)
-
-
-def limits_summary(all_rows):
-    """The index's short form: per pipeline and axis, the last setting that ran and the first
-    that failed."""
-    body = []
-    for s in limit_series(all_rows):
-        last, stop, axis = s["last"], s["stop"], s["axis"]
-        body.append([s["scene"], s["label"],
-                     f"{'bounce limit' if axis == 'bounces' else 'resolution'} {s['fixed']}",
-                     f"{setting_of(last, axis)} ({ms(last['device_ms'])} ms)" if last else "—",
-                     f"{setting_of(stop, axis)}: {how_text(s)}" if stop else how_text(s)])
-    return table(["Scene", "Pipeline", "Axis", "Last that ran", "First failure"], body)
-
-
-def limits_section(data, json_rel, chart_exists):
-    meta, all_rows = clean_meta(data["meta"], data["rows"]), data["rows"]
-    rows = in_group(all_rows, "limits")
-    if not rows:
-        return []
-    first = rows[0]
-    cap = first.get("max_frame_s")
-    launch = first.get("max_launch_ms")
-    errors = {}
-    for r in rows:
-        if failure(r) not in ("", "skipped"):
-            errors.setdefault(r.get("error", ""), []).append(r)
-    # Each pair of frames compared is recorded on both rows: count it once.
-    compared = list({(setting(r), r.get("layout"), frozenset((r["pipeline"],
-                      r["image_compared_with"]))): r for r in rows
-                     if r.get("image_compared_with") and "image_max_diff" in r}.values())
-    differing = [r for r in compared if r["image_max_diff"] != 0]
-    nonfinite = [r for r in rows if r.get("image_nonfinite")]
-    doc = ["## Limits: how far each pipeline goes",
-           "",
-           f"From [`{json_rel}`]({json_rel}) (sweep `{meta.get('config_file')}`, commit "
-           f"`{meta.get('commit')}`, measured {meta.get('started')} to {meta.get('finished')}; "
-           f"{meta.get('measured')} cells ran, {meta.get('failed')} failed, "
-           f"{meta.get('not_run', 0)} not run). Per pipeline the bounce limit goes up at a fixed "
-           "size and the resolution at a fixed bounce limit. Once a setting fails"
-           + (f" (or one of its frames takes longer than {cap:g} s)" if cap else "")
-           + ", the settings of that pipeline that are no smaller are not run. "
-           + (f"Frames are split so that no launch should run past {launch:g} ms (display "
-              "watchdogs); the launches per frame and the longest one are recorded. " if launch else "")
-           + f"Device max allocation {gib(meta.get('max_alloc_bytes'))}, global memory "
-           f"{gib(meta.get('global_mem_bytes'))}.",
-           "",
-           limits_table(all_rows),
-           ""]
-    if errors:
-        doc += ["How each failing setting failed (the message the user gets):", ""]
-        for msg, rs in errors.items():
-            where = ", ".join(f"{Series(rows).label(Series(rows).key(r))} {size_label(r)} "
-                              f"B={r['bounces']}" for r in rs[:4])
-            doc.append(f"- {where}{' …' if len(rs) > 4 else ''}: `{msg}`")
-        doc.append("")
-    if compared:
-        doc.append(f"Frames of two pipelines were compared at the {len(compared)} settings both ran: "
-                   + ("bit-identical at every one." if not differing else
-                      f"{len(differing)} differ (largest |difference| "
-                      f"{max(r['image_max_diff'] for r in differing):g}).")
-                   + (" No frame has a NaN or infinite pixel." if not nonfinite else
-                      f" {len(nonfinite)} frames have NaN or infinite pixels."))
-        doc.append("")
-    timed = [r for r in rows if failure(r) == "" and r.get("longest_launch_ms") is not None]
-    series = Series(rows)
-    if launch and timed:
-        over = [r for r in timed if r["longest_launch_ms"] > launch]
-        worst = max(timed, key=lambda r: r["longest_launch_ms"])
-        if not over:
-            doc.append(f"Every launch of the {len(timed)} cells that ran stayed under "
-                       f"max-launch-ms = {launch:g} (longest {ms(worst['longest_launch_ms'])} ms).")
-        else:
-            longest = sorted(r["longest_launch_ms"] for r in over)
-            doc.append(f"**Launches over max-launch-ms = {launch:g}:** {len(over)} of the {len(timed)} "
-                       f"cells that ran had a longer one (median of their longest launches "
-                       f"{ms(longest[len(longest) // 2])} ms; the worst "
-                       f"{ms(worst['longest_launch_ms'])} ms, {series.label(series.key(worst))} "
-                       f"{size_label(worst)} B={worst['bounces']}). Tiles are "
-                       "planned from each row's cost measured in the earlier frames of the same "
-                       "setting, aiming at 80% of the target; a launch runs over when its rows "
-                       "cost more than they did a frame before (other load on the machine: host "
-                       f"load average {meta.get('host_load_start', '?')} at the start, "
-                       f"{meta.get('host_load_end', '?')} at the end) or when a single row costs "
-                       "more than the target.")
-        doc.append("")
-    if chart_exists:
-        doc += ["![Limits: time, memory and longest launch against bounce limit and resolution]"
-                "(limits.png)", ""]
-    body = []
-    for r in rows:
-        kind = failure(r)
-        ended = "ran" if kind == "" else "not run" if kind == "skipped" else \
-            f"error: {FAILURES.get(kind, kind)}"
-        body.append([series.label(series.key(r)), size_label(r), r["bounces"],
-                     ms(r.get("device_ms")),
-                     gib(r.get("device_bytes")) if r.get("device_bytes") else "—",
-                     tree_text({0: r}) if kind == "" else "—", r.get("launches", "—"),
-                     ms(r.get("longest_launch_ms")), ended])
-    doc += ["<details><summary>Every limits cell</summary>", "",
-            table(["Pipeline", "Resolution", "B", "Device ms", "Global memory",
-                   "Global ray tree", "Launches", "Longest launch ms", "How it ended"], body),
-            "", "</details>", ""]
-    return doc
-
-
 def write_readme(out, doc, index=False):
     """Writes a result set's README and, when asked (--index: committing result sets), the index
     of the folder above it. A user's own sweep must not rewrite the tracked results/README.md."""
@@ -392,18 +186,22 @@ def limits_only_doc(data, limit_docs):
             ""] + limit_docs
 
 
+def read_sweep(path):
+    """The sweep a file holds (written by rtlab sweep: "meta" and "rows"), else None."""
+    try:
+        with open(path) as f:
+            data = json.load(f)
+    except (OSError, ValueError):
+        return None
+    return data if isinstance(data, dict) and "meta" in data and "rows" in data else None
+
+
 def sweep_files(folder):
     """The sweep JSONs (written by rtlab sweep: "meta" and "rows") in a result-set folder."""
     out = []
     for name in sorted(os.listdir(folder)):
-        if not name.endswith(".json"):
-            continue
-        try:
-            with open(os.path.join(folder, name)) as f:
-                data = json.load(f)
-        except (OSError, ValueError):
-            continue
-        if isinstance(data, dict) and "meta" in data and "rows" in data:
+        data = read_sweep(os.path.join(folder, name)) if name.endswith(".json") else None
+        if data is not None:
             out.append((name, data))
     return out
 
@@ -541,9 +339,10 @@ def main():
         write_index(args.json)
         return 0
     if not args.json:
-        ap.error("give a sweep JSON, or a results folder with --index")
-    with open(args.json) as f:
-        given = json.load(f)
+        ap.error("give a sweep JSON, or a results folder to index")
+    given = read_sweep(args.json)
+    if given is None:
+        sys.exit(f"{ap.prog}: {args.json}: not a sweep JSON (one with \"meta\" and \"rows\")")
     out = args.out or os.path.join(os.path.dirname(os.path.abspath(args.json)), "README.md")
     here = os.path.dirname(os.path.abspath(out))
     # A folder holds one result set per device, possibly from several sweeps (`cpu` and `limits`):

@@ -125,6 +125,19 @@ class ReadmeTest(unittest.TestCase):
             self.run_readme(path, "--index")
             self.assertTrue(os.path.exists(index))
 
+    def test_a_file_that_is_not_a_sweep_is_one_line_and_an_error(self):
+        with tempfile.TemporaryDirectory(prefix="rtlab-test-charts-") as tmp:
+            path = os.path.join(tmp, "not-a-sweep.json")
+            with open(path, "w") as f:
+                f.write("[1, 2")
+            scripts = ["results-readme.py"] + (["charts.py"] if HAVE_MPL else [])
+            for script in scripts:
+                done = subprocess.run([sys.executable, os.path.join(SCRIPTS, script), path],
+                                      capture_output=True, text=True)
+                self.assertNotEqual(done.returncode, 0)
+                self.assertIn("not a sweep JSON", done.stderr)
+                self.assertNotIn("Traceback", done.stderr)
+
     def test_every_pipeline_has_a_column(self):
         with tempfile.TemporaryDirectory(prefix="rtlab-test-charts-") as tmp:
             path = self.write_set(tmp)
