@@ -38,7 +38,8 @@ CHARTS = [("time-vs-resolution.png", "Frame time against resolution"),
           ("speed-vs-accuracy.png", "Speed against accuracy, Pareto front marked")]
 RATIO_TEXT = ("Times are compared per setting with the fastest series (pipeline, and layout where "
               "one pipeline ran several) measured at that setting: 1.00 is the fastest, 2.00 "
-              "twice its time.")
+              "twice its time. A scene's winner has the lowest geometric mean of that ratio, which "
+              "need not be the series fastest in most settings (small losses, large wins).")
 
 
 def fastest_text(cells, series):
