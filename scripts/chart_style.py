@@ -65,10 +65,10 @@ def plain(v, _pos=None):
 def log_ticks(ax, which="y"):
     """A log axis labelled in plain numbers (0.1, 1, 10) in one style, so that `90, 10^2, 110`
     cannot happen, and with at least three labels (matplotlib may give a short axis one).
-    Past 4 decades matplotlib's 10^n labels stay."""
+    Past 6 decades matplotlib's 10^n labels stay."""
     axis = ax.yaxis if which == "y" else ax.xaxis
     lo, hi = ax.get_ylim() if which == "y" else ax.get_xlim()
-    if lo <= 0 or hi / lo >= 1e4:
+    if lo <= 0 or hi / lo >= 1e6:
         return
     decades = range(math.floor(math.log10(lo)), math.ceil(math.log10(hi)) + 1)
     ticks = []
@@ -106,8 +106,7 @@ def place_labels(fig, ax, labels, avoid=()):
     fig.canvas.draw()
     renderer = fig.canvas.get_renderer()
     frame = ax.get_window_extent(renderer)
-    taken = list(avoid)
-    placed = []
+    placed, boxes = [], []
     offsets = [((6, 5), "left", "bottom"), ((6, -5), "left", "top"),
                ((-6, 5), "right", "bottom"), ((-6, -5), "right", "top")]
     for x, y, text, keep in labels:
@@ -118,8 +117,10 @@ def place_labels(fig, ax, labels, avoid=()):
             box = t.get_window_extent(renderer)
             inside = (box.x0 >= frame.x0 and box.x1 <= frame.x1 and box.y0 >= frame.y0 and
                       box.y1 <= frame.y1)
-            if inside and not any(boxes_overlap(box, o) for o in taken):
-                taken.append(box)
+            # Labels 4 px apart at least: two that touch read as one (`B1 s1 aa1B4 s4 aa1`).
+            if inside and not any(boxes_overlap(box, o, pad=4.0) for o in boxes) and \
+                    not any(boxes_overlap(box, o, pad=0.0) for o in avoid):
+                boxes.append(box)
                 placed.append(t)
                 break
             t.remove()

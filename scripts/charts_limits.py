@@ -40,9 +40,14 @@ def mark_stops(fig, axes, group, x, kind):
     """A dotted line through the panels and a cross on the top edge at each first failure;
     crosses at one x are set side by side. Returns legend (handle, label) pairs."""
     entries, at_x = [], {}
-    for s in sorted((s for s in group if s["stop"] is not None), key=lambda s: x(s["stop"])):
+    stops = sorted((s for s in group if s["stop"] is not None), key=lambda s: x(s["stop"]))
+    count = {}
+    for s in stops:
+        count[x(s["stop"])] = count.get(x(s["stop"]), 0) + 1
+    for s in stops:
         sx = x(s["stop"])
-        n = at_x[sx] = at_x.get(sx, -1) + 1
+        at_x[sx] = at_x.get(sx, -1) + 1
+        n = at_x[sx] - (count[sx] - 1) / 2  # centred on the line
         for ax in axes:
             ax.axvline(sx, color=s["color"], linestyle=":", linewidth=1.0, alpha=0.8)
         shift = offset_copy(axes[0].get_xaxis_transform(), fig=fig, x=9 * n, units="points")
@@ -97,7 +102,7 @@ def limits_chart(meta, all_rows):
     scenes = list(dict.fromkeys(s["scene"] for s in series))
     kinds = [k for k in ("bounces", "size") if any(s["axis"] == k for s in series)]
     ncol = len(kinds) * len(scenes)
-    fig = plt.figure(figsize=(6.4 * ncol, 13.5), layout="constrained", dpi=DPI)
+    fig = plt.figure(figsize=(max(6.4 * ncol, 11), 13.5), layout="constrained", dpi=DPI)
     grid = fig.add_gridspec(4, ncol, height_ratios=[1, 1, 1, 0.7])
     limit_rows = in_group(all_rows, "limits")
     columns = []
@@ -115,9 +120,14 @@ def limits_chart(meta, all_rows):
         entries = [(draw_series(axes, s, x), s["label"]) for s in group]
         entries += mark_stops(fig, axes, group, x, kind)
         entries += reference_lines(axes, meta, group, limit_rows)
-        for ax, (ylabel, _) in zip(axes, PANELS):
+        for ax, (ylabel, val) in zip(axes, PANELS):
             ax.set_ylabel(ylabel)
-            ax.set_yscale("log")
+            if not any((val(r) or 0) > 0 for s in group for r in s["ran"]):
+                # Rows from before a field was recorded: say so instead of a broken log axis.
+                ax.text(0.5, 0.5, "not recorded by this sweep", transform=ax.transAxes,
+                        ha="center", va="center", color="#555555")
+            else:
+                ax.set_yscale("log")
             ax.margins(x=0.04)
             ax.grid(True, which="both", alpha=0.25)
             if kind == "bounces":
