@@ -56,8 +56,10 @@ def value(r, k):
 
 def setting_text(r, keys):
     """'1280×720 B=4 s=1 aa=1 bvh' for the keys given."""
-    names = {"size": lambda r: f"{r['width']}×{r['height']}", "bounces": lambda r: f"B={r['bounces']}",
-             "shadow_samples": lambda r: f"s={r['shadow_samples']}", "aa": lambda r: f"aa={r['aa']}",
+    names = {"size": lambda r: f"{r['width']}×{r['height']}",
+             "bounces": lambda r: f"B={r['bounces']}",
+             "shadow_samples": lambda r: f"s={r['shadow_samples']}",
+             "aa": lambda r: f"aa={r['aa']}",
              "accel": lambda r: "" if r["accel"] in ("-", "none") else r["accel"]}
     return " ".join(t for t in (names[k](r) for k in keys) if t)
 

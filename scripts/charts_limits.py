@@ -142,7 +142,8 @@ def limits_chart(meta, all_rows):
                                   loc="upper center", fontsize=7.5, ncol=1, frameon=False)
         legend.set_in_layout(False)  # a wide legend must not squeeze its column
         columns.append((axes[1], group, x))
-    fig.suptitle("Limits: how far each pipeline goes\n● ran   ■ ran with the global ray tree in "
+    fig.suptitle("Limits: how far each pipeline goes\n"
+                 "● ran   ■ ran with the global ray tree in "
                  "K row tiles (K beside the memory point)   ✕ on the top edge: first failure, or "
                  "first setting not run", fontsize=11)
     fig.supxlabel(footer_text(meta), fontsize=7, color="#555555")

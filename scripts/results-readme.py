@@ -7,8 +7,9 @@ Usage: /usr/bin/python3 scripts/results-readme.py results/<device-slug>/<sweep>.
 
 The README holds the tables the report's results chapter left empty (per scene: number of
 objects, spheres, triangles, acceleration structures, resolution, and every pipeline's time),
-which pipeline wins on each scene and by what ratio to the fastest, the time-against-bounce-limit and
-acceleration tables, the Pareto front of speed against accuracy, failed cells, and the charts.
+which pipeline wins on each scene and by what ratio to the fastest, the
+time-against-bounce-limit and acceleration tables, the Pareto front of speed against accuracy,
+failed cells, and the charts.
 A folder may hold several sweeps of one device: the README covers them all, the `limits` sweep
 (bench/sweeps/limits) in its own section (per pipeline the last setting that ran, its time and
 memory, and how the first failing one failed).

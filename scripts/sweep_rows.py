@@ -3,8 +3,9 @@
 Nothing here knows which pipelines exist: a series is whatever `pipeline` values the rows hold,
 split by `layout` where one pipeline ran several, and by `memory_budget`. A series is titled by
 the rows' `pipeline_title` (else the short name) and coloured from a fixed palette by a stable
-hash of its pipeline's name, so that adding a pipeline does not recolour the others. Times are compared with
-the fastest series at the same setting. Failures are read from the rows' `failure` field only.
+hash of its pipeline's name, so that adding a pipeline does not recolour the others. Times are
+compared with the fastest series at the same setting. Failures are read from the rows' `failure`
+field only.
 Standard library only.
 """
 import zlib
@@ -148,10 +149,12 @@ def limit_series(all_rows):
             by_b.setdefault(r["bounces"], []).append(r)
         size, srows = max(by_size.items(), key=lambda kv: len({r["bounces"] for r in kv[1]}))
         if len({r["bounces"] for r in srows}) > 1:
-            axes.append(("bounces", f"at {size[0]}×{size[1]}", sorted(srows, key=lambda r: r["bounces"])))
+            axes.append(("bounces", f"at {size[0]}×{size[1]}",
+                         sorted(srows, key=lambda r: r["bounces"])))
         b, brows = max(by_b.items(), key=lambda kv: len({(r["width"], r["height"]) for r in kv[1]}))
         if len({(r["width"], r["height"]) for r in brows}) > 1:
-            axes.append(("size", f"at B={b}", sorted(brows, key=lambda r: r["width"] * r["height"])))
+            axes.append(("size", f"at B={b}",
+                         sorted(brows, key=lambda r: r["width"] * r["height"])))
         for axis, fixed, pts in axes:
             ran = [r for r in pts if failure(r) == ""]
             failed = [r for r in pts if failure(r) not in ("", "skipped")]

@@ -215,7 +215,8 @@ def texts_overlap(fig):
                  if t.get_visible() and t.get_text()]
         for i, (a, box_a) in enumerate(boxes):
             # 2 px: labels that touch read as one, as if they overlapped.
-            out += [(a, b) for b, box_b in boxes[i + 1:] if chart_style.boxes_overlap(box_a, box_b, 2)]
+            out += [(a, b) for b, box_b in boxes[i + 1:]
+                    if chart_style.boxes_overlap(box_a, box_b, 2)]
     return out
 
 
