@@ -204,6 +204,17 @@ class ChartsTest(unittest.TestCase):
                 self.assertTrue(all("10^" in t for t in labels) or
                                 not any("10^" in t for t in labels), labels)
 
+    def test_a_narrow_log_axis_gets_plain_labels(self):
+        for lo, hi in ((90, 140), (0.23, 1.6), (0.03, 500)):
+            fig, ax = chart_style.plt.subplots()
+            ax.plot([1, 2], [lo, hi])
+            ax.set_yscale("log")
+            chart_style.log_ticks(ax)
+            fig.canvas.draw()
+            labels = [t.get_text() for t in ax.yaxis.get_ticklabels() if t.get_text()]
+            self.assertGreaterEqual(len(labels), 3, labels)
+            self.assertFalse(any("10^" in t or "times" in t for t in labels), labels)
+
 
 def texts_overlap(fig):
     """Pairs of overlapping labels inside any axes, after a draw."""
