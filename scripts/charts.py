@@ -3,258 +3,266 @@
 
 Usage: /usr/bin/python3 scripts/charts.py results/<device-slug>/<sweep>.json [--out DIR]
 
-Writes, next to the JSON unless --out says otherwise:
-  time-vs-resolution.png   device ms per frame against megapixels     (group [resolution])
+Writes, next to the JSON unless --out says otherwise, each chart whose group the sweep has:
+  time-vs-resolution.png   device ms per frame against resolution      (group [resolution])
   time-vs-bounces.png      device ms per frame against the bounce limit (group [bounces])
   memory-vs-bounces.png    global and private memory against the bounce limit ([bounces])
-  kernel-breakdown.png     device ms per kernel, stacked, per bounce limit ([bounces])
+  kernel-breakdown.png     each kernel's share of the frame, and the frame's ms ([bounces])
   speed-vs-accuracy.png    device ms against RMSE from the converged reference, with the
-                           Pareto front marked ([accuracy])
-  limits.png               how far each pipeline goes: device time, memory and the longest launch
-                           against the bounce limit and the resolution, where the wavefront tree
-                           starts to tile and where (and how) each pipeline first fails ([limits])
-A chart whose group the sweep lacks is written as a placeholder saying so, unless the folder has
-that chart already (from another sweep of the same device, e.g. `cpu` beside `limits`), so that a
-result set always has the five and a second sweep never blanks the first one's charts.
-Every chart's footer names the device, driver, commit and timing settings.
+                           Pareto front marked ([accuracy], scored cells only)
+  limits.png               how far each pipeline goes (charts_limits.py, [limits])
+A chart whose group the sweep lacks is not written (and one already in the folder, from another
+sweep of the same device, is left alone). The pipelines, their titles, colours and layouts come
+from the rows (sweep_rows.py). Every chart's footer names the device, driver, commit and timing.
 Needs Debian's python3-matplotlib (scripts/setup), hence /usr/bin/python3.
 """
 import argparse
-import importlib.util
 import json
 import math
 import os
 import sys
 
-import matplotlib
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from chart_style import (DPI, MARKERS, figure, legend_row, log_ticks,  # noqa: E402
+                         place_labels, plt, point_boxes, resolution_axis)
+from matplotlib.lines import Line2D  # noqa: E402
+from matplotlib.patches import Patch  # noqa: E402
+from matplotlib.ticker import MaxNLocator  # noqa: E402
+from sweep_rows import PALETTE, Series, failure, in_group  # noqa: E402
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-from matplotlib.ticker import LogFormatter, MaxNLocator, NullLocator  # noqa: E402
-
-COLORS = {"mega": "#1f77b4", "wave": "#d62728"}
-NAMES = {"mega": "megakernel", "wave": "wavefront"}
 KERNEL_COLORS = {"megakernel": "#1f77b4", "centers": "#6baed6", "edges": "#08519c",
                  "trace": "#d62728", "image": "#ff9896", "reset": "#7f7f7f"}
+MERGE = 0.05  # lines closer than this (relative) are one line on a log axis of several decades
+SETTING_KEYS = ("size", "bounces", "shadow_samples", "aa", "accel")
 
 
-def load(path, every=False):
-    with open(path) as f:
-        data = json.load(f)
-    rows = [r for r in data["rows"] if every or r.get("status") == "ok"]
-    return data["meta"], rows
-
-
-def in_group(rows, group):
-    return [r for r in rows if group in r.get("groups", [])]
+def load(path):
+    """(meta, rows) of a sweep JSON, or None when the file is not one."""
+    try:
+        with open(path) as f:
+            data = json.load(f)
+        return data["meta"], data["rows"]
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
 
 
 def scenes_of(rows):
-    out = []
-    for r in rows:
-        if r["scene"] not in out:
-            out.append(r["scene"])
-    return out
+    return list(dict.fromkeys(r["scene"] for r in rows))
 
 
-def footer(fig, meta):
-    s = meta.get("settings", {})
-    text = (f"{meta.get('device')} | {meta.get('platform')}, driver {meta.get('driver')} | "
-            f"commit {meta.get('commit')} | sweep {meta.get('sweep')}\ndevice time = sum of the "
-            f"frame's kernels by OpenCL profiling events, median of {s.get('repeats')} frames "
-            f"after {s.get('warmup')} warm-up")
-    fig.text(0.5, 0.005, text, ha="center", va="bottom", fontsize=7, color="#555555")
+def value(r, k):
+    return (r["width"], r["height"]) if k == "size" else r[k]
 
 
-def grid(n):
-    cols = min(3, max(1, n))
-    rows = max(1, math.ceil(n / cols))
-    # At least 9 inches wide, so that the two-line title and the footer fit one panel too.
-    fig, axes = plt.subplots(rows, cols, figsize=(max(4.6 * cols, 9), 3.6 * rows + 1.0),
-                             squeeze=False)
-    flat = [a for row in axes for a in row]
-    for a in flat[n:]:
-        a.set_visible(False)
-    return fig, flat
-
-
-def empty_chart(path, meta, title, why):
-    if os.path.exists(path):
-        print(f"charts: kept {os.path.basename(path)} ({why})")
-        return
-    fig, ax = plt.subplots(figsize=(7, 3))
-    ax.axis("off")
-    ax.text(0.5, 0.5, f"{title}\n\n{why}", ha="center", va="center", fontsize=11)
-    footer(fig, meta)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-
-
-def save(fig, meta, path, title):
-    fig.suptitle(title, fontsize=12)
-    footer(fig, meta)
-    fig.tight_layout(rect=(0, 0.05, 1, 0.93 - 0.03 * title.count("\n")))
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-
-
-def series(rows, key):
-    """Groups rows by `key(row)` into {label: sorted rows}."""
-    out = {}
-    for r in rows:
-        out.setdefault(key(r), []).append(r)
-    return out
-
-
-def setting_label(r, vary):
-    parts = []
-    if "size" in vary:
-        parts.append(f"{r['width']}x{r['height']}")
-    if "bounces" in vary:
-        parts.append(f"B={r['bounces']}")
-    if "shadow_samples" in vary:
-        parts.append(f"s={r['shadow_samples']}")
-    if "aa" in vary:
-        parts.append(f"aa={r['aa']}")
-    if "accel" in vary:
-        parts.append(r["accel"])
-    return " ".join(parts)
+def setting_text(r, keys):
+    """'1280×720 B=4 s=1 aa=1 bvh' for the keys given."""
+    names = {"size": lambda r: f"{r['width']}×{r['height']}",
+             "bounces": lambda r: f"B={r['bounces']}",
+             "shadow_samples": lambda r: f"s={r['shadow_samples']}",
+             "aa": lambda r: f"aa={r['aa']}",
+             "accel": lambda r: "" if r["accel"] in ("-", "none") else r["accel"]}
+    return " ".join(t for t in (names[k](r) for k in keys) if t)
 
 
 def varying(rows, keys):
-    """Which of the keys take more than one value among rows (other than the chart's axis)."""
-    out = []
-    for k in keys:
-        vals = {(r["width"], r["height"]) if k == "size" else r[k] for r in rows}
-        if len(vals) > 1:
-            out.append(k)
-    return out
+    """Which of the keys take more than one value among rows."""
+    return [k for k in keys if len({value(r, k) for r in rows}) > 1]
 
 
-def line_chart(path, meta, rows, title, xkey, xlabel, ylabel, yvalue, logx, logy, other):
-    scenes = scenes_of(rows)
-    fig, axes = grid(len(scenes))
-    for ax, scene in zip(axes, scenes):
+def line_chart(meta, rows, title, axis_key, ylabel):
+    """Device ms against the bounce limit or the resolution, a panel per scene; the settings a
+    scene keeps fixed are in its title, those that vary get a marker each."""
+    scenes, series = scenes_of(rows), Series(rows)
+    fig, panels, legend_ax = figure(meta, title, len(scenes))
+    other = [k for k in SETTING_KEYS if k != axis_key]
+    handles, labels = [], []
+    for ax, scene in zip(panels, scenes):
         srows = [r for r in rows if r["scene"] == scene]
         vary = varying(srows, other)
-        for (pipe, label), pts in sorted(series(srows, lambda r: (r["pipeline"], setting_label(r, vary))).items()):
-            pts.sort(key=xkey)
-            ax.plot([xkey(r) for r in pts], [yvalue(r) for r in pts], marker="o", ms=4,
-                    color=COLORS.get(pipe), linestyle="-" if pipe == "mega" else "--",
-                    label=f"{NAMES.get(pipe, pipe)} {label}".strip())
-        ax.set_title(scene)
-        ax.set_xlabel(xlabel)
+        variants = sorted({setting_text(r, vary) for r in srows})
+        for key in series.keys:
+            for n, variant in enumerate(variants):
+                pts = sorted((r for r in srows if series.key(r) == key and
+                              setting_text(r, vary) == variant),
+                             key=lambda r: value(r, axis_key) if axis_key != "size"
+                             else r["width"] * r["height"])
+                if not pts:
+                    continue
+                xs = [r["bounces"] if axis_key == "bounces" else r["width"] * r["height"] / 1e6
+                      for r in pts]
+                label = f"{series.label(key)} {variant}".strip()
+                line, = ax.plot(xs, [r["device_ms"] for r in pts], marker=MARKERS[n % 10], ms=4,
+                                color=series.color(key), linestyle=series.linestyle(key),
+                                label=label)
+                handles.append(line)
+                labels.append(label)
+        fixed = setting_text(srows[0], [k for k in other if k not in vary])
+        ax.set_title(f"{scene}" + (f" ({fixed})" if fixed else ""), fontsize=9)
         ax.set_ylabel(ylabel)
-        if logx:
-            ax.set_xscale("log")
-        else:
-            ax.xaxis.set_major_locator(MaxNLocator(integer=True))
-        if logy:
-            ax.set_yscale("log")
+        ax.set_yscale("log")
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=7)
-    save(fig, meta, path, title)
+        if axis_key == "size":
+            resolution_axis(ax, srows)
+        else:
+            ax.set_xlabel("bounce limit B")
+            ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+        log_ticks(ax)
+    legend_row(legend_ax, handles, labels)
+    return fig
 
 
-def time_vs_resolution(meta, rows, out):
-    path = os.path.join(out, "time-vs-resolution.png")
+def time_vs_resolution(meta, rows):
     rows = in_group(rows, "resolution")
-    title = "Frame time against resolution"
-    if not rows:
-        return empty_chart(path, meta, title, "this sweep has no [resolution] group")
-    line_chart(path, meta, rows, title, lambda r: r["width"] * r["height"] / 1e6,
-               "megapixels", "device ms per frame", lambda r: r["device_ms"], True, True,
-               ["bounces", "shadow_samples", "aa", "accel"])
+    return rows and line_chart(meta, rows, "Frame time against resolution (log-log)",
+                               "size", "device ms per frame")
 
 
-def time_vs_bounces(meta, rows, out):
-    path = os.path.join(out, "time-vs-bounces.png")
+def time_vs_bounces(meta, rows):
     rows = in_group(rows, "bounces")
-    title = "Frame time against bounce limit"
-    if not rows:
-        return empty_chart(path, meta, title, "this sweep has no [bounces] group")
-    line_chart(path, meta, rows, title, lambda r: r["bounces"], "bounce limit B",
-               "device ms per frame", lambda r: r["device_ms"], False, True,
-               ["size", "shadow_samples", "aa", "accel"])
+    return rows and line_chart(meta, rows, "Frame time against bounce limit", "bounces",
+                               "device ms per frame")
 
 
-def memory_vs_bounces(meta, rows, out):
-    path = os.path.join(out, "memory-vs-bounces.png")
-    rows = in_group(rows, "bounces")
-    title = "Device memory against bounce limit"
-    if not rows:
-        return empty_chart(path, meta, title, "this sweep has no [bounces] group")
-    fig, (left, right) = plt.subplots(1, 2, figsize=(12, 4.6))
-    scenes = scenes_of(rows)
-    cmap = plt.get_cmap("tab10")
-    for i, scene in enumerate(scenes):
-        for pipe in ("mega", "wave"):
-            pts = sorted((r for r in rows if r["scene"] == scene and r["pipeline"] == pipe),
+def scene_list(names, every):
+    rest = [s for s in every if s not in names]
+    if not rest:
+        return "every scene"
+    if len(rest) <= 2 and len(names) > len(rest):
+        return f"every scene but {', '.join(rest)}"
+    return ", ".join(names)
+
+
+def curves(rows, series, y):
+    """Lines of y against the bounce limit, one per (series, scene), merged where they coincide
+    (within MERGE at every point: one line on a log axis) so that a legend entry is a line seen."""
+    out = []  # [xs, ys, [series keys], [scenes]]
+    for key in series.keys:
+        for scene in scenes_of(rows):
+            pts = sorted((r for r in rows if r["scene"] == scene and series.key(r) == key),
                          key=lambda r: r["bounces"])
             if not pts:
                 continue
-            style = dict(color=cmap(i % 10), marker="o", ms=3,
-                         linestyle="-" if pipe == "mega" else "--")
-            left.plot([r["bounces"] for r in pts], [r["device_bytes"] / 2**20 for r in pts],
-                      label=f"{scene} {NAMES[pipe]}", **style)
-            right.plot([r["bounces"] for r in pts], [r["private_bytes"] / 1024 for r in pts],
-                       label=f"{scene} {NAMES[pipe]}", **style)
-    sizes = sorted({f"{r['width']}x{r['height']}" for r in rows})
-    left.set_title(f"global memory allocated per frame ({', '.join(sizes)})")
-    left.set_ylabel("MiB")
-    right.set_title("private ray storage per work-item")
-    right.set_ylabel("KiB")
-    for ax in (left, right):
+            xs, ys = [r["bounces"] for r in pts], [y(r) for r in pts]
+            same = next((c for c in out if c[0] == xs and all(
+                abs(a - b) <= MERGE * max(abs(a), abs(b), 1e-12) for a, b in zip(c[1], ys))), None)
+            if same:
+                same[2] += [key] if key not in same[2] else []
+                same[3] += [scene] if scene not in same[3] else []
+            else:
+                out.append([xs, ys, [key], [scene]])
+    return out
+
+
+def memory_vs_bounces(meta, rows):
+    rows = in_group(rows, "bounces")
+    if not rows:
+        return None
+    series, every = Series(rows), scenes_of(rows)
+    sizes = sorted({f"{r['width']}×{r['height']}" for r in rows})
+    panels = [("global memory allocated per frame", "MiB", lambda r: r["device_bytes"] / 2**20),
+              ("private ray storage per work-item", "KiB", lambda r: r["private_bytes"] / 1024)]
+    lines = [curves(rows, series, y) for _, _, y in panels]
+    fig, axes, legend_ax = figure(
+        meta, f"Device memory against bounce limit ({', '.join(sizes)})", 2, cols=2,
+        panel=(6, 3.8), legend_rows=1 + 0.5 * max(len(c) for c in lines))
+    legends = []
+    for ax, (what, unit, _), found in zip(axes, panels, lines):
+        handles = []
+        for n, (xs, ys, keys, scenes) in enumerate(found):
+            color = series.color(keys[0]) if len(keys) == 1 else "#333333"
+            style = series.linestyle(keys[0]) if len(keys) == 1 else "-"
+            label = f"{', '.join(series.label(k) for k in keys)}: {scene_list(scenes, every)}"
+            handles += ax.plot(xs, ys, color=color, linestyle=style, marker=MARKERS[n % 10],
+                               ms=3.5, label=label)
+        ax.set_title(what, fontsize=9)
+        ax.set_ylabel(unit)
         ax.set_xlabel("bounce limit B")
         ax.xaxis.set_major_locator(MaxNLocator(integer=True))
         ax.set_yscale("log")
         ax.grid(True, which="both", alpha=0.3)
-    left.legend(fontsize=7, ncol=2)
-    save(fig, meta, path, title + " (solid: megakernel, dashed: wavefront)")
+        log_ticks(ax)
+        legends.append(legend_ax.legend(handles=handles, loc="upper center",
+                                        bbox_to_anchor=(0.25 if ax is axes[0] else 0.75, 1.0),
+                                        fontsize=7.5, frameon=False, title_fontsize=7.5,
+                                        title=f"{what} (lines within {MERGE:.0%} merged)"))
+    legend_ax.add_artist(legends[0])
+    return fig
 
 
-def kernel_breakdown(meta, rows, out):
-    path = os.path.join(out, "kernel-breakdown.png")
-    title = "Device time per kernel"
-    chosen = in_group(rows, "bounces")
-    xkey, xlabel = (lambda r: r["bounces"]), "bounce limit B (left bar megakernel, right wavefront)"
+def kernel_colors(names):
+    unknown = sorted(n for n in names if n not in KERNEL_COLORS)
+    return {**{n: PALETTE[i % len(PALETTE)] for i, n in enumerate(unknown)}, **KERNEL_COLORS}
+
+
+def kernel_breakdown(meta, rows):
+    """Per scene: each kernel's share of the frame as stacked bars (one bar per series at each
+    bounce limit), and the frame's device ms on a log axis beside, so that small B stays
+    readable next to B=8."""
+    chosen, axis = in_group(rows, "bounces"), "bounces"
     if not chosen:
-        chosen = in_group(rows, "resolution")
-        xkey, xlabel = (lambda r: r["width"] * r["height"]), "pixels"
+        chosen, axis = in_group(rows, "resolution"), "size"
+    chosen = [r for r in chosen if r.get("kernel_ms")]
     if not chosen:
-        return empty_chart(path, meta, title, "this sweep has no [bounces] or [resolution] group")
-    scenes = scenes_of(chosen)
-    fig, axes = grid(len(scenes))
-    seen = set()
-    for ax, scene in zip(axes, scenes):
-        srows = [r for r in chosen if r["scene"] == scene]
-        xs = sorted({xkey(r) for r in srows})
-        for offset, pipe in ((-0.2, "mega"), (0.2, "wave")):
-            for i, x in enumerate(xs):
-                match = [r for r in srows if r["pipeline"] == pipe and xkey(r) == x]
-                if not match:
-                    continue
-                bottom = 0.0
-                for name, ms in match[0].get("kernel_ms", {}).items():
-                    label = name if name not in seen else None
-                    seen.add(name)
-                    ax.bar(i + offset, ms, 0.38, bottom=bottom, color=KERNEL_COLORS.get(name),
-                           label=label, edgecolor="white", linewidth=0.4)
-                    bottom += ms
-        ax.set_xticks(range(len(xs)))
-        ax.set_xticklabels([str(x) for x in xs], fontsize=8)
-        ax.set_title(scene)
-        ax.set_xlabel(xlabel, fontsize=8)
-        ax.set_ylabel("device ms per frame")
-        ax.grid(True, axis="y", alpha=0.3)
+        return None
+    series, scenes = Series(chosen), scenes_of(chosen)
+    colors = kernel_colors({k for r in chosen for k in r["kernel_ms"]})
+    fig, panels, legend_ax = figure(meta, "Device time per kernel: share of the frame (bars) "
+                                    "and frame time (points, right axis)", len(scenes),
+                                    legend_rows=1.5)
+    width = 0.8 / len(series.keys)
     handles, labels = [], []
-    for ax in axes:
-        for h, l in zip(*ax.get_legend_handles_labels()):
-            if l not in labels:
-                handles.append(h)
-                labels.append(l)
-    axes[0].legend(handles, labels, loc="upper left", fontsize=7)
-    save(fig, meta, path, title)
+    for ax, scene in zip(panels, scenes):
+        srows = [r for r in chosen if r["scene"] == scene]
+        xkey = (lambda r: r["bounces"]) if axis == "bounces" else \
+            (lambda r: r["width"] * r["height"])
+        xs = sorted({xkey(r) for r in srows})
+        total_ax = ax.twinx()
+        for j, key in enumerate(series.keys):
+            offset = (j - (len(series.keys) - 1) / 2) * width
+            pts = {xkey(r): r for r in srows if series.key(r) == key}
+            for i, x in enumerate(xs):
+                r = pts.get(x)
+                if not r:
+                    continue
+                total, bottom = sum(r["kernel_ms"].values()) or 1.0, 0.0
+                for name, t in r["kernel_ms"].items():
+                    share = 100 * t / total
+                    ax.bar(i + offset, share, width * 0.95, bottom=bottom, color=colors[name],
+                           edgecolor="white", linewidth=0.4)
+                    bottom += share
+                    if name not in labels:
+                        handles.append(Patch(color=colors[name]))
+                        labels.append(name)
+            at = [i + offset for i, x in enumerate(xs) if x in pts]
+            # Black on white: the bars behind already use the series' hues for kernels.
+            line, = total_ax.plot(at, [pts[x]["device_ms"] for x in xs if x in pts],
+                                  marker=MARKERS[j % len(MARKERS)], ms=4.5, color="black",
+                                  markerfacecolor="white", linestyle=series.linestyle(key),
+                                  linewidth=0.9)
+            label = f"{series.label(key)}: frame ms"
+            if label not in labels:
+                handles.append(line)
+                labels.append(label)
+        total_ax.set_yscale("log")
+        total_ax.set_ylabel("device ms per frame (log)", fontsize=8)
+        log_ticks(total_ax)
+        ax.set_ylim(0, 100)
+        ax.set_xticks(range(len(xs)))
+        first = srows[0]
+        if axis == "bounces":
+            ax.set_xticklabels([str(x) for x in xs], fontsize=8)
+            ax.set_xlabel("bounce limit B", fontsize=8)
+        else:
+            sizes = {r["width"] * r["height"]: f"{r['width']}×{r['height']}" for r in srows}
+            ax.set_xticklabels([sizes[x] for x in xs], fontsize=7, rotation=30)
+            ax.set_xlabel("resolution", fontsize=8)
+        fixed = [k for k in SETTING_KEYS if k != axis and k not in varying(srows, SETTING_KEYS)]
+        ax.set_title(f"{scene} ({setting_text(first, fixed)})", fontsize=9)
+        ax.set_ylabel("% of the frame's device time")
+    order = ", ".join(series.label(k) for k in series.keys)
+    legend_row(legend_ax, handles, labels, ncol=min(len(labels), 5))
+    legend_ax.set_title(f"bars at each x, left to right: {order}", fontsize=8)
+    return fig
 
 
 def pareto(points):
@@ -267,194 +275,100 @@ def pareto(points):
     return front
 
 
-def speed_vs_accuracy(meta, rows, out):
-    path = os.path.join(out, "speed-vs-accuracy.png")
+def shared_error(rows):
+    """(settings where every series' frame has the same error, settings measured on more than
+    one series): equal errors mean equal images, the points differ only in time."""
+    by = {}
+    for r in rows:
+        k = (r["scene"], r["width"], r["height"], r["bounces"], r["shadow_samples"], r["aa"])
+        by.setdefault(k, []).append(r["rmse"])
+    multi = [v for v in by.values() if len(v) > 1]
+    return sum(1 for v in multi if max(v) == min(v)), len(multi)
+
+
+def size_of(s):
+    return 14 + 8 * math.log2(s)
+
+
+def speed_vs_accuracy(meta, rows):
     rows = [r for r in in_group(rows, "accuracy") if "rmse" in r]
-    title = "Speed against accuracy (error from the converged CPU reference)"
     if not rows:
-        return empty_chart(path, meta, title, "this sweep has no scored [accuracy] group")
+        return None
     ref = rows[0].get("reference", {})
-    scenes = scenes_of(rows)
-    fig, axes = grid(len(scenes))
-    markers = {1: "o", 2: "s", 3: "^", 4: "D"}
-    for ax, scene in zip(axes, scenes):
+    series, scenes = Series(rows), scenes_of(rows)
+    same, multi = shared_error(rows)
+    note = (f"\nthe error is the same on every pipeline at {same} of the {multi} settings run on "
+            "more than one (the same image): their points share a height, only the time differs"
+            if multi else "")
+    fig, panels, legend_ax = figure(
+        meta, "Speed against accuracy (error from the converged CPU reference, log-log)\n"
+        f"reference: CPU double, B={ref.get('bounces')}, {ref.get('shadow_samples')} shadow "
+        f"samples, aa={ref.get('aa')}" + note, len(scenes), legend_rows=2.2)
+    aas = sorted({r["aa"] for r in rows})
+    shadows = sorted({r["shadow_samples"] for r in rows})
+    labelled = []
+    for ax, scene in zip(panels, scenes):
         srows = [r for r in rows if r["scene"] == scene]
-        for pipe in ("mega", "wave"):
-            for aa in sorted({r["aa"] for r in srows}):
-                pts = [r for r in srows if r["pipeline"] == pipe and r["aa"] == aa]
+        for key in series.keys:
+            for n, aa in enumerate(aas):
+                pts = [r for r in srows if series.key(r) == key and r["aa"] == aa]
                 if pts:
                     ax.scatter([r["device_ms"] for r in pts], [max(r["rmse"], 1e-6) for r in pts],
-                               s=[14 + 6 * math.log2(r["shadow_samples"]) for r in pts],
-                               marker=markers.get(aa, "v"), color=COLORS[pipe], alpha=0.55,
-                               label=f"{NAMES[pipe]} aa={aa}")
+                               s=[size_of(r["shadow_samples"]) for r in pts],
+                               marker=MARKERS[n % 10], color=series.color(key), alpha=0.55)
         front = pareto([(r["device_ms"], max(r["rmse"], 1e-6), r) for r in srows])
         ax.step([p[0] for p in front], [p[1] for p in front], where="post", color="black",
-                linewidth=1.2, label="Pareto front")
+                linewidth=1.1)
         ax.scatter([p[0] for p in front], [p[1] for p in front], s=70, facecolors="none",
                    edgecolors="black", linewidths=1.0)
-        # Label the front's steps that matter: at least 3% less error than the last label
-        # (a deeper bounce limit on a scene that has nothing left to bounce off gains ~0).
-        last = None
-        for n, (t, e, r) in enumerate(front):
-            if last is not None and e > 0.97 * last and n != len(front) - 1:
-                continue
-            last = e
-            ax.annotate(f"{r['pipeline'][0]} B{r['bounces']} s{r['shadow_samples']} aa{r['aa']}",
-                        (t, e), textcoords="offset points", xytext=(4, 4), fontsize=6)
-        size = f"{srows[0]['width']}x{srows[0]['height']}"
-        ax.set_title(f"{scene} ({size})")
+        ax.set_title(f"{scene} ({srows[0]['width']}×{srows[0]['height']})", fontsize=9)
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.set_xlabel("device ms per frame")
         ax.set_ylabel("RMSE (linear, clamped to [0,1])")
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=6)
-    sub = (f"reference: CPU double, B={ref.get('bounces')}, {ref.get('shadow_samples')} shadow "
-           f"samples, aa={ref.get('aa')}; marker size grows with shadow samples\nlabels: "
-           f"m/w megakernel/wavefront, B bounce limit, s shadow samples, aa N (NxN samples)")
-    save(fig, meta, path, title + "\n" + sub)
-
-def readme_module():
-    """scripts/results-readme.py (standard library only): the limits analysis both scripts share."""
-    path = os.path.join(os.path.dirname(os.path.abspath(__file__)), "results-readme.py")
-    spec = importlib.util.spec_from_file_location("results_readme", path)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
-
-
-LIMIT_STYLES = {("mega", "tree", False): dict(color="#1f77b4", linestyle="-"),
-                ("mega", "weighted", False): dict(color="#17becf", linestyle="-."),
-                ("wave", "tree", False): dict(color="#d62728", linestyle="--"),
-                ("wave", "tree", True): dict(color="#ff7f0e", linestyle=":")}
-HOW_SHORT = {"private tree": "private tree > limit", "tree row": "tree row > budget",
-             "allocation": "allocation failed", "OpenCL error": "OpenCL error",
-             "time cap": "frame > time cap", "other": "error", "skipped": "not run"}
+        log_ticks(ax, "x")
+        log_ticks(ax)
+        labelled.append((ax, front))
+    handles = [Line2D([], [], linestyle="none", marker="o", color=series.color(k), alpha=0.7)
+               for k in series.keys]
+    labels = [series.label(k) for k in series.keys]
+    handles += [Line2D([], [], linestyle="none", marker=MARKERS[n % 10], color="#777777")
+                for n in range(len(aas))]
+    labels += [f"aa={aa} ({aa}×{aa} samples)" for aa in aas]
+    handles += [Line2D([], [], linestyle="none", marker="o", color="#777777",
+                       markersize=math.sqrt(size_of(s))) for s in shadows]
+    labels += [f"{s} shadow sample{'s' if s > 1 else ''}" for s in shadows]
+    handles.append(Line2D([], [], color="black", marker="o", markerfacecolor="none"))
+    labels.append("Pareto front (labelled: B bounce limit, s shadow samples, aa)")
+    legend_row(legend_ax, handles, labels, ncol=min(len(labels), 5))
+    for ax, front in labelled:
+        label_front(fig, ax, front)
+    return fig
 
 
-def limits_chart(meta, all_rows, out):
-    """Per scene: columns bounce limit and resolution; rows device time, global memory and the
-    longest launch. Filled circles ran, squares ran with the wavefront tree in row tiles (K
-    printed beside), a cross at the top marks each series' first failure (or where it was not
-    run because a frame took longer than max-frame-s), with the kind."""
-    rr = readme_module()
-    series = rr.limit_series(all_rows)
-    path = os.path.join(out, "limits.png")
-    if not series:
-        return
-    scenes = []
-    for s in series:
-        if s["scene"] not in scenes:
-            scenes.append(s["scene"])
-    axes_kinds = [k for k in ("bounces", "size") if any(s["axis"] == k for s in series)]
-    ncol = len(axes_kinds) * len(scenes)
-    fig, grid_axes = plt.subplots(3, ncol, figsize=(6.4 * ncol, 11.5), squeeze=False)
-    limit_rows = in_group(all_rows, "limits")
-    target = next((r.get("max_launch_ms") for r in limit_rows if r.get("max_launch_ms")), 0)
-    budgets = sorted({r.get("memory_budget") for r in limit_rows if r.get("memory_budget")})
-    col = 0
-    for scene in scenes:
-        for kind in axes_kinds:
-            t_ax, m_ax, l_ax = (grid_axes[i][col] for i in range(3))
-            col += 1
-            group = [s for s in series if s["scene"] == scene and s["axis"] == kind]
-            if kind == "bounces":
-                x = lambda r: r["bounces"]  # noqa: E731
-                fixed = sorted({s["fixed"] for s in group})
-                t_ax.set_title(f"{scene}: bounce limit up ({', '.join(f[3:] for f in fixed)})")
-            else:
-                x = lambda r: r["width"] * r["height"] / 1e6  # noqa: E731
-                fixed = sorted({s["fixed"] for s in group})
-                t_ax.set_title(f"{scene}: resolution up ({', '.join(f[3:] for f in fixed)})")
-            stops = []
-            for s in group:
-                style = LIMIT_STYLES.get((s["pipeline"], s["layout"], bool(s["budget"])),
-                                         dict(color="#7f7f7f", linestyle="-"))
-                ran = s["ran"]
-                tiled = [r for r in ran if rr.memory_tiles(r) > 1]
-                plain = [r for r in ran if rr.memory_tiles(r) <= 1]
-                for ax, val in ((t_ax, lambda r: r["device_ms"]),
-                                (m_ax, lambda r: r.get("device_bytes", 0) / 2**20),
-                                (l_ax, lambda r: r.get("longest_launch_ms") or float("nan"))):
-                    ax.plot([x(r) for r in ran], [val(r) for r in ran], linewidth=1.4,
-                            label=s["label"] if ax is t_ax else None, **style)
-                    ax.plot([x(r) for r in plain], [val(r) for r in plain], "o", ms=4.5,
-                            color=style["color"])
-                    ax.plot([x(r) for r in tiled], [val(r) for r in tiled], "s", ms=6,
-                            color=style["color"], markeredgecolor="black", markeredgewidth=0.6)
-                # K tiles beside the memory points (the first, then every other one).
-                for i, r in enumerate(tiled):
-                    if i == 0 or i == len(tiled) - 1 or i % 2 == 0:
-                        m_ax.annotate(f"{rr.memory_tiles(r)}", (x(r), r["device_bytes"] / 2**20),
-                                      textcoords="offset points", xytext=(4, -9), fontsize=6.5,
-                                      color=style["color"])
-                if s["stop"] is not None:
-                    stops.append((x(s["stop"]), s, style))
-            # First failures: a dotted line through all three panels, a cross and the kind on top.
-            stops.sort(key=lambda t: t[0])
-            for n, (sx, s, style) in enumerate(stops):
-                for ax in (t_ax, m_ax, l_ax):
-                    ax.axvline(sx, color=style["color"], linestyle=":", linewidth=1.0, alpha=0.8)
-                ypos = 0.96 - 0.085 * n
-                t_ax.plot([sx], [ypos], marker="X", ms=9, color=style["color"],
-                          markeredgecolor="black", markeredgewidth=0.6,
-                          transform=t_ax.get_xaxis_transform(), clip_on=False)
-                where = f"B={s['stop']['bounces']}" if kind == "bounces" else \
-                    f"{s['stop']['width']}×{s['stop']['height']}"
-                t_ax.text(sx, ypos, f"{where}: {HOW_SHORT.get(s['how'], s['how'])}   ",
-                          transform=t_ax.get_xaxis_transform(), fontsize=7, va="center",
-                          ha="right", color=style["color"],
-                          bbox=dict(boxstyle="round,pad=0.15", fc="white", ec="none", alpha=0.8))
-            # Where the device (or the budget) stops one wavefront tree buffer.
-            alloc = meta.get("max_alloc_bytes")
-            if alloc:
-                m_ax.axhline(alloc / 2**20, color="#555555", linewidth=0.9, linestyle="--")
-                m_ax.text(0.01, alloc / 2**20, f" device max allocation {alloc / 2**30:.3g} GiB",
-                          transform=m_ax.get_yaxis_transform(), fontsize=7, va="bottom",
-                          color="#555555")
-            for b in budgets:
-                if any(s["budget"] == b for s in group):
-                    m_ax.axhline(b / 2**20, color="#ff7f0e", linewidth=0.9, linestyle=":")
-                    m_ax.text(0.01, b / 2**20, f" memory budget {b / 2**20:g} MiB",
-                              transform=m_ax.get_yaxis_transform(), fontsize=7, va="bottom",
-                              color="#b35900")
-            if target:
-                l_ax.axhline(target, color="#555555", linewidth=0.9, linestyle="--")
-                l_ax.text(0.01, target, f" max-launch-ms {target:g}",
-                          transform=l_ax.get_yaxis_transform(), fontsize=7, va="bottom",
-                          color="#555555")
-            t_ax.set_ylabel("device ms per frame")
-            m_ax.set_ylabel("global memory allocated, MiB")
-            l_ax.set_ylabel("longest single launch, ms")
-            for ax in (t_ax, m_ax, l_ax):
-                ax.set_yscale("log")
-                ax.margins(x=0.04)
-                ax.grid(True, which="both", alpha=0.25)
-                if kind == "bounces":
-                    ax.xaxis.set_major_locator(MaxNLocator(integer=True))
-                    ax.set_xlabel("bounce limit B")
-                else:
-                    ax.set_xscale("log")
-                    sizes = sorted({(r["width"], r["height"]) for s in group for r in s["rows"]},
-                                   key=lambda wh: wh[0] * wh[1])
-                    ax.set_xticks([w * h / 1e6 for w, h in sizes])
-                    ax.set_xticklabels([f"{w}×{h}" for w, h in sizes], fontsize=7, rotation=30)
-                    ax.xaxis.set_minor_locator(NullLocator())
-                    ax.set_xlabel("resolution")
-            for ax in (t_ax, m_ax, l_ax):
-                lo, hi = ax.get_ylim()
-                if hi / lo < 30:  # under ~1.5 decades: label the minor ticks too
-                    ax.yaxis.set_minor_formatter(LogFormatter(labelOnlyBase=False,
-                                                              minor_thresholds=(2, 0.4)))
-                    ax.tick_params(axis="y", which="minor", labelsize=7)
-            t_ax.legend(fontsize=7, loc="lower right")
-    fig.suptitle("Limits: how far each pipeline goes\n● ran   ■ ran with the wavefront "
-         "tree in K row tiles (K beside the memory point)   ✕ first failure, or first setting not "
-         "run after a too-long frame", fontsize=11)
-    footer(fig, meta)
-    fig.tight_layout(rect=(0, 0.035, 1, 0.955))
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+def label_front(fig, ax, front):
+    """Labels the front's points where there is room, the ones that cut the error most first."""
+    gains = [(front[i - 1][1] / p[1] if i else float("inf"), i) for i, p in enumerate(front)]
+    order = [i for _, i in sorted(gains, reverse=True)]
+    boxes = point_boxes(fig, ax, [(t, e) for t, e, _ in front], 4.5)
+    place_labels(fig, ax, [(front[i][0], front[i][1],
+                            f"B{front[i][2]['bounces']} s{front[i][2]['shadow_samples']} "
+                            f"aa{front[i][2]['aa']}", False) for i in order], avoid=boxes)
+
+
+CHARTS = {"time-vs-resolution.png": time_vs_resolution, "time-vs-bounces.png": time_vs_bounces,
+          "memory-vs-bounces.png": memory_vs_bounces, "kernel-breakdown.png": kernel_breakdown,
+          "speed-vs-accuracy.png": speed_vs_accuracy}
+
+
+def draw_all(meta, all_rows):
+    """{file name: figure} for every chart the rows have data for."""
+    import charts_limits
+    rows = [r for r in all_rows if failure(r) == ""]
+    figs = {name: chart(meta, rows) for name, chart in CHARTS.items()}
+    figs["limits.png"] = charts_limits.limits_chart(meta, all_rows)
+    return figs
 
 
 def main():
@@ -462,15 +376,20 @@ def main():
     ap.add_argument("json")
     ap.add_argument("--out", help="output folder [the JSON's folder]")
     args = ap.parse_args()
-    meta, all_rows = load(args.json, every=True)
-    rows = [r for r in all_rows if r.get("status") == "ok"]
+    sweep = load(args.json)
+    if sweep is None:
+        sys.exit(f"{ap.prog}: {args.json}: not a sweep JSON (one with \"meta\" and \"rows\")")
+    meta, all_rows = sweep
     out = args.out or os.path.dirname(os.path.abspath(args.json))
     os.makedirs(out, exist_ok=True)
-    for chart in (time_vs_resolution, time_vs_bounces, memory_vs_bounces, kernel_breakdown,
-                  speed_vs_accuracy):
-        chart(meta, rows, out)
-    limits_chart(meta, all_rows, out)
+    for name, fig in draw_all(meta, all_rows).items():
+        if not fig:
+            print(f"charts: no {name} (the sweep has no cells for it)")
+            continue
+        fig.savefig(os.path.join(out, name), dpi=DPI)
+        plt.close(fig)
     print(f"charts: done in {out}")
+    return 0
 
 
 if __name__ == "__main__":

@@ -1,0 +1,170 @@
+"""What the charts (charts.py) and the generated READMEs (results-readme.py) read from sweep rows.
+
+Nothing here knows which pipelines exist: a series is whatever `pipeline` values the rows hold,
+split by `layout` where one pipeline ran several, and by `memory_budget`. A series is titled by
+the rows' `pipeline_title` (else the short name) and coloured from a fixed palette by a stable
+hash of its pipeline's name, so that adding a pipeline does not recolour the others. Times are
+compared with the fastest series at the same setting. Failures are read from the rows' `failure`
+field only.
+Standard library only.
+"""
+import zlib
+
+# A fixed palette; a series takes the slot its key hashes to, or the next free one.
+PALETTE = ["#9467bd", "#2ca02c", "#8c564b", "#1f77b4", "#17becf",
+           "#ff7f0e", "#e377c2", "#d62728", "#bcbd22", "#7f7f7f"]
+LINESTYLES = ["-", "--", "-.", ":"]
+FAILURES = {"private_tree": "private ray tree over the per-work-item limit",
+            "tree_row": "one row of the wavefront ray tree over the memory budget",
+            "out_of_memory": "out of device memory",
+            "opencl": "OpenCL error",
+            "invalid_option": "invalid option",
+            "skipped": "not run",
+            "other": "error"}
+FAILURES_SHORT = {"private_tree": "private tree > limit", "tree_row": "tree row > budget",
+                  "out_of_memory": "out of memory", "opencl": "OpenCL error",
+                  "invalid_option": "invalid option", "skipped": "not run", "other": "error"}
+NODE_BYTES = 48  # sizeof(RayNode) in core/types.h, for rows that do not record it
+
+
+def budget_label(b):
+    if not b:
+        return ""
+    return f"{b / 2**30:g} GiB" if b >= 2**30 else f"{b / 2**20:g} MiB"
+
+
+def layouts_by_pipeline(rows):
+    out = {}
+    for r in rows:
+        out.setdefault(r["pipeline"], set()).add(r.get("layout") or "tree")
+    return out
+
+
+class Series:
+    """One line of a chart / one column of a table: a pipeline, its layout where the rows hold
+    several, and a memory budget where one was set."""
+
+    def __init__(self, rows):
+        self.layouts = layouts_by_pipeline(rows)
+        self.titles = {}
+        for r in rows:
+            self.titles.setdefault(r["pipeline"], r.get("pipeline_title") or r["pipeline"])
+        self.keys = sorted({self.key(r) for r in rows})
+        self.colors = {}
+        for k in self.keys:
+            # Hashed by the pipeline alone: its layouts and budgets take the next free slots.
+            slot = zlib.crc32(k.split("/")[0].encode()) % len(PALETTE)
+            while PALETTE[slot] in self.colors.values() and len(self.colors) < len(PALETTE):
+                slot = (slot + 1) % len(PALETTE)
+            self.colors[k] = PALETTE[slot]
+
+    def key(self, r):
+        k = r["pipeline"]
+        if len(self.layouts.get(r["pipeline"], ())) > 1:
+            k += "/" + (r.get("layout") or "tree")
+        if r.get("memory_budget"):
+            k += "/" + budget_label(r["memory_budget"]).replace(" ", "")
+        return k
+
+    def label(self, key):
+        parts = key.split("/")
+        text = self.titles.get(parts[0], parts[0])
+        extra = [p for p in parts[1:] if not p[0].isdigit()]
+        budget = [p for p in parts[1:] if p[0].isdigit()]
+        if extra:
+            text += f" ({', '.join(extra)})"
+        if budget:
+            text += f", {budget[0].replace('MiB', ' MiB').replace('GiB', ' GiB')} budget"
+        return text
+
+    def color(self, key):
+        return self.colors.get(key, PALETTE[-1])
+
+    def linestyle(self, key):
+        return LINESTYLES[self.keys.index(key) % len(LINESTYLES)] if key in self.keys else "-"
+
+
+def setting(r):
+    """A cell's setting apart from the pipeline and its layout: what two series are compared at."""
+    return (r["scene"], r["width"], r["height"], r["bounces"], r["shadow_samples"], r["aa"],
+            r["accel"], r.get("adaptive"), r.get("memory_budget") or 0)
+
+
+def by_setting(rows, series):
+    """[(setting, {series key: row})] in sweep order, for settings at least two series ran."""
+    by, order = {}, []
+    for r in rows:
+        k = setting(r)
+        if k not in by:
+            order.append(k)
+        by.setdefault(k, {})[series.key(r)] = r
+    return [(k, by[k]) for k in order if len(by[k]) > 1]
+
+
+def fastest(cells):
+    """The key of the fastest series in {key: row}."""
+    return min(cells, key=lambda k: cells[k]["device_ms"])
+
+
+def failure(r):
+    """How a row ended: "" ran, else a kind of FAILURES (the rows' own field, nothing parsed)."""
+    return r.get("failure") or ("" if r.get("status") == "ok" else "other")
+
+
+def memory_tiles(r):
+    return max(1, r.get("memory_tiles") or r.get("tiles") or 1)
+
+
+def tree_sizes(r):
+    """(bytes of one tile's tree, bytes of the whole frame's tree, tiles) of a row with a global
+    ray tree, else None. The whole tree is width x height x nodes x node size; the tile is what
+    was allocated (tree_bytes)."""
+    if not r.get("tree_bytes") or not r.get("tree_nodes"):
+        return None
+    node = r.get("node_bytes") or r.get("extras", {}).get("node_bytes") or NODE_BYTES
+    whole = r["width"] * r["height"] * r["tree_nodes"] * node
+    return r["tree_bytes"], whole, memory_tiles(r)
+
+
+def in_group(rows, g):
+    return [r for r in rows if g in r.get("groups", [])]
+
+
+def limit_series(all_rows):
+    """The limits group as series: one per scene, series key (pipeline, layout, budget) and
+    axis. Along `bounces` the size is fixed, along `size` the bounce limit; a setting both axes
+    share belongs to both. Each says the last setting that ran, where its global tree first
+    tiled, and the first setting that failed (or was not run after an earlier failure)."""
+    rows = in_group(all_rows, "limits")
+    series = Series(rows)
+    variants = {}
+    for r in rows:
+        variants.setdefault((r["scene"], series.key(r)), []).append(r)
+    out = []
+    for (scene, key), vrows in variants.items():
+        axes = []
+        by_size, by_b = {}, {}
+        for r in vrows:
+            by_size.setdefault((r["width"], r["height"]), []).append(r)
+            by_b.setdefault(r["bounces"], []).append(r)
+        size, srows = max(by_size.items(), key=lambda kv: len({r["bounces"] for r in kv[1]}))
+        if len({r["bounces"] for r in srows}) > 1:
+            axes.append(("bounces", f"at {size[0]}×{size[1]}",
+                         sorted(srows, key=lambda r: r["bounces"])))
+        b, brows = max(by_b.items(), key=lambda kv: len({(r["width"], r["height"]) for r in kv[1]}))
+        if len({(r["width"], r["height"]) for r in brows}) > 1:
+            axes.append(("size", f"at B={b}",
+                         sorted(brows, key=lambda r: r["width"] * r["height"])))
+        for axis, fixed, pts in axes:
+            ran = [r for r in pts if failure(r) == ""]
+            failed = [r for r in pts if failure(r) not in ("", "skipped")]
+            skipped = [r for r in pts if failure(r) == "skipped"]
+            tiled = [r for r in ran if memory_tiles(r) > 1]
+            stop = failed[0] if failed else (skipped[0] if skipped else None)
+            out.append({"scene": scene, "key": key, "label": series.label(key),
+                        "color": series.color(key), "linestyle": series.linestyle(key),
+                        "axis": axis, "fixed": fixed, "rows": pts, "ran": ran,
+                        "last": ran[-1] if ran else None, "tiled": tiled[0] if tiled else None,
+                        "stop": stop, "how": failure(stop) if stop else None,
+                        "skipped": skipped})
+    return out

@@ -1,0 +1,256 @@
+#!/usr/bin/python3
+"""Tests of the result charts and READMEs (scripts/charts.py, results-readme.py, sweep_rows.py):
+what a reader sees — one legend entry per visible line, labels that do not overlap, log axes
+labelled in one style, no placeholder PNG — and that pipelines, titles and failure kinds come
+from the rows, so that a third pipeline needs no code. CTest runs this with /usr/bin/python3
+(Debian's matplotlib); the chart tests are skipped where matplotlib is missing.
+Every test writes into a temporary folder of its own.
+"""
+import importlib.util
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import unittest
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+SCRIPTS = os.path.join(ROOT, "scripts")
+sys.path.insert(0, SCRIPTS)
+import sweep_rows  # noqa: E402
+
+try:
+    import charts  # noqa: E402
+    import chart_style  # noqa: E402
+    HAVE_MPL = True
+except ImportError:
+    HAVE_MPL = False
+
+META = {"device": "Test device", "platform": "Test", "driver": "1", "commit": "abc", "sweep": "t",
+        "settings": {"repeats": 3, "warmup": 1}, "max_alloc_bytes": 2**30}
+PIPES = [("mega", "megakernel", "tree"), ("mega", "megakernel", "weighted"),
+         ("wave", "wavefront", "tree"), ("queue", "queue wavefront", "tree")]
+
+
+def row(pipe, title, layout, scene, b, w=320, h=180, group="bounces", **extra):
+    r = {"pipeline": pipe, "pipeline_title": title, "layout": layout, "scene": scene,
+         "width": w, "height": h, "bounces": b, "shadow_samples": 1, "aa": 1, "accel": "-",
+         "adaptive": False, "memory_budget": 0, "groups": [group], "status": "ok", "failure": "",
+         "error": "", "device_ms": (1 + b) * (1 + len(pipe)) * (1.5 if layout == "weighted" else 1),
+         "device_bytes": 2**20 * (1 + b * (pipe != "mega")), "private_bytes": 64 * (1 + b),
+         "kernel_ms": {f"{pipe}_a": 0.5 + b, f"{pipe}_b": 0.2}, "tree_nodes": 2**(b + 1) - 1,
+         "tree_bytes": 0, "memory_tiles": 1, "scene_info": {"objects": 2, "spheres": 2,
+                                                            "triangles": 0}}
+    r.update(extra)
+    return r
+
+
+def sweep_rows_fixture(groups=("bounces", "resolution")):
+    rows = []
+    for pipe, title, layout in PIPES:
+        for scene in ("spheres", "cornell"):
+            if "bounces" in groups:
+                rows += [row(pipe, title, layout, scene, b) for b in range(5)]
+            if "resolution" in groups:
+                rows += [row(pipe, title, layout, scene, 2, w, h, "resolution")
+                         for w, h in ((320, 180), (640, 360), (1280, 720))]
+    return rows
+
+
+def load_script(name):
+    spec = importlib.util.spec_from_file_location(name.replace("-", "_"),
+                                                  os.path.join(SCRIPTS, name))
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+class RowsTest(unittest.TestCase):
+    def test_series_come_from_the_rows_with_distinct_colours(self):
+        series = sweep_rows.Series(sweep_rows_fixture())
+        self.assertEqual(series.keys, ["mega/tree", "mega/weighted", "queue", "wave"])
+        self.assertEqual(series.label("queue"), "queue wavefront")
+        self.assertEqual(series.label("mega/weighted"), "megakernel (weighted)")
+        self.assertEqual(len(set(series.colors.values())), 4)
+
+    def test_colour_of_a_pipeline_does_not_change_when_another_is_added(self):
+        two = sweep_rows.Series([r for r in sweep_rows_fixture() if r["pipeline"] != "queue"])
+        three = sweep_rows.Series(sweep_rows_fixture())
+        self.assertEqual(two.color("wave"), three.color("wave"))
+
+    def test_failure_is_read_from_the_field_not_the_message(self):
+        rows = [row("mega", "megakernel", "tree", "s", b, group="limits") for b in range(3)]
+        rows[2].update(status="error", failure="opencl", error="tree in private memory")
+        (s,) = [s for s in sweep_rows.limit_series(rows) if s["axis"] == "bounces"]
+        self.assertEqual(s["how"], "opencl")
+        self.assertEqual(sweep_rows.failure({"status": "error"}), "other")
+
+    def test_migration_maps_messages_to_the_fixed_kinds(self):
+        migrate = load_script("migrate-rows.py")
+        self.assertEqual(migrate.classify({"status": "ok"}), "")
+        self.assertEqual(migrate.classify({"status": "skipped"}), "skipped")
+        self.assertEqual(migrate.classify({"status": "error", "failure": "allocation"}),
+                         "out_of_memory")
+        self.assertEqual(migrate.classify({"status": "error", "error": "x in private memory"}),
+                         "private_tree")
+
+    def test_tree_size_says_tile_and_whole(self):
+        r = row("wave", "wavefront", "tree", "s", 8, 1280, 720, tree_nodes=511,
+                tree_bytes=1280 * 676 * 511 * 48, memory_tiles=2)
+        tile, whole, tiles = sweep_rows.tree_sizes(r)
+        self.assertEqual(whole, 1280 * 720 * 511 * 48)
+        self.assertEqual((tile < whole, tiles), (True, 2))
+
+
+class ReadmeTest(unittest.TestCase):
+    def write_set(self, tmp):
+        folder = os.path.join(tmp, "results", "test-device")
+        os.makedirs(folder)
+        path = os.path.join(folder, "t.json")
+        with open(path, "w") as f:
+            json.dump({"meta": META, "rows": sweep_rows_fixture()}, f)
+        return path
+
+    def run_readme(self, *args):
+        return subprocess.run([sys.executable, os.path.join(SCRIPTS, "results-readme.py"), *args],
+                              capture_output=True, text=True, check=True)
+
+    def test_a_sweep_does_not_rewrite_the_index_unless_asked(self):
+        with tempfile.TemporaryDirectory(prefix="rtlab-test-charts-") as tmp:
+            path = self.write_set(tmp)
+            index = os.path.join(tmp, "results", "README.md")
+            self.run_readme(path)
+            self.assertTrue(os.path.exists(os.path.join(os.path.dirname(path), "README.md")))
+            self.assertFalse(os.path.exists(index))
+            self.run_readme(path, "--index")
+            self.assertTrue(os.path.exists(index))
+
+    def test_a_file_that_is_not_a_sweep_is_one_line_and_an_error(self):
+        with tempfile.TemporaryDirectory(prefix="rtlab-test-charts-") as tmp:
+            path = os.path.join(tmp, "not-a-sweep.json")
+            with open(path, "w") as f:
+                f.write("[1, 2")
+            scripts = ["results-readme.py"] + (["charts.py"] if HAVE_MPL else [])
+            for script in scripts:
+                done = subprocess.run([sys.executable, os.path.join(SCRIPTS, script), path],
+                                      capture_output=True, text=True)
+                self.assertNotEqual(done.returncode, 0)
+                self.assertIn("not a sweep JSON", done.stderr)
+                self.assertNotIn("Traceback", done.stderr)
+
+    def test_every_pipeline_has_a_column(self):
+        with tempfile.TemporaryDirectory(prefix="rtlab-test-charts-") as tmp:
+            path = self.write_set(tmp)
+            self.run_readme(path)
+            with open(os.path.join(os.path.dirname(path), "README.md")) as f:
+                text = f.read()
+            for title in ("megakernel (tree)", "megakernel (weighted)", "queue wavefront",
+                          "wavefront"):
+                self.assertIn(f"| {title}: time / fastest", text)
+
+
+@unittest.skipUnless(HAVE_MPL, "matplotlib is not installed")
+class ChartsTest(unittest.TestCase):
+    def tearDown(self):
+        chart_style.plt.close("all")
+
+    def test_no_placeholder_for_a_sweep_without_accuracy_cells(self):
+        with tempfile.TemporaryDirectory(prefix="rtlab-test-charts-") as tmp:
+            path = os.path.join(tmp, "t.json")
+            with open(path, "w") as f:
+                json.dump({"meta": META, "rows": sweep_rows_fixture(("bounces",))}, f)
+            subprocess.run([sys.executable, os.path.join(SCRIPTS, "charts.py"), path],
+                           capture_output=True, check=True)
+            written = sorted(os.listdir(tmp))
+        self.assertIn("time-vs-bounces.png", written)
+        for name in ("speed-vs-accuracy.png", "time-vs-resolution.png", "limits.png"):
+            self.assertNotIn(name, written)
+
+    def test_every_chart_draws_three_pipelines_and_two_layouts(self):
+        rows = sweep_rows_fixture()
+        for pipe, title, layout in PIPES:
+            rows += [row(pipe, title, layout, "spheres", b, group="accuracy", rmse=0.1 / (1 + b),
+                         psnr_db=20 + b, reference={"bounces": 8}) for b in range(3)]
+            limits = [row(pipe, title, layout, "spheres", b, group="limits") for b in range(4)]
+            limits[-1].update(status="error", failure="out_of_memory", device_ms=None)
+            rows += limits
+        figs = charts.draw_all(META, rows)
+        self.assertTrue(all(figs.values()), [k for k, v in figs.items() if not v])
+        self.assertEqual(texts_overlap(figs["limits.png"]), [])
+
+    def test_memory_legend_has_one_entry_per_visible_line(self):
+        fig = charts.memory_vs_bounces(META, sweep_rows_fixture())
+        fig.canvas.draw()
+        panels = [ax for ax in fig.axes if ax.lines]
+        legends = fig.axes[-1].artists + [fig.axes[-1].get_legend()]
+        entries = sum(len(lg.get_texts()) for lg in legends if lg)
+        lines = sum(len(ax.lines) for ax in panels)
+        self.assertEqual(entries, lines)
+        # Same scenes, same values: each pipeline is one line, not one per scene.
+        self.assertLessEqual(lines, 2 * 4)
+
+    def test_pipelines_have_distinct_colours_in_line_charts(self):
+        fig = charts.time_vs_bounces(META, sweep_rows_fixture())
+        colours = {line.get_color() for line in fig.axes[0].lines}
+        self.assertEqual(len(colours), 4)
+
+    def test_log_axes_have_several_labels_in_one_style(self):
+        fig = charts.time_vs_resolution(META, sweep_rows_fixture())
+        fig.canvas.draw()
+        for ax in fig.axes[:2]:
+            for axis in (ax.xaxis, ax.yaxis):
+                labels = [t.get_text() for t in axis.get_ticklabels() if t.get_text()]
+                self.assertGreater(len(labels), 1, labels)
+                self.assertTrue(all("10^" in t for t in labels) or
+                                not any("10^" in t for t in labels), labels)
+
+    def test_a_narrow_log_axis_gets_plain_labels(self):
+        for lo, hi in ((90, 140), (0.23, 1.6), (0.03, 500)):
+            fig, ax = chart_style.plt.subplots()
+            ax.plot([1, 2], [lo, hi])
+            ax.set_yscale("log")
+            chart_style.log_ticks(ax)
+            fig.canvas.draw()
+            labels = [t.get_text() for t in ax.yaxis.get_ticklabels() if t.get_text()]
+            self.assertGreaterEqual(len(labels), 3, labels)
+            self.assertFalse(any("10^" in t or "times" in t for t in labels), labels)
+
+
+def texts_overlap(fig):
+    """Pairs of overlapping labels inside any axes, after a draw."""
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    out = []
+    for ax in fig.axes:
+        boxes = [(t.get_text(), t.get_window_extent(renderer)) for t in ax.texts
+                 if t.get_visible() and t.get_text()]
+        for i, (a, box_a) in enumerate(boxes):
+            # 2 px: labels that touch read as one, as if they overlapped.
+            out += [(a, b) for b, box_b in boxes[i + 1:]
+                    if chart_style.boxes_overlap(box_a, box_b, 2)]
+    return out
+
+
+@unittest.skipUnless(HAVE_MPL, "matplotlib is not installed")
+class CommittedChartsTest(unittest.TestCase):
+    """The charts of the committed result sets: labels must not collide."""
+    SET = os.path.join(ROOT, "results", "nvidia-h100-80gb-hbm3")
+
+    def tearDown(self):
+        chart_style.plt.close("all")
+
+    def test_speed_vs_accuracy_labels_do_not_overlap(self):
+        meta, rows = charts.load(os.path.join(self.SET, "full.json"))
+        fig = charts.speed_vs_accuracy(meta, rows)
+        self.assertEqual(texts_overlap(fig), [])
+        self.assertGreater(sum(len(ax.texts) for ax in fig.axes), 6)
+
+    def test_limits_labels_do_not_overlap(self):
+        import charts_limits
+        meta, rows = charts.load(os.path.join(self.SET, "limits.json"))
+        fig = charts_limits.limits_chart(meta, rows)
+        self.assertEqual(texts_overlap(fig), [])
+
+
+if __name__ == "__main__":
+    unittest.main()
