@@ -291,7 +291,7 @@ def size_of(s):
 
 
 def speed_vs_accuracy(meta, rows):
-    rows = [r for r in in_group(rows, "accuracy") if "rmse" in r]
+    rows = [r for r in in_group(rows, "accuracy") if r.get("rmse") is not None]
     if not rows:
         return None
     ref = rows[0].get("reference", {})

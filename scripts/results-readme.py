@@ -145,7 +145,7 @@ def accel_table(rows):
 
 
 def pareto_table(rows):
-    scored = [r for r in in_group(rows, "accuracy") if "rmse" in r]
+    scored = [r for r in in_group(rows, "accuracy") if r.get("rmse") is not None]
     series = Series(scored) if scored else None
     body = []
     for scene in dict.fromkeys(r["scene"] for r in scored):
@@ -157,8 +157,14 @@ def pareto_table(rows):
                 body.append([scene, series.label(series.key(r)), r["bounces"],
                              r["shadow_samples"], r["aa"], ms(r["device_ms"]),
                              f"{r['rmse']:.4f}", f"{r['psnr_db']:.1f}"])
-    return table(["Scene", "Pipeline", "B", "Shadow samples", "AA", "Device ms", "RMSE",
-                  "PSNR dB"], body)
+    out = table(["Scene", "Pipeline", "B", "Shadow samples", "AA", "Device ms", "RMSE",
+                 "PSNR dB"], body)
+    # A frame with a NaN or infinite pixel has no error score (rmse is null): name each one.
+    broken = [r for r in in_group(rows, "accuracy") if r.get("nonfinite_pixels")]
+    for r in broken:
+        out += (f"\n\n**{r['scene']} {r['pipeline']} B={r['bounces']}: "
+                f"{r['nonfinite_pixels']} non-finite pixel(s); no accuracy score.**")
+    return out
 
 def write_readme(out, doc, index=False):
     """Writes a result set's README and, when asked (--index: committing result sets), the index
