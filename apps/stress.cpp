@@ -36,6 +36,7 @@
 #include "core/pipeline.h"
 #include "core/reference.h"
 #include "core/scene_loader.h"
+#include "core/version.h"
 
 namespace rt::stress {
 

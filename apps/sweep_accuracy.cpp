@@ -16,6 +16,7 @@
 #include "core/scene_loader.h"
 #include "image/compare.h"
 #include "image/image_io.h"
+#include "core/version.h"
 
 namespace rt::cli {
 namespace fs = std::filesystem;

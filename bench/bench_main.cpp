@@ -28,6 +28,7 @@
 #include "core/accel.h"
 #include "core/error.h"
 #include "core/scene_loader.h"
+#include "core/version.h"
 
 namespace fs = std::filesystem;
 using namespace rt;
@@ -49,7 +50,7 @@ Google Benchmark mode (every --benchmark_* flag works, e.g. --benchmark_filter=R
   --devices=SPEC,...    OpenCL devices by index or name [$RTLAB_DEVICE, else first GPU]
   --repeats=N           repetitions per benchmark; the median is reported [5]
   --frames=N            timed frames per repetition (fixed, so that sub-millisecond cells do
-                        not auto-iterate for minutes) [10]
+                        not auto-iterate for minutes) [5]
   --warmup=N            untimed frames before timing [2]
   --count-rays=yes|no   one untimed frame with device ray counters [yes]
 Sweep mode (no Google Benchmark; what `rtlab sweep --import` reads):
@@ -78,7 +79,7 @@ struct Flags {
     std::vector<std::string> accels;  // empty: each scene's default
     std::string cells, sweep, out, device, sceneDir, kernelDir, resume;
     std::vector<std::string> devices;
-    int repeats = 5, warmup = 2, frames = 10;
+    int repeats = 5, warmup = 2, frames = 5;
     bool countRays = true, listDevices = false;
     double timeLimit = 0;
 };
@@ -250,9 +251,10 @@ void reportProgress(const std::string& name, double msPerFrame, bool ok) {
     double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() -
                                                    progress.start).count();
     double left = elapsed / progress.done * std::max(0, progress.total - progress.done);
+    char result[64] = "failed";
+    if (ok) std::snprintf(result, sizeof result, "%.3f ms/frame", msPerFrame);
     std::fprintf(stderr, "[%d/%s%d] %s: %s | elapsed %s, ETA %s%s\n", progress.done,
-                 progress.filtered ? "at most " : "", progress.total, name.c_str(),
-                 ok ? (std::to_string(msPerFrame) + " ms/frame").c_str() : "failed",
+                 progress.filtered ? "at most " : "", progress.total, name.c_str(), result,
                  formatDuration(elapsed).c_str(), progress.filtered ? "<= " : "",
                  formatDuration(left).c_str());
 }

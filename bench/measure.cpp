@@ -6,6 +6,7 @@
 #include <map>
 
 #include "core/error.h"
+#include "core/version.h"
 
 namespace rt::bench {
 

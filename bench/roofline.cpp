@@ -16,6 +16,7 @@
 
 #include "core/cl_runtime.h"
 #include "core/error.h"
+#include "core/version.h"
 
 using namespace rt;
 

@@ -15,6 +15,7 @@
 #include "bench/measure.h"
 #include "core/accel.h"
 #include "core/error.h"
+#include "core/version.h"
 
 namespace rt::bench {
 namespace fs = std::filesystem;
