@@ -3,6 +3,7 @@
 // (median of repeats after a warm-up frame) beside its error against the reference.
 #include <algorithm>
 #include <cstdio>
+#include <filesystem>
 #include <optional>
 #include <string>
 #include <vector>
@@ -54,7 +55,15 @@ bool compareParsed() { return compareCmd && compareCmd->parsed(); }
 
 int runCompare() {
     CompareArgs& a = compareArgs;
+    // A bad -o fails before minutes of rendering, not after.
+    if (!a.outputPrefix.empty()) {
+        std::filesystem::path dir = std::filesystem::path(a.outputPrefix).parent_path();
+        if (!dir.empty() && !std::filesystem::is_directory(dir))
+            throw Error("--output-prefix " + a.outputPrefix + ": folder " + dir.string() +
+                        " does not exist");
+    }
     Scene scene = loadScene(a.scene, readImage);
+    for (const std::string& note : scene.notes) std::fprintf(stderr, "rtlab: note: %s\n", note.c_str());
     RenderOptions o = a.flags.apply(scene.defaults);
     ClContext cl(selectDevice(a.flags.device), a.flags.kernelSources());
     std::printf("rtlab compare: %s, %dx%d, bounces %d, shadow samples %d, aa %d, C=%d\n",

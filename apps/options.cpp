@@ -109,6 +109,10 @@ KernelSources SceneFlags::kernelSources() const {
 }
 
 void checkOutputPath(const std::filesystem::path& path) {
+    std::error_code ec;
+    if (std::filesystem::is_directory(path, ec))
+        throw Error("--output " + path.string() + ": is a folder; give a file name such as " +
+                    (path / "render.png").string());
     std::string ext = path.extension().string();
     for (char& c : ext) c = char(std::tolower((unsigned char)c));
     if (ext != ".png" && ext != ".exr" && ext != ".jpg" && ext != ".jpeg" && ext != ".tif" &&

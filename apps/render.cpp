@@ -79,6 +79,7 @@ int runRender() {
     // Fail on an unwritable output before spending time on the frame.
     checkOutputPath(output);
     Scene scene = loadScene(a.scene, readImage);
+    for (const std::string& note : scene.notes) std::fprintf(stderr, "rtlab: note: %s\n", note.c_str());
     RenderOptions options = a.flags.apply(scene.defaults);
     std::optional<ClContext> cl;
     if (kind != PipelineKind::Cpu) cl.emplace(selectDevice(a.flags.device), a.flags.kernelSources());

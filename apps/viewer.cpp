@@ -76,6 +76,7 @@ std::string framePath(const ClContext& cl) {
 
 int runViewer(Args& a) {
     Scene scene = loadScene(a.scene, readImage);
+    for (const std::string& note : scene.notes) std::fprintf(stderr, "rtlab-view: note: %s\n", note.c_str());
     RenderOptions options = a.flags.apply(scene.defaults);
     if (!a.screenshot.empty()) {
         try {

@@ -279,6 +279,40 @@ bool unitLength(const glm::vec3& v, glm::vec3* out) {
 }
 
 // Warnings of tinyobjloader that mean broken geometry (the scanner should have caught them).
+glm::vec3 unitColor(const tinyobj::real_t* c) {
+    glm::vec3 v(c[0], c[1], c[2]);
+    return finite(v) ? glm::clamp(v, 0.f, 1.f) : glm::vec3(0.f);
+}
+
+float clampFinite(float v, float lo, float hi, float fallback) {
+    return std::isfinite(v) ? std::clamp(v, lo, hi) : fallback;
+}
+
+ObjMaterial toMaterial(const tinyobj::material_t& m) {
+    ObjMaterial out;
+    out.name = m.name;
+    out.ambient = unitColor(m.ambient);
+    out.diffuse = unitColor(m.diffuse);
+    out.specular = unitColor(m.specular);
+    out.shininess = clampFinite(m.shininess, 1.f, 10000.f, 1.f);
+    out.ior = clampFinite(m.ior, 1.f, 4.f, 1.f);
+    out.dissolve = clampFinite(m.dissolve, 0.f, 1.f, 1.f);
+    out.illum = m.illum;
+    return out;
+}
+
+// tinyobjloader reports a missing or unreadable .mtl as a warning; rtlab then renders with its
+// default material, and says so.
+std::string materialNote(const std::string& warn) {
+    std::istringstream lines(warn);
+    std::string line;
+    while (std::getline(lines, line))
+        if (line.find("Material file") != std::string::npos ||
+            line.find("material file") != std::string::npos)
+            return line;
+    return "";
+}
+
 void checkWarnings(const fs::path& path, const std::string& warn) {
     std::istringstream lines(warn);
     std::string line;
@@ -290,10 +324,12 @@ void checkWarnings(const fs::path& path, const std::string& warn) {
 }
 
 ObjMesh build(const fs::path& path, const tinyobj::attrib_t& attrib,
-              const std::vector<tinyobj::shape_t>& shapes) {
+              const std::vector<tinyobj::shape_t>& shapes,
+              const std::vector<tinyobj::material_t>& materials) {
     const int vertexCount = int(attrib.vertices.size() / 3);
     const int normalCount = int(attrib.normals.size() / 3);
     std::vector<tinyobj::index_t> corners;
+    std::vector<int> faceMaterial;  // per kept triangle
     bool fileNormals = true;
     long long total = 0;
     for (const tinyobj::shape_t& shape : shapes) {
@@ -318,6 +354,9 @@ ObjMesh build(const fs::path& path, const tinyobj::attrib_t& attrib,
                                      vertexAt(attrib, idx[t + 2].vertex_index) - v0);
             if (n == glm::vec3(0.f) || !finite(n)) continue;  // zero area: never hit, dropped
             corners.insert(corners.end(), idx.begin() + t, idx.begin() + t + 3);
+            const std::size_t f = t / 3;
+            const int m = f < shape.mesh.material_ids.size() ? shape.mesh.material_ids[f] : -1;
+            faceMaterial.push_back(m >= 0 && m < int(materials.size()) ? m : -1);
         }
     }
     if (total == 0) fail(path, "no triangles");
@@ -328,6 +367,8 @@ ObjMesh build(const fs::path& path, const tinyobj::attrib_t& attrib,
                        std::to_string(kMaxTriangles) + ")");
 
     ObjMesh mesh;
+    mesh.triangleMaterial = std::move(faceMaterial);
+    for (const tinyobj::material_t& m : materials) mesh.materials.push_back(toMaterial(m));
     mesh.positions.reserve(corners.size());
     for (const tinyobj::index_t& c : corners)
         mesh.positions.push_back(vertexAt(attrib, c.vertex_index));
@@ -378,15 +419,19 @@ ObjMesh loadObj(const std::filesystem::path& path) {
         std::vector<tinyobj::material_t> materials;
         std::string warn, err;
         std::istringstream in(std::move(text));
-        // No material reader: materials are chosen by the scene file, mtllib is ignored.
-        bool ok = tinyobj::LoadObj(&attrib, &shapes, &materials, &warn, &err, &in, nullptr,
+        // mtllib files are looked up beside the OBJ file, as the format says.
+        std::string base = path.parent_path().string();
+        tinyobj::MaterialFileReader mtl(base.empty() ? std::string("./") : base + "/");
+        bool ok = tinyobj::LoadObj(&attrib, &shapes, &materials, &warn, &err, &in, &mtl,
                                    /*triangulate=*/true, /*default_vcols_fallback=*/false);
         if (!ok || !err.empty()) {
             std::string first = err.substr(0, err.find('\n'));
             fail(path, first.empty() ? "cannot parse" : first);
         }
         checkWarnings(path, warn);
-        return build(path, attrib, shapes);
+        ObjMesh mesh = build(path, attrib, shapes, materials);
+        mesh.materialNote = materialNote(warn);
+        return mesh;
     } catch (const std::bad_alloc&) {
         fail(path, "out of memory");
     } catch (const std::length_error&) {

@@ -61,6 +61,9 @@ struct Scene {
     std::vector<dev::Light> lights;
     Environment environment;
     RenderOptions defaults;
+    // What the loader could not use and rendered differently, for front ends to show
+    // ("bunny.mtl not found: the default material"); never an error.
+    std::vector<std::string> notes;
 
     // Branching factor C of the ray tree: 2 when any material is transparent, else 1.
     int branching() const;

@@ -645,6 +645,22 @@ class Loader {
 };
 
 // A bare OBJ: grey model, ground plane under it, camera on -z framing its bounding sphere.
+// An .mtl material as rtlab's: Ka, Kd, Ks and Ns as they are; d as the opacity, with Ni as the
+// index of refraction of what shows through; illumination models 3, 5 and 7 (ray-traced
+// reflection) make the surface a mirror weighted by Ks's mean.
+dev::Material fromObj(const ObjMaterial& m) {
+    dev::Material out{};
+    out.ambient = f3(m.ambient);
+    out.diffuse = f3(m.diffuse);
+    out.specular = f3(m.specular);
+    out.exponent = m.shininess;
+    const bool mirror = m.illum == 3 || m.illum == 5 || m.illum == 7;
+    out.reflectance = mirror ? (m.specular.x + m.specular.y + m.specular.z) / 3.f : 0.f;
+    out.opacity = m.dissolve;
+    out.ior = m.dissolve < 1.f ? m.ior : 1.f;
+    return out;
+}
+
 Scene wrapObj(const fs::path& path) {
     ObjMesh obj = loadObj(path);
     Scene scene;
@@ -660,11 +676,20 @@ Scene wrapObj(const fs::path& path) {
     model.opacity = ground.opacity = model.ior = ground.ior = 1.f;
     scene.materials = {model, ground};
     scene.materialNames = {"default", "ground"};
+    // The file's own materials follow (scenes/README.md, "OBJ models"): faces without one keep
+    // the default.
+    const int firstObjMaterial = int(scene.materials.size());
+    for (const ObjMaterial& m : obj.materials) {
+        scene.materials.push_back(fromObj(m));
+        scene.materialNames.push_back(m.name);
+    }
+    if (!obj.materialNote.empty()) scene.notes.push_back(path.string() + ": " + obj.materialNote);
     for (std::size_t t = 0; t < obj.positions.size(); t += 3) {
         const auto& p = obj.positions;
         const auto& n = obj.normals;
-        scene.triangles.push_back(
-            {f3(p[t]), f3(p[t + 1]), f3(p[t + 2]), f3(n[t]), f3(n[t + 1]), f3(n[t + 2]), 0, 0});
+        const int m = t / 3 < obj.triangleMaterial.size() ? obj.triangleMaterial[t / 3] : -1;
+        scene.triangles.push_back({f3(p[t]), f3(p[t + 1]), f3(p[t + 2]), f3(n[t]), f3(n[t + 1]),
+                                   f3(n[t + 2]), m < 0 ? 0 : firstObjMaterial + m, 0});
     }
     scene.meshes.push_back({0, int(scene.triangles.size()), -1, 0, {}, {}, {}, 0.f, {}});
     finalizeScene(scene);
@@ -680,16 +705,31 @@ Scene wrapObj(const fs::path& path) {
     return scene;
 }
 
-bool isObj(const fs::path& path) {
+std::string lowerExtension(const fs::path& path) {
     std::string ext = path.extension().string();
     for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
-    return ext == ".obj";
+    return ext;
+}
+
+bool isObj(const fs::path& path) { return lowerExtension(path) == ".obj"; }
+
+// Model formats people try first; rtlab reads OBJ models and its own JSON scenes only.
+void rejectOtherModelFormats(const fs::path& path) {
+    static const char* const kOthers[] = {".ply", ".gltf", ".glb", ".fbx", ".stl", ".dae",
+                                          ".3ds", ".blend", ".usd", ".usda", ".usdz", ".x3d"};
+    const std::string ext = lowerExtension(path);
+    for (const char* other : kOthers)
+        if (ext == other)
+            throw Error(path.string() + ": " + ext.substr(1) +
+                        " files are not supported; rtlab reads .obj models and .json scenes "
+                        "(convert it to OBJ, e.g. with assimp export or Blender)");
 }
 
 }  // namespace
 
 Scene loadScene(const std::filesystem::path& path, const ImageReader& readImage) {
     try {
+        rejectOtherModelFormats(path);
         if (isObj(path)) return wrapObj(path);
         return Loader(path, readImage).load();
     } catch (const std::bad_alloc&) {

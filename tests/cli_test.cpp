@@ -108,6 +108,9 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"render scenes/spheres.json --layout diagonal -o /tmp/x.png", "--layout"},
         BadCase{"render scenes/spheres.json --pipeline wave --adaptive --aa 2 -o /tmp/x.png",
                 "--adaptive: the wavefront pipeline has no adaptive anti-aliasing"},
+        BadCase{"render tests/data/model.ply -o /tmp/x.png", "ply files are not supported"},
+        BadCase{"render scenes/spheres.json -o scenes", "scenes: is a folder"},
+        BadCase{"compare scenes/spheres.json -o /no/such/dir/p", "--output-prefix /no/such/dir/p"},
         BadCase{"bogus", "unknown command 'bogus'"}),
     caseName);
 

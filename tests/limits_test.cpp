@@ -167,7 +167,7 @@ TEST(LimitsSweep, RowsRecordHowEachCellEnded) {
     // 320 x 15 x 48 = 230400 B: not even one row fits; 640x360 would not be tried.
     EXPECT_EQ(rows["wave 320x180 b3"]["failure"], "tree row");
     EXPECT_NE(rows["wave 320x180 b3"]["end"].get<std::string>().find(
-                  "error: --bounces 3: one row of the wavefront ray tree"),
+                  "error: one row of the wavefront ray tree at bounce limit 3"),
               std::string::npos);
 }
 

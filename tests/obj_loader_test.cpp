@@ -9,6 +9,7 @@
 #include <string>
 
 #include "core/error.h"
+#include "core/scene_loader.h"
 #include "tests/test_device.h"
 
 namespace rt {
@@ -137,6 +138,56 @@ TEST(ObjLoader, KnotModelHasTenThousandTrianglesWithFileNormals) {
         agree += glm::dot(face, mesh.normals[t]) > 0.f;
     }
     EXPECT_EQ(agree, int(mesh.positions.size() / 3));
+}
+
+// Real models ship with .mtl libraries: their Kd, Ks, Ns, Ni, d and illum become rtlab materials
+// (scenes/README.md), faces without a known material keep the default.
+TEST(ObjLoader, MtlMaterialsMapOntoRtlabMaterials) {
+    const Scene scene = loadScene("tests/data/obj_mtl/two_materials.obj");
+    EXPECT_TRUE(scene.notes.empty());
+    ASSERT_EQ(scene.materials.size(), 4u);  // default, ground, then the file's two
+    EXPECT_EQ(scene.materialNames[2], "red_mirror");
+    EXPECT_EQ(scene.materialNames[3], "glass");
+    ASSERT_EQ(scene.triangles.size(), 5u);  // two quads and a triangle
+    const int expected[] = {2, 2, 3, 3, 0};
+    for (int t = 0; t < 5; ++t) EXPECT_EQ(scene.triangles[t].material, expected[t]) << "triangle " << t;
+
+    const dev::Material& red = scene.materials[2];
+    EXPECT_FLOAT_EQ(red.diffuse.x, 0.8f);
+    EXPECT_FLOAT_EQ(red.diffuse.y, 0.1f);
+    EXPECT_FLOAT_EQ(red.ambient.x, 0.1f);
+    EXPECT_FLOAT_EQ(red.exponent, 64.f);
+    EXPECT_FLOAT_EQ(red.reflectance, 0.6f);  // illum 3: a mirror weighted by mean(Ks)
+    EXPECT_FLOAT_EQ(red.opacity, 1.f);
+    EXPECT_FLOAT_EQ(red.ior, 1.f);
+
+    const dev::Material& glass = scene.materials[3];
+    EXPECT_FLOAT_EQ(glass.opacity, 0.25f);
+    EXPECT_FLOAT_EQ(glass.ior, 1.5f);
+    EXPECT_FLOAT_EQ(glass.reflectance, 1.f);
+    EXPECT_EQ(scene.branching(), 2) << "a transparent material makes the tree binary";
+}
+
+TEST(ObjLoader, MissingMtlLibraryRendersWithTheDefaultMaterialAndSaysSo) {
+    const Scene scene = loadScene("tests/data/obj_mtl/missing_library.obj");
+    ASSERT_EQ(scene.materials.size(), 2u);
+    for (const dev::Triangle& t : scene.triangles) EXPECT_EQ(t.material, 0);
+    ASSERT_EQ(scene.notes.size(), 1u);
+    EXPECT_NE(scene.notes[0].find("no_such_library.mtl"), std::string::npos) << scene.notes[0];
+}
+
+TEST(ObjLoader, OtherModelFormatsAreRefusedByName) {
+    for (const char* file : {"model.ply", "scene.gltf", "scene.GLB", "part.stl"}) {
+        try {
+            loadScene(file);
+            ADD_FAILURE() << file << " loaded";
+        } catch (const Error& e) {
+            const std::string msg = e.what();
+            EXPECT_NE(msg.find(file), std::string::npos) << msg;
+            EXPECT_NE(msg.find("files are not supported; rtlab reads .obj models and .json scenes"),
+                      std::string::npos) << msg;
+        }
+    }
 }
 
 TEST(ObjLoader, StanfordBunnyLoads) {

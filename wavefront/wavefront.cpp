@@ -17,7 +17,8 @@ int WavefrontPipeline::tileRows(int width, int height, int branching, int bounce
     if (row > budget) {
         int fits = bounces;
         while (fits >= 0 && rowBytes(fits) > budget) --fits;
-        std::string msg = "--bounces " + std::to_string(bounces) + ": one row of the wavefront ray tree (" +
+        // Named by what limits it (the budget), not by --bounces, which the user may not have set.
+        std::string msg = "one row of the wavefront ray tree at bounce limit " + std::to_string(bounces) + " (" +
                           std::to_string(width) + " pixels x " +
                           std::to_string(treeNodeCount(branching, bounces)) + " nodes x " +
                           std::to_string(sizeof(dev::Node)) + " B = " + std::to_string(row) +
