@@ -1,6 +1,7 @@
-// rtlab compare: the testbed's main job in one command. Renders a scene with the CPU reference,
-// the megakernel and the wavefront pipeline on one device, and prints each pipeline's device time
-// (median of repeats after a warm-up frame) beside its error against the reference.
+// rtlab compare: the testbed's main job in one command. Renders a scene with the CPU reference and
+// every registered pipeline on one device, and prints each pipeline's device time (median of
+// repeats after a warm-up frame) beside its error against the reference, then how far each pair
+// of pipelines differs (by design, not at all).
 #include <algorithm>
 #include <cstdio>
 #include <optional>
@@ -12,6 +13,7 @@
 #include "core/cl_runtime.h"
 #include "core/error.h"
 #include "core/pipeline.h"
+#include "pipelines/registry.h"
 #include "core/scene_loader.h"
 #include "image/compare.h"
 #include "image/image_io.h"
@@ -39,10 +41,12 @@ double median(std::vector<double> v) {
 void addCompare(CLI::App& app) {
     CompareArgs& a = compareArgs;
     compareCmd = app.add_subcommand(
-        "compare", "Render one scene with cpu, mega and wave; print time and error side by side");
+        "compare", "Render one scene with the CPU reference and every pipeline (" +
+                       pipelineRegistry().joinedNames(true) +
+                       "); print time and error side by side");
     compareCmd->add_option("scene", a.scene, "Scene file (.json) or OBJ model")->required();
     compareCmd->add_option("-o,--output-prefix", a.outputPrefix,
-                           "Also write PREFIX-cpu.png, PREFIX-mega.png, PREFIX-wave.png");
+                           "Also write PREFIX-<pipeline>.png for each pipeline and the reference");
     compareCmd->add_option("--repeats", a.repeats, "Timed frames per pipeline (median is shown)")
         ->check(CLI::Range(1, 1000))
         ->capture_default_str();
@@ -61,17 +65,22 @@ int runCompare() {
                 scene.branching());
     std::printf("device %s, commit %s\n\n", cl.device().label().c_str(), RTLAB_COMMIT);
 
-    auto cpu = makePipeline(PipelineKind::Cpu, nullptr);
+    const PipelineRegistry& registry = pipelineRegistry();
+    const PipelineInfo& ref = *std::find_if(registry.all().begin(), registry.all().end(),
+                                            [](const PipelineInfo& p) { return p.reference; });
+    auto cpu = makePipeline(ref.name, nullptr);
     Image reference = cpu->render(scene, o);
     double cpuMs = cpu->stats().hostMs;
-    if (!a.outputPrefix.empty()) writeImage(reference, a.outputPrefix + "-cpu.png");
+    if (!a.outputPrefix.empty()) writeImage(reference, a.outputPrefix + "-" + ref.name + ".png");
 
     std::printf("%-6s %12s %12s %14s %12s %12s\n", "pipe", "device ms", "host ms", "within 2/255",
                 "mean |err|", "max |err|");
-    std::printf("%-6s %12s %12.2f %14s %12s %12s\n", "cpu", "-", cpuMs, "reference", "-", "-");
+    std::printf("%-6s %12s %12.2f %14s %12s %12s\n", ref.name.c_str(), "-", cpuMs, "reference",
+                "-", "-");
+    const std::vector<std::string> names = registry.names(true);
     std::vector<Image> images;
-    for (PipelineKind kind : {PipelineKind::Mega, PipelineKind::Wave}) {
-        auto p = makePipeline(kind, &cl);
+    for (const std::string& name : names) {
+        auto p = makePipeline(name, &cl);
         Image img = p->render(scene, o);  // warm-up: builds the program, allocates buffers
         std::vector<double> dev, host;
         for (int r = 0; r < a.repeats; ++r) {
@@ -80,16 +89,20 @@ int runCompare() {
             host.push_back(p->stats().hostMs);
         }
         ImageDiff d = compareImages(img, reference, 2.0 / 255.0);
-        std::printf("%-6s %12.3f %12.3f %13.3f%% %10.3f/255 %8.2f/255\n", pipelineName(kind),
+        std::printf("%-6s %12.3f %12.3f %13.3f%% %10.3f/255 %8.2f/255\n", name.c_str(),
                     median(dev), median(host), 100.0 * d.fractionWithin, d.meanAbs * 255.0,
                     d.maxAbs * 255.0);
         if (!a.outputPrefix.empty())
-            writeImage(img, a.outputPrefix + "-" + pipelineName(kind) + ".png");
+            writeImage(img, a.outputPrefix + "-" + name + ".png");
         images.push_back(std::move(img));
     }
-    ImageDiff mw = compareImages(images[0], images[1], 0.0, false);
-    std::printf("\nmega vs wave: max |difference| %.3g (%s)\n", mw.maxAbs,
-                mw.maxAbs == 0 ? "bit-identical" : "not bit-identical");
+    std::printf("\n");
+    for (size_t i = 0; i < names.size(); ++i)
+        for (size_t j = i + 1; j < names.size(); ++j) {
+            ImageDiff d = compareImages(images[i], images[j], 0.0, false);
+            std::printf("%s vs %s: max |difference| %.3g (%s)\n", names[i].c_str(), names[j].c_str(),
+                        d.maxAbs, d.maxAbs == 0 ? "bit-identical" : "not bit-identical");
+        }
     return 0;
 }
 

@@ -26,6 +26,7 @@
 #include "core/cl_runtime.h"
 #include "core/error.h"
 #include "core/pipeline.h"
+#include "pipelines/registry.h"
 #include "core/scene_loader.h"
 
 namespace fs = std::filesystem;
@@ -62,7 +63,7 @@ Frame frame(Pipeline& p, const Scene& scene, RenderOptions o, bool count) {
     return {p.stats().deviceMs, count ? totalRays(p.stats()) : 0};
 }
 
-void BigMeshBvhOverNone(benchmark::State& state, PipelineKind kind) {
+void BigMeshBvhOverNone(benchmark::State& state, std::string kind) {
     try {
         std::optional<ClContext> cl;
         const char* dev = std::getenv("RTLAB_DEVICE");
@@ -104,11 +105,11 @@ void BigMeshBvhOverNone(benchmark::State& state, PipelineKind kind) {
 
 }  // namespace
 
-BENCHMARK_CAPTURE(BigMeshBvhOverNone, mega, PipelineKind::Mega)
+BENCHMARK_CAPTURE(BigMeshBvhOverNone, mega, "mega")
     ->Iterations(1)
     ->UseManualTime()
     ->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BigMeshBvhOverNone, wave, PipelineKind::Wave)
+BENCHMARK_CAPTURE(BigMeshBvhOverNone, wave, "wave")
     ->Iterations(1)
     ->UseManualTime()
     ->Unit(benchmark::kMillisecond);

@@ -33,12 +33,12 @@ using namespace rt::bench;
 
 namespace {
 
-const char* kUsage = R"(rtlab-bench: megakernel versus wavefront, timed by OpenCL profiling events.
+const char* kUsage = R"(rtlab-bench: the registered pipelines, timed by OpenCL profiling events.
 
 Google Benchmark mode (every --benchmark_* flag works, e.g. --benchmark_filter=REGEX,
 --benchmark_out=FILE.json, --benchmark_min_time=0.1):
   --scenes=a,b,...      scene names in the scene folder [empty,spheres,shadows,cornell,mesh,envmap]
-  --pipelines=mega,wave
+  --pipelines=a,b,...   any registered pipelines (listed below) [all]
   --sizes=WxH,...       [640x360,1280x720,1920x1080,3840x2160]
   --bounces=0..8        list and/or ranges [0..8]
   --accels=bvh,...      none, bv, grid, bvh [each scene's default]
@@ -61,9 +61,15 @@ Both:
   --list-devices        print the OpenCL devices and exit
 )";
 
+void printUsage() {
+    std::fputs(kUsage, stdout);
+    std::printf("\nPipelines (--pipelines, and `pipelines =` in sweep files):\n%s",
+                pipelineRegistry().help().c_str());
+}
+
 struct Flags {
     std::vector<std::string> scenes{"empty", "spheres", "shadows", "cornell", "mesh", "envmap"};
-    std::vector<std::string> pipelines{"mega", "wave"};
+    std::vector<std::string> pipelines = pipelineRegistry().names(true);
     std::vector<std::string> sizes{"640x360", "1280x720", "1920x1080", "3840x2160"};
     std::string bounces = "0..8";
     std::vector<std::string> accels;  // empty: each scene's default
@@ -91,7 +97,7 @@ Flags parseFlags(int argc, char** argv) {
     for (int i = 1; i < argc; ++i) {
         std::string a = argv[i];
         if (a == "--help" || a == "-h") {
-            std::fputs(kUsage, stdout);
+            printUsage();
             std::exit(0);
         }
         if (a == "--list-devices") {
@@ -213,7 +219,7 @@ struct Target {
     std::string tag;  // "" for one device, else "/dev<index>"
 };
 
-void renderBenchmark(benchmark::State& state, ClContext* cl, const Scene* scene, PipelineKind kind,
+void renderBenchmark(benchmark::State& state, ClContext* cl, const Scene* scene, std::string kind,
                      RenderOptions o, int warmup, bool countRays) {
     size_t before = cl->allocatedBytes();
     std::unique_ptr<Pipeline> pipeline;
@@ -251,28 +257,30 @@ void renderBenchmark(benchmark::State& state, ClContext* cl, const Scene* scene,
     state.counters["wall_ms"] = Counter(wall, Counter::kAvgIterations);
     state.counters["device_bytes"] = double(cl->allocatedBytes() - before);
     state.counters["private_bytes"] = double(s.privateBytes);
-    state.counters["tree_nodes"] = double(s.treeNodes);
+    state.counters["tree_nodes"] = double(treeNodeCount(scene->branching(), o.bounces));
     state.counters["tiles"] = s.tiles;
     if (countRays) {
         Measurement m;
-        m.treeNodes = s.treeNodes;
         m.deviceMs = state.iterations() ? devSum / double(state.iterations()) : 0;
         try {
             o.countRays = true;
             pipeline->render(*scene, o);
             m.rays = pipeline->stats().rays;
             m.raysCounted = pipeline->stats().raysCounted;
+            m.extras = pipeline->stats().extras;
         } catch (const std::exception& e) {
             state.SetLabel(std::string("ray count failed: ") + e.what());
         }
-        deriveRayCounters(m, kind, o);
+        deriveRayCounters(m);
         if (m.raysCounted) {
-            static const char* names[4] = {"rays_primary", "rays_reflection", "rays_refraction",
-                                           "rays_shadow"};
-            for (int i = 0; i < 4; ++i) state.counters[names[i]] = double(m.rays[i]);
+            for (int i = 0; i < RT_RAY_TYPES; ++i)
+                state.counters[std::string("rays_") + rayTypeName(i)] = double(m.rays[size_t(i)]);
             state.counters["Mrays_per_s"] = m.mrays;
-            if (m.treeUsed >= 0) state.counters["tree_used"] = m.treeUsed;
         }
+        // Numeric extras (the wavefront's tree_used, ...) as they are.
+        for (const auto& [key, value] : m.extras.items())
+            if (value.is_number())
+                state.counters[key] = value.get<double>();
     }
 }
 
@@ -335,7 +343,7 @@ int benchmarkCommand(const Flags& f, int argc, char** argv) {
                         for (const std::string& p : f.pipelines) {
                             Cell c;
                             c.scene = name;
-                            c.pipeline = parsePipeline(p);
+                            c.pipeline = pipelineInfo(p).name;
                             c.options = s->defaults;
                             if (std::sscanf(size.c_str(), "%dx%d", &c.options.width,
                                             &c.options.height) != 2)
@@ -350,7 +358,7 @@ int benchmarkCommand(const Flags& f, int argc, char** argv) {
     for (Target& t : targets)
         for (const Cell& c : cells) {
             const RenderOptions& o = c.options;
-            std::string name = "render/" + c.scene + "/" + pipelineName(c.pipeline) + "/" +
+            std::string name = "render/" + c.scene + "/" + c.pipeline + "/" +
                                std::to_string(o.width) + "x" + std::to_string(o.height) + "/b" +
                                std::to_string(o.bounces) + "/s" + std::to_string(o.shadowSamples) +
                                "/aa" + std::to_string(o.aa) + "/" +
@@ -375,7 +383,7 @@ int benchmarkCommand(const Flags& f, int argc, char** argv) {
 int main(int argc, char** argv) {
     for (int i = 1; i < argc; ++i)
         if (!std::strcmp(argv[i], "--help") || !std::strcmp(argv[i], "-h")) {
-            std::fputs(kUsage, stdout);
+            printUsage();
             std::puts("\nGoogle Benchmark's own flags: --benchmark_list_tests, --benchmark_filter, ...");
             return 0;
         }

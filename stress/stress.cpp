@@ -34,6 +34,7 @@
 #include "core/cl_runtime.h"
 #include "core/error.h"
 #include "core/pipeline.h"
+#include "pipelines/registry.h"
 #include "core/reference.h"
 #include "core/scene_loader.h"
 
@@ -490,7 +491,7 @@ NestedResult compare(const Image& a, const Image& b) {
     return r;
 }
 
-NestedResult nested(ClContext& cl, PipelineKind kind, int width, int height, int bounces) {
+NestedResult nested(ClContext& cl, const std::string& kind, int width, int height, int bounces) {
     Scene scene = nestedScene();
     RenderOptions o;
     o.width = width;
@@ -745,11 +746,11 @@ void runAll(ClContext& cl, bool quick, Report& R) {
           "Bar: every pixel finite, >= 99% within 2/255.\n\n"
        << "| pipeline | bounces | non-finite pixels | within 2/255 | mean abs error | max abs "
           "error | bar |\n| --- | --- | --- | --- | --- | --- | --- |\n";
-    for (PipelineKind k : {PipelineKind::Mega, PipelineKind::Wave})
+    for (const std::string& k : pipelineRegistry().names(true))
         for (int b : {2, 6}) {
             NestedResult n = nested(cl, k, 64, 48, b);
             double within = double(n.within) / double(n.pixels);
-            md << "| " << pipelineName(k) << " | " << b << " | " << n.nonFinite << " | "
+            md << "| " << k << " | " << b << " | " << n.nonFinite << " | "
                << fmt("%.2f%%", 100 * within) << " | " << fmt("%.3f/255", n.meanAbs * 255)
                << " | " << fmt("%.2f/255", n.maxAbs * 255) << " | "
                << R.check(n.nonFinite == 0 && within >= 0.99) << " |\n";
