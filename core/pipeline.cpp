@@ -61,7 +61,7 @@ void checkOptions(const Scene& scene, const RenderOptions& o) {
 
 size_t treePrivateBytes(int branching, int bounces) {
     // A node plus its colour (float3, 16 bytes in private memory) per tree slot.
-    return size_t(treeNodeCount(branching, bounces)) * (sizeof(dev::Node) + 16);
+    return size_t(treeNodeCount(branching, bounces)) * (sizeof(dev::Node) + sizeof(cl_float3));
 }
 
 void checkPrivateTree(int branching, int bounces, const std::string& who, bool suggestWeighted) {

@@ -3,10 +3,13 @@
 // name every choice when asked for one it lacks.
 #include <gtest/gtest.h>
 
+#include <cstring>
 #include <set>
 #include <string>
 
 #include "core/error.h"
+#include "core/scene_loader.h"
+#include "image/image_io.h"
 #include "pipelines/registry.h"
 #include "test_device.h"
 
@@ -55,6 +58,24 @@ TEST(Registry, RefusesADuplicateName) {
     r.add(referencePipelineInfo());
     EXPECT_THROW(r.add(referencePipelineInfo()), Error);
     EXPECT_THROW(r.make("mega", nullptr), Error);  // not in this registry
+}
+
+// What lets a new pipeline in without a test of its own: every device pipeline renders the same
+// image, bit for bit, as the first one registered (they share the stage code in core/cl).
+TEST(Registry, EveryDevicePipelineRendersTheSameImage) {
+    Scene scene = loadScene("scenes/spheres.json", readImage);
+    RenderOptions o = scene.defaults;
+    o.width = 48;
+    o.height = 32;
+    o.bounces = 3;
+    const std::vector<std::string> names = pipelineRegistry().names(true);
+    Image first = makePipeline(names.at(0), &test::device())->render(scene, o);
+    for (size_t i = 1; i < names.size(); ++i) {
+        Image other = makePipeline(names[i], &test::device())->render(scene, o);
+        ASSERT_EQ(other.rgb.size(), first.rgb.size()) << names[i];
+        EXPECT_EQ(std::memcmp(other.rgb.data(), first.rgb.data(), first.rgb.size() * sizeof(float)), 0)
+            << names[i] << " differs from " << names[0];
+    }
 }
 
 TEST(Registry, DevicePipelineNeedsADevice) {

@@ -1,17 +1,21 @@
 // Stability (issue 8): the numerical stress suite asserts the robust methods' figures and records
 // the plain methods' (RecordProperty, in the gtest XML); garbage geometry is rejected with one
 // clear line or renders without a NaN pixel; device limits end in a clear error. The cases and
-// their probe kernels are those of rtlab-stress (stress/stress.cpp, core/cl/probe.cl), included
+// their probe kernels are those of rtlab-stress (stress/stress.h, core/cl/probe.cl), linked
 // here so the tool and the test cannot drift apart; the tests use fewer rays.
-#define RTLAB_STRESS_NO_MAIN
-#include "stress/stress.cpp"
+#include "stress/stress.h"
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 
+#include "core/error.h"
+#include "core/reference.h"
+#include "core/scene_loader.h"
 #include "megakernel/megakernel.h"
 #include "pipelines/registry.h"
 #include "test_device.h"
