@@ -19,7 +19,7 @@ namespace rt::cli {
 namespace {
 
 struct RenderArgs {
-    std::string scene, output, pipeline = "mega";
+    std::string scene, output, pipeline;  // the first device pipeline registered, by default
     SceneFlags flags;
     bool stats = false;
 } renderArgs;
@@ -124,6 +124,7 @@ void addRender(CLI::App& app) {
     renderCmd->add_option("-o,--output", a.output,
                           "Output image: .png (8-bit sRGB, clamped) or .exr (linear float) "
                           "[render.png]");
+    a.pipeline = pipelineRegistry().names(true).at(0);
     addPipelineOption(*renderCmd, a.pipeline, true);
     a.flags.add(*renderCmd);
     renderCmd->add_flag("--stats", a.stats, "Print kernel times (profiling events) and memory use");

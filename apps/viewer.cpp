@@ -28,7 +28,7 @@ namespace {
 using namespace rt;
 
 struct Args {
-    std::string scene, pipeline = "mega", screenshot;
+    std::string scene, pipeline, screenshot;  // pipeline: the registry's first by default
     cli::SceneFlags flags;
     int scale = 2;
     std::array<std::string, 2> pair;  // --split LEFT,RIGHT

@@ -1,4 +1,4 @@
-// rtlab-view — the render thread. It owns the scene and both pipelines (megakernel, wavefront),
+// rtlab-view — the render thread. It owns the scene and every registered device pipeline,
 // renders whatever the window last asked for, and hands back 8-bit frames and their stats. The
 // window thread stays free for input and drawing, so a slow device (PoCL) never stalls the UI.
 //
@@ -48,8 +48,8 @@ Animation orbitFirstSphere(const Scene& scene, float radius, double period);
 struct ViewRequest {
     dev::Camera camera{};
     bool split = false;                // two pipelines, both full frame
-    std::string pipeline = "mega";     // when not split: any registered device pipeline
-    std::array<std::string, 2> pair = {"mega", "wave"};  // split: left, right
+    std::string pipeline;              // when not split: any registered device pipeline
+    std::array<std::string, 2> pair;   // split: left, right (registered device pipelines)
     int bounces = 0;
     RenderOptions::Accel accel = RenderOptions::Accel::Bv;
     uint64_t reloads = 0;  // bumped by R

@@ -184,7 +184,7 @@ int sweepCommand(const Flags& f) {
                 o.skip.insert(row["cell"].get<std::string>());
         }
     }
-    // Frames that are bit-identical (the two pipelines share their stage code, so they often
+    // Frames that are bit-identical (the pipelines share their stage code, so they often
     // are) are stored once: the file count and size that travel back stay small.
     std::map<uint64_t, std::string> stored;
     auto writeMeta = [&](const nlohmann::json& meta) {

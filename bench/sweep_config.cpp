@@ -309,7 +309,7 @@ std::vector<Cell> expandCells(const SweepConfig& config,
             // planes alone runs the same program whatever the accel.
             bool prims = !scene.spheres.empty() || !scene.triangles.empty();
             if (!prims) accels = {d.accel};
-            // Pipelines innermost: the two pipelines of a setting run back to back, so slow
+            // Pipelines innermost: the pipelines of a setting run back to back, so slow
             // drift of the machine (clocks, other load) hits both sides of a ratio alike.
             for (auto [w, h] : sizes)
                 for (int b : orDefault(g.bounces, d.bounces))

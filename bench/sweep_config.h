@@ -57,7 +57,7 @@ std::filesystem::path findSweep(const std::string& nameOrPath);
 // One measured cell: a scene, a pipeline and fully resolved render options.
 struct Cell {
     std::string scene;
-    std::string pipeline = "mega";
+    std::string pipeline;             // a registered name
     RenderOptions options;
     std::vector<std::string> groups;  // every group that asked for this cell
     bool images = false;

@@ -379,7 +379,7 @@ SweepSummary runSweep(const SweepConfig& config, const SweepRunOptions& options,
         }
         double batchCost = 0;
         for (size_t k : run) batchCost += cellCost(cells[k]);
-        // Frames of the same setting from both pipelines: they must agree (bit-identical by
+        // Frames of the same setting from every pipeline: they must agree (bit-identical by
         // design), which catches a silent wrong image at a limit (tiling, launch splitting).
         std::map<std::string, size_t> bySetting;
         std::map<size_t, std::pair<std::string, double>> diff;  // cell -> (other pipeline, max |d|)
