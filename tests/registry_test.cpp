@@ -7,6 +7,7 @@
 #include <set>
 #include <string>
 
+#include "bench/sweep_config.h"
 #include "core/error.h"
 #include "core/scene_loader.h"
 #include "image/image_io.h"
@@ -75,6 +76,25 @@ TEST(Registry, EveryDevicePipelineRendersTheSameImage) {
         ASSERT_EQ(other.rgb.size(), first.rgb.size()) << names[i];
         EXPECT_EQ(std::memcmp(other.rgb.data(), first.rgb.data(), first.rgb.size() * sizeof(float)), 0)
             << names[i] << " differs from " << names[0];
+    }
+}
+
+// Sweep files take any registered name, and every device pipeline when a group names none.
+TEST(Registry, SweepFilesTakeTheirPipelinesFromTheRegistry) {
+    bench::SweepConfig c = bench::parseSweep("[a]\nscenes = spheres\n[b]\nscenes = spheres\n"
+                                             "pipelines = wave\n",
+                                             "test");
+    EXPECT_EQ(c.groups[0].pipelines, pipelineRegistry().names(true));
+    EXPECT_EQ(c.groups[1].pipelines, std::vector<std::string>{"wave"});
+    for (const char* bad : {"nope", "cpu"}) {
+        try {
+            bench::parseSweep(std::string("[a]\nscenes = spheres\npipelines = ") + bad + "\n", "f");
+            FAIL() << bad << " was accepted";
+        } catch (const Error& e) {
+            EXPECT_EQ(e.kind(), FailureKind::InvalidOption) << e.what();
+            EXPECT_NE(std::string(e.what()).find("f:3: "), std::string::npos) << e.what();
+            EXPECT_NE(std::string(e.what()).find(bad), std::string::npos) << e.what();
+        }
     }
 }
 
