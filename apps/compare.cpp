@@ -1,6 +1,7 @@
-// rtlab compare: the testbed's main job in one command. Renders a scene with the CPU reference,
-// the megakernel and the wavefront pipeline on one device, and prints each pipeline's device time
-// (median of repeats after a warm-up frame) beside its error against the reference.
+// rtlab compare: the testbed's main job in one command. Renders a scene with the CPU reference and
+// every registered pipeline on one device, and prints each pipeline's device time (median of
+// repeats after a warm-up frame) beside its error against the reference, then how far each pair
+// of pipelines differs (by design, not at all).
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
@@ -13,6 +14,7 @@
 #include "core/cl_runtime.h"
 #include "core/error.h"
 #include "core/pipeline.h"
+#include "pipelines/registry.h"
 #include "core/scene_loader.h"
 #include "image/compare.h"
 #include "image/image_io.h"
@@ -41,10 +43,12 @@ double median(std::vector<double> v) {
 void addCompare(CLI::App& app) {
     CompareArgs& a = compareArgs;
     compareCmd = app.add_subcommand(
-        "compare", "Render one scene with cpu, mega and wave; print time and error side by side");
+        "compare", "Render one scene with the CPU reference and every pipeline (" +
+                       pipelineRegistry().joinedNames(true) +
+                       "); print time and error side by side");
     compareCmd->add_option("scene", a.scene, "Scene file (.json) or OBJ model")->required();
     compareCmd->add_option("-o,--output-prefix", a.outputPrefix,
-                           "Also write PREFIX-cpu.png, PREFIX-mega.png, PREFIX-wave.png");
+                           "Also write PREFIX-<pipeline>.png for each pipeline and the reference");
     compareCmd->add_option("--repeats", a.repeats, "Timed frames per pipeline (median is shown)")
         ->check(CLI::Range(1, 1000))
         ->capture_default_str();
@@ -71,23 +75,29 @@ int runCompare() {
                 scene.branching());
     std::printf("device %s, commit %s\n\n", cl.device().label().c_str(), RTLAB_COMMIT);
 
-    auto cpu = makePipeline(PipelineKind::Cpu, nullptr);
+    const PipelineRegistry& registry = pipelineRegistry();
+    const PipelineInfo& ref = *std::find_if(registry.all().begin(), registry.all().end(),
+                                            [](const PipelineInfo& p) { return p.reference; });
+    auto cpu = makePipeline(ref.name, nullptr);
     Image reference = cpu->render(scene, o);
     double cpuMs = cpu->stats().hostMs;
-    if (!a.outputPrefix.empty()) writeImage(reference, a.outputPrefix + "-cpu.png");
+    if (!a.outputPrefix.empty()) writeImage(reference, a.outputPrefix + "-" + ref.name + ".png");
 
     std::printf("%-6s %12s %12s %14s %12s %12s\n", "pipe", "device ms", "host ms", "within 2/255",
                 "mean |err|", "max |err|");
-    std::printf("%-6s %12s %12.2f %14s %12s %12s\n", "cpu", "-", cpuMs, "reference", "-", "-");
+    std::printf("%-6s %12s %12.2f %14s %12s %12s\n", ref.name.c_str(), "-", cpuMs, "reference",
+                "-", "-");
+    const std::vector<std::string> names = registry.names(true);
     std::vector<Image> images;
     long long nonfinite = countNonFinite(reference);
-    for (PipelineKind kind : {PipelineKind::Mega, PipelineKind::Wave}) {
-        if (kind == PipelineKind::Wave && o.adaptiveAa) {
-            std::printf("%-6s %12s   (no adaptive anti-aliasing in the wavefront: not compared)\n",
-                        pipelineName(kind), "-");
+    std::vector<std::string> compared;
+    for (const std::string& name : names) {
+        // Adaptive anti-aliasing is compared only where a pipeline has it (the registry says).
+        if (o.adaptiveAa && !registry.get(name).supports.adaptiveAa) {
+            std::printf("%-6s %12s   (no adaptive anti-aliasing: not compared)\n", name.c_str(), "-");
             continue;
         }
-        auto p = makePipeline(kind, &cl);
+        auto p = makePipeline(name, &cl);
         Image img = p->render(scene, o);  // warm-up: builds the program, allocates buffers
         std::vector<double> dev, host;
         for (int r = 0; r < a.repeats; ++r) {
@@ -97,20 +107,24 @@ int runCompare() {
         }
         ImageDiff d = compareImages(img, reference, 2.0 / 255.0);
         nonfinite += countNonFinite(img);
-        std::printf("%-6s %12.3f %12.3f %13.3f%% %10.3f/255 %8.2f/255\n", pipelineName(kind),
+        std::printf("%-6s %12.3f %12.3f %13.3f%% %10.3f/255 %8.2f/255\n", name.c_str(),
                     median(dev), median(host), 100.0 * d.fractionWithin, d.meanAbs * 255.0,
                     d.maxAbs * 255.0);
         if (!a.outputPrefix.empty())
-            writeImage(img, a.outputPrefix + "-" + pipelineName(kind) + ".png");
+            writeImage(img, a.outputPrefix + "-" + name + ".png");
         images.push_back(std::move(img));
+        compared.push_back(name);
     }
-    if (images.size() == 2) {
-        ImageDiff mw = compareImages(images[0], images[1], 0.0, false);
-        std::printf("\nmega vs wave: max |difference| %.3g (%s)\n", mw.maxAbs,
-                    mw.maxAbs == 0 ? "bit-identical" : "not bit-identical");
-    }
+    std::printf("\n");
+    for (size_t i = 0; i < compared.size(); ++i)
+        for (size_t j = i + 1; j < compared.size(); ++j) {
+            ImageDiff d = compareImages(images[i], images[j], 0.0, false);
+            std::printf("%s vs %s: max |difference| %.3g (%s)\n", compared[i].c_str(),
+                        compared[j].c_str(), d.maxAbs, d.maxAbs == 0 ? "bit-identical" : "not bit-identical");
+        }
     // A NaN or infinite pixel is a broken frame whatever the error figures say.
-    if (nonfinite) throw Error(std::to_string(nonfinite) + " non-finite (NaN or infinite) pixel(s) in the frames above");
+    if (nonfinite)
+        throw Error(std::to_string(nonfinite) + " non-finite (NaN or infinite) pixel(s) in the frames above");
     return 0;
 }
 

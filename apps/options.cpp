@@ -6,6 +6,7 @@
 
 #include "core/accel.h"
 #include "core/error.h"
+#include "pipelines/registry.h"
 
 namespace rt::cli {
 
@@ -14,7 +15,7 @@ void SceneFlags::add(CLI::App& cmd) {
                    "OpenCL device: index or name substring from `rtlab devices` "
                    "[$RTLAB_DEVICE, else first GPU, else CPU]");
     cmd.add_option("--size", size, "Image size WxH [scene default]");
-    cmd.add_option("--bounces", bounces, "Bounce limit B, 0..16 [scene default]");
+    cmd.add_option("--bounces", bounces, "Bounce limit B, 0.." + std::to_string(RT_MAX_BOUNCE_LIMIT) + " [scene default]");
     cmd.add_option("--shadow-samples", shadowSamples,
                    "Shadow rays per light of non-zero radius, 1..255 [scene default]");
     cmd.add_option("--aa", aa, "Anti-aliasing: N x N samples per pixel, 1..16 [scene default]");
@@ -48,6 +49,17 @@ void SceneFlags::add(CLI::App& cmd) {
     cmd.add_option("--kernel-dir", kernelDir,
                    "Read kernel sources from this source tree instead of the embedded copies "
                    "[$RTLAB_KERNEL_DIR]");
+}
+
+CLI::Option* addPipelineOption(CLI::App& cmd, std::string& value, bool withReference) {
+    const PipelineRegistry& registry = pipelineRegistry();
+    std::string help = "Pipeline, one of " + registry.joinedNames(!withReference) + ":";
+    for (const PipelineInfo& p : registry.all())
+        if (withReference || !p.reference)
+            help += "\n  " + p.name + ": " + p.title + ", " + p.description;
+    return cmd.add_option("--pipeline", value, help)
+        ->check(CLI::IsMember(registry.names(!withReference)))
+        ->capture_default_str();
 }
 
 void parseSize(const std::string& text, int& width, int& height) {
@@ -93,7 +105,7 @@ RenderOptions SceneFlags::apply(RenderOptions o) const {
             throw Error(std::string(flag) + " " + std::to_string(v) + ": must be in " +
                         std::to_string(lo) + ".." + std::to_string(hi));
     };
-    range("--bounces", o.bounces, 0, 16);
+    range("--bounces", o.bounces, 0, RT_MAX_BOUNCE_LIMIT);
     range("--shadow-samples", o.shadowSamples, 1, 255);
     range("--aa", o.aa, 1, 16);
     if (!(o.shadowStrength >= 0.f && o.shadowStrength <= 1.f))

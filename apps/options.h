@@ -31,6 +31,10 @@ struct SceneFlags {
     KernelSources kernelSources() const;
 };
 
+// Adds --pipeline to cmd: any registered name (pipelines/registry.h), or only the device
+// pipelines when withReference is false; its help lists every entry with its description.
+CLI::Option* addPipelineOption(CLI::App& cmd, std::string& value, bool withReference);
+
 // Parses "640x480"; throws rt::Error("--size ...") otherwise.
 void parseSize(const std::string& text, int& width, int& height);
 // Parses "512", "64K", "1.5M", "2G"; throws rt::Error naming --memory-budget.

@@ -10,6 +10,7 @@
 #include "core/cl_runtime.h"
 #include "core/error.h"
 #include "core/pipeline.h"
+#include "pipelines/registry.h"
 #include "core/scene_loader.h"
 #include "image/image_io.h"
 
@@ -18,7 +19,7 @@ namespace rt::cli {
 namespace {
 
 struct RenderArgs {
-    std::string scene, output, pipeline = "mega";
+    std::string scene, output, pipeline;  // the first device pipeline registered, by default
     SceneFlags flags;
     bool stats = false;
 } renderArgs;
@@ -74,7 +75,7 @@ int runDevices() {
 
 int runRender() {
     RenderArgs& a = renderArgs;
-    PipelineKind kind = parsePipeline(a.pipeline);
+    const PipelineInfo& info = pipelineInfo(a.pipeline);
     std::string output = a.output.empty() ? "render.png" : a.output;
     // Fail on an unwritable output before spending time on the frame.
     checkOutputPath(output);
@@ -82,28 +83,33 @@ int runRender() {
     for (const std::string& note : scene.notes) std::fprintf(stderr, "rtlab: note: %s\n", note.c_str());
     RenderOptions options = a.flags.apply(scene.defaults);
     std::optional<ClContext> cl;
-    if (kind != PipelineKind::Cpu) cl.emplace(selectDevice(a.flags.device), a.flags.kernelSources());
-    std::unique_ptr<Pipeline> pipeline = makePipeline(kind, cl ? &*cl : nullptr);
+    if (!info.reference) cl.emplace(selectDevice(a.flags.device), a.flags.kernelSources());
+    std::unique_ptr<Pipeline> pipeline = makePipeline(info.name, cl ? &*cl : nullptr);
     Image image = pipeline->render(scene, options);
     writeImage(image, output);
     if (a.stats) {
         const FrameStats& s = pipeline->stats();
         std::printf("scene %s, %dx%d, bounces %d, C=%d, N=%lld nodes/pixel, pipeline %s\n",
                     scene.name.c_str(), options.width, options.height, options.bounces,
-                    s.branching, s.treeNodes, pipelineName(kind));
+                    scene.branching(), treeNodeCount(scene.branching(), options.bounces),
+                    info.name.c_str());
         if (cl)
             std::printf("device %s, program %s\n", cl->device().label().c_str(),
                         s.program.c_str());
         for (const auto& [name, ms] : s.kernelMs)
             std::printf("  %-12s %10.3f ms\n", name.c_str(), ms);
-        if (kind != PipelineKind::Cpu) std::printf("  %-12s %10.3f ms\n", "device total", s.deviceMs);
+        if (!info.reference) std::printf("  %-12s %10.3f ms\n", "device total", s.deviceMs);
         std::printf("  %-12s %10.3f ms\n", "host", s.hostMs);
-        if (kind == PipelineKind::Wave)
-            std::printf("  ray tree     %zu bytes (%s) in %d tile(s), %zu B node\n", s.treeBytes,
-                        mib(double(s.treeBytes)).c_str(), s.tiles, sizeof(dev::Node));
-        if (kind != PipelineKind::Cpu)
+        for (const auto& [name, bytes] : s.buffers)
+            std::printf("  %-12s %zu bytes (%s)\n", name.c_str(), bytes, mib(double(bytes)).c_str());
+        if (info.supports.tiling)
+            std::printf("  tiles        %d, %zu B ray-tree node\n", s.tiles, sizeof(dev::Node));
+        if (!info.reference) {
             std::printf("  private      %zu bytes per work-item\n", s.privateBytes);
-        if (kind != PipelineKind::Cpu) printAccel(s.accel, options.accel);
+            printAccel(s.accel, options.accel);
+        }
+        for (const auto& [key, value] : s.extras.items())
+            std::printf("  %-12s %s\n", key.c_str(), value.dump().c_str());
     }
     std::printf("wrote %s\n", output.c_str());
     return 0;
@@ -119,9 +125,8 @@ void addRender(CLI::App& app) {
     renderCmd->add_option("-o,--output", a.output,
                           "Output image: .png (8-bit sRGB, clamped) or .exr (linear float) "
                           "[render.png]");
-    renderCmd->add_option("--pipeline", a.pipeline, "cpu (double-precision reference), mega or wave")
-        ->check(CLI::IsMember({"cpu", "mega", "wave"}))
-        ->capture_default_str();
+    a.pipeline = pipelineRegistry().names(true).at(0);
+    addPipelineOption(*renderCmd, a.pipeline, true);
     a.flags.add(*renderCmd);
     renderCmd->add_flag("--stats", a.stats, "Print kernel times (profiling events) and memory use");
 }

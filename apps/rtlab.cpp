@@ -10,12 +10,13 @@
 #include "apps/commands.h"
 #include "apps/parse_error.h"
 #include "core/error.h"
+#include "pipelines/registry.h"
 
 int main(int argc, char** argv) {
-    CLI::App app{
-        "rtlab: Whitted ray tracing on OpenCL, megakernel versus wavefront.\n"
-        "Renders scenes with a double-precision CPU reference (cpu), one monolithic kernel (mega)\n"
-        "or the report's trace/image/reset kernels (wave), and measures both."};
+    CLI::App app{"rtlab: Whitted ray tracing on OpenCL, pipeline against pipeline.\n"
+                 "Renders scenes with a double-precision CPU reference and every registered\n"
+                 "pipeline, and measures them:\n" +
+                 rt::pipelineRegistry().help()};
     app.require_subcommand(1);
     rt::cli::addRender(app);
     rt::cli::addDevices(app);

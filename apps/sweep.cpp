@@ -52,13 +52,24 @@ std::string csvField(const nlohmann::json& v) {
 }
 
 // One flat CSV row per result; kernel times get one column per kernel name.
-void writeCsv(const nlohmann::json& rows, const fs::path& path) {
-    std::vector<std::string> kernels;
+// The keys of an object field over every row, in first-seen order (kernels, buffers, extras).
+std::vector<std::string> keysOf(const nlohmann::json& rows, const char* field) {
+    std::vector<std::string> keys;
     for (const auto& r : rows)
-        if (r.contains("kernel_ms"))
-            for (auto it = r["kernel_ms"].begin(); it != r["kernel_ms"].end(); ++it)
-                if (std::find(kernels.begin(), kernels.end(), it.key()) == kernels.end())
-                    kernels.push_back(it.key());
+        if (r.contains(field))
+            for (auto it = r[field].begin(); it != r[field].end(); ++it)
+                if (std::find(keys.begin(), keys.end(), it.key()) == keys.end())
+                    keys.push_back(it.key());
+    return keys;
+}
+
+nlohmann::json field(const nlohmann::json& row, const char* object, const std::string& key) {
+    return row.contains(object) && row[object].contains(key) ? row[object][key] : nlohmann::json();
+}
+
+void writeCsv(const nlohmann::json& rows, const fs::path& path) {
+    const std::vector<std::string> kernels = keysOf(rows, "kernel_ms"),
+                                   buffers = keysOf(rows, "buffers"), extras = keysOf(rows, "extras");
     const std::vector<std::string> head = {
         "sweep", "groups", "scene", "pipeline", "width", "height", "bounces", "shadow_samples",
         "aa", "accel", "layout", "memory_budget", "adaptive", "status", "device_ms",
@@ -70,17 +81,20 @@ void writeCsv(const nlohmann::json& rows, const fs::path& path) {
         "error",
         // Added with the limits sweep (after the old columns, so old readers keep their places).
         "end", "failure", "skip_reason", "memory_tiles", "launches", "longest_launch_ms",
-        "max_launch_ms", "frames", "image_max_diff", "image_nonfinite"};
-    const char* rays[4] = {"primary", "reflection", "refraction", "shadow"};
+        "max_launch_ms", "frames", "image_max_diff", "image_nonfinite",
+        // Added with the pipeline registry; then one column per buffer and per extra.
+        "pipeline_title"};
     const char* counts[6] = {"objects", "spheres", "planes", "triangles", "meshes", "lights"};
     std::ofstream f(path);
     if (!f) throw Error(path.string() + ": cannot write");
     std::string line;
     for (const auto& h : head) line += h + ",";
     for (const auto& k : kernels) line += "k_" + k + "_ms,";
-    for (const char* r : rays) line += std::string("rays_") + r + ",";
+    for (int r = 0; r < RT_RAY_TYPES; ++r) line += std::string("rays_") + rayTypeName(r) + ",";
     for (const char* c : counts) line += std::string("scene_") + c + ",";
     for (const auto& t : tail) line += t + ",";
+    for (const auto& b : buffers) line += "buffer_" + b + "_bytes,";
+    for (const auto& x : extras) line += "extra_" + x + ",";
     line.pop_back();
     f << line << "\n";
     for (const auto& r : rows) {
@@ -95,13 +109,12 @@ void writeCsv(const nlohmann::json& rows, const fs::path& path) {
                 line += csvField(get(h)) + ",";
             }
         }
-        for (const auto& k : kernels)
-            line += csvField(r.contains("kernel_ms") && r["kernel_ms"].contains(k) ? r["kernel_ms"][k]
-                                                                                    : nlohmann::json()) + ",";
-        for (const char* x : rays)
-            line += csvField(r.contains("rays") ? r["rays"][x] : nlohmann::json()) + ",";
+        for (const auto& k : kernels) line += csvField(field(r, "kernel_ms", k)) + ",";
+        for (int x = 0; x < RT_RAY_TYPES; ++x) line += csvField(field(r, "rays", rayTypeName(x))) + ",";
         for (const char* c : counts) line += csvField(r["scene_info"][c]) + ",";
         for (const auto& t : tail) line += csvField(get(t)) + ",";
+        for (const auto& b : buffers) line += csvField(field(r, "buffers", b)) + ",";
+        for (const auto& x : extras) line += csvField(field(r, "extras", x)) + ",";
         line.pop_back();
         f << line << "\n";
     }

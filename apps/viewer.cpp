@@ -1,5 +1,5 @@
-// rtlab-view SCENE — a real-time window on the two pipelines: the megakernel or the wavefront, or
-// both side by side. Sets up GLFW (OpenGL 3.3 core), the OpenCL device and the render thread,
+// rtlab-view SCENE — a real-time window on the registered pipelines: one at a time (M cycles), or
+// any two side by side (--split LEFT,RIGHT). Sets up GLFW (OpenGL 3.3 core), the OpenCL device and the render thread,
 // then hands over to App (viewer_app.h). Every failure ends in one line on stderr
 // ("rtlab-view: <reason>") and exit status 1, usage errors included.
 #define GLFW_INCLUDE_NONE
@@ -7,8 +7,11 @@
 
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
+#include <array>
 #include <cstdio>
 #include <string>
+#include <vector>
 
 #include "apps/options.h"
 #include "apps/parse_error.h"
@@ -19,15 +22,17 @@
 #include "core/error.h"
 #include "core/scene_loader.h"
 #include "image/image_io.h"
+#include "pipelines/registry.h"
 
 namespace {
 
 using namespace rt;
 
 struct Args {
-    std::string scene, pipeline = "mega", screenshot;
+    std::string scene, pipeline, screenshot;  // pipeline: the registry's first by default
     cli::SceneFlags flags;
     int scale = 2;
+    std::array<std::string, 2> pair;  // --split LEFT,RIGHT
     bool split = false, noOverlay = false, animate = false, noRayCount = false;
     long long frames = 0;
     std::string keys;
@@ -113,7 +118,8 @@ int runViewer(Args& a) {
     view::ViewRequest first;
     first.camera = scene.camera;
     first.split = a.split;
-    first.kind = parsePipeline(a.pipeline);
+    first.pipeline = a.pipeline;
+    first.pair = a.pair;
     first.bounces = options.bounces;
     first.accel = options.accel;
     view::Renderer renderer(cl, std::move(scene), rc, [] { glfwPostEmptyEvent(); });
@@ -133,17 +139,36 @@ int runViewer(Args& a) {
 
 }  // namespace
 
+// "--split LEFT,RIGHT": two registered device pipelines (they may be the same one).
+std::array<std::string, 2> parsePair(const std::string& text, const std::vector<std::string>& names) {
+    size_t comma = text.find(',');
+    std::array<std::string, 2> pair = {text.substr(0, comma),
+                                       comma == std::string::npos ? "" : text.substr(comma + 1)};
+    for (const std::string& p : pair)
+        if (std::find(names.begin(), names.end(), p) == names.end())
+            throw Error("--split " + text + ": expected LEFT,RIGHT, each one of " +
+                        pipelineRegistry().joinedNames(true));
+    return pair;
+}
+
 int main(int argc, char** argv) {
     std::string keys = "\nKeys:\n";
     for (const std::string& line : view::helpLines()) keys += "  " + line + "\n";
-    CLI::App app{"rtlab-view: watch the megakernel and the wavefront render a scene in real time."};
+    CLI::App app{"rtlab-view: watch the pipelines render a scene in real time."};
     app.footer(keys);
     Args a;
     app.add_option("scene", a.scene, "Scene file (.json) or OBJ model")->required();
-    app.add_option("--pipeline", a.pipeline, "Pipeline shown first: mega or wave")
-        ->check(CLI::IsMember({"mega", "wave"}))
-        ->capture_default_str();
-    app.add_flag("--split", a.split, "Start in split view: megakernel left, wavefront right");
+    const PipelineRegistry& registry = pipelineRegistry();
+    const std::vector<std::string> names = registry.names(true);
+    a.pipeline = names.at(0);
+    a.pair = {names.at(0), names.at(names.size() > 1 ? 1 : 0)};
+    cli::addPipelineOption(app, a.pipeline, false);
+    std::string pair;
+    CLI::Option* split = app.add_option(
+        "--split", pair,
+        "Start in split view; LEFT,RIGHT picks any two pipelines (" + registry.joinedNames(true) +
+            ") [" + a.pair[0] + "," + a.pair[1] + "]");
+    split->expected(0, 1);
     app.add_option("--scale", a.scale, "Window pixels per rendered pixel, 1..8")->capture_default_str();
     app.add_flag("--no-overlay", a.noOverlay, "Hide the overlay and the split divider (O shows them)");
     app.add_flag("--animate", a.animate,
@@ -166,6 +191,8 @@ int main(int argc, char** argv) {
         return cli::reportParseError(app, e, "rtlab-view", argc, argv);
     }
     try {
+        a.split = split->count() > 0;
+        if (!pair.empty()) a.pair = parsePair(pair, names);
         return runViewer(a);
     } catch (const Error& e) {
         std::fprintf(stderr, "rtlab-view: %s\n", e.what());

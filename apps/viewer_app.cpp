@@ -16,6 +16,7 @@
 #include "core/accel.h"
 #include "core/error.h"
 #include "image/image_io.h"
+#include "pipelines/registry.h"
 
 namespace rt::view {
 namespace {
@@ -84,9 +85,12 @@ App::App(GLFWwindow* window, GlDisplay& display, Renderer& renderer, ViewRequest
         self(w)->onMouseButton(button, action);
     });
     glfwSetCursorPosCallback(window_, [](GLFWwindow* w, double x, double y) { self(w)->onCursor(x, y); });
-    const char* labels[2] = {"megakernel", "wavefront"};
+    // The split view's pair is fixed for the session (--split LEFT,RIGHT): label it once, by the
+    // registry's titles, both labels as wide as the longer.
+    std::string labels[2] = {pipelineInfo(req_.pair[0]).title, pipelineInfo(req_.pair[1]).title};
+    int width = int(std::max(labels[0].size(), labels[1].size()));
     for (int i = 0; i < 2; ++i) {
-        TextCanvas label(10, 1, {0, 0, 0, 150});
+        TextCanvas label(width, 1, {0, 0, 0, 150});
         label.text(0, 0, labels[i], {255, 255, 255, 255});
         display_.uploadOverlay(1 + i, label.rgba(), label.width(), label.height());
         labelSize_[0] = label.width();
@@ -104,23 +108,29 @@ void App::message(const std::string& text) {
 }
 
 void App::onKey(int key) {
-    const char* shown = req_.kind == PipelineKind::Mega ? "megakernel" : "wavefront";
+    const std::string shown = pipelineInfo(req_.pipeline).title;
     switch (key) {
         case GLFW_KEY_ESCAPE: glfwSetWindowShouldClose(window_, GLFW_TRUE); return;
-        case GLFW_KEY_M:
-            req_.kind = req_.kind == PipelineKind::Mega ? PipelineKind::Wave : PipelineKind::Mega;
+        case GLFW_KEY_M: {
+            // Cycles through every registered device pipeline, in registry order.
+            std::vector<std::string> names = pipelineRegistry().names(true);
+            auto at = std::find(names.begin(), names.end(), req_.pipeline);
+            req_.pipeline = at == names.end() || at + 1 == names.end() ? names.front() : *(at + 1);
             req_.split = false;
-            message(std::string("showing the ") +
-                    (req_.kind == PipelineKind::Mega ? "megakernel" : "wavefront"));
+            message("showing the " + pipelineInfo(req_.pipeline).title);
             break;
+        }
         case GLFW_KEY_V:
             req_.split = !req_.split;
-            message(req_.split ? "split: megakernel left, wavefront right"
-                               : std::string("showing the ") + shown);
+            message(req_.split ? "split: " + pipelineInfo(req_.pair[0]).title + " left, " +
+                                     pipelineInfo(req_.pair[1]).title + " right"
+                               : "showing the " + shown);
             break;
         case GLFW_KEY_EQUAL:
         case GLFW_KEY_KP_ADD:
-            if (req_.bounces >= 16) return message("bounce limit is at its maximum, 16");
+            if (req_.bounces >= RT_MAX_BOUNCE_LIMIT)
+                return message("bounce limit is at its maximum, " +
+                               std::to_string(RT_MAX_BOUNCE_LIMIT));
             ++req_.bounces;
             break;
         case GLFW_KEY_MINUS:
@@ -262,7 +272,8 @@ void App::draw() {
         OverlayInfo info;
         info.frame = haveFrame_ ? &frame_ : nullptr;
         info.split = req_.split;
-        info.kind = req_.kind;
+        info.pipeline = req_.pipeline;
+        info.pair = req_.pair;
         info.bounces = req_.bounces;
         info.accel = req_.accel;
         info.animate = config_.animate;
@@ -322,7 +333,7 @@ int App::run() {
             if (frame_.index > firstArrival_.second && rest > 0)
                 std::printf(", then %.2f FPS", double(frame_.index - firstArrival_.second) / rest);
             for (const PipelineFrame& p : frame_.pipelines)
-                std::printf(", %s %.1f ms device", pipelineName(p.kind), p.stats.deviceMs);
+                std::printf(", %s %.1f ms device", p.name.c_str(), p.stats.deviceMs);
             std::printf("\n");
             glfwSwapBuffers(window_);
             return 0;

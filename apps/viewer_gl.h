@@ -1,5 +1,5 @@
 // rtlab-view — the OpenGL 3.3 core side of the viewer: a full-window textured quad that shows one
-// frame, or two frames side by side (left megakernel, right wavefront) split at a divider, plus
+// frame, or two frames side by side (any two pipelines, left and right) split at a divider, plus
 // the overlay texture on top. Frames arrive as 8-bit sRGB bytes (the host-copy path).
 #pragma once
 

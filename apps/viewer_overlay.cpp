@@ -20,7 +20,7 @@ double mib(size_t bytes) { return double(bytes) / (1024.0 * 1024.0); }
 
 std::string pipelineLine(const PipelineFrame& p) {
     const FrameStats& s = p.stats;
-    std::string line = format("%-4s %7.1f MS ", pipelineName(p.kind), s.deviceMs);
+    std::string line = format("%-4s %7.1f MS ", p.name.c_str(), s.deviceMs);
     for (const auto& [name, ms] : s.kernelMs) line += format(" %s %.1f", name.c_str(), ms);
     if (s.raysCounted && s.deviceMs > 0) {
         double rays = 0;
@@ -39,7 +39,7 @@ const std::vector<std::string>& helpLines() {
     static const std::vector<std::string> lines = {
         "W/A/S/D  move            Q/E  down/up      shift  faster",
         "drag     turn (yaw/pitch); in split view, drag the divider",
-        "M  megakernel/wavefront  V  split view     +/-  bounce limit",
+        "M  next pipeline         V  split view     +/-  bounce limit",
         "B  accel none/bv/grid/bvh    R  reload scene    P  screenshot",
         "O  overlay   H  help   Esc  quit",
     };
@@ -54,7 +54,7 @@ TextCanvas makeOverlay(const OverlayInfo& info) {
     std::vector<Line> lines;
     if (info.stats) {
         const FrameOut* f = info.frame;
-        std::string mode = info.split ? "split mega|wave" : pipelineName(info.kind);
+        std::string mode = info.split ? "split " + info.pair[0] + "|" + info.pair[1] : info.pipeline;
         std::string head = f ? format("%s %dx%d", f->sceneName.c_str(), f->width, f->height) : "";
         lines.push_back({format("%s  %s  B %d  accel %s%s", head.c_str(), mode.c_str(), info.bounces,
                                 accelName(info.accel), info.animate ? "  animated" : ""),
@@ -63,13 +63,16 @@ TextCanvas makeOverlay(const OverlayInfo& info) {
             lines.push_back({format("FPS %.1f  frame %.0f ms  %s", info.fps, f->wallMs,
                                     info.framePath.c_str()),
                              kText});
-            size_t tree = 0;
+            // The largest buffer any pipeline on screen holds (the wavefront's ray tree).
+            std::pair<std::string, size_t> largest;
             for (const PipelineFrame& p : f->pipelines) {
                 lines.push_back({pipelineLine(p), kDim});
-                tree = std::max(tree, p.stats.treeBytes);
+                for (const auto& b : p.stats.buffers)
+                    if (b.second > largest.second) largest = b;
             }
             std::string mem = format("device memory %.1f MiB", mib(f->deviceBytes));
-            if (tree) mem += format(" (ray tree %.1f MiB)", mib(tree));
+            if (largest.second)
+                mem += format(" (%s %.1f MiB)", largest.first.c_str(), mib(largest.second));
             lines.push_back({mem, kText});
         } else {
             lines.push_back({"building kernels, first frame...", kText});

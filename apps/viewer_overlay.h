@@ -2,6 +2,7 @@
 // pipeline on screen, device memory, recent messages, and the key help.
 #pragma once
 
+#include <array>
 #include <string>
 #include <vector>
 
@@ -13,7 +14,8 @@ namespace rt::view {
 struct OverlayInfo {
     const FrameOut* frame = nullptr;  // the frame on screen; null before the first one
     bool split = false;
-    PipelineKind kind = PipelineKind::Mega;
+    std::string pipeline;               // shown when not split
+    std::array<std::string, 2> pair;    // split: left, right
     int bounces = 0;
     RenderOptions::Accel accel = RenderOptions::Accel::Bv;
     bool animate = false;

@@ -9,6 +9,7 @@
 #include "core/error.h"
 #include "core/scene_loader.h"
 #include "image/image_io.h"
+#include "pipelines/registry.h"
 
 namespace rt::view {
 
@@ -44,10 +45,24 @@ Renderer::Renderer(ClContext& cl, Scene scene, Config config, std::function<void
     base_.countRays = config_.countRays;
     if (config_.animate) animation_ = orbitFirstSphere(scene, config_.orbitRadius, config_.orbitPeriod);
     fileCamera_ = scene.camera;
+    for (const std::string& name : pipelineRegistry().names(true))
+        held_.push_back({name, makePipeline(name, &cl_), {}});
+    slots_.resize(2 * held_.size() + 2);
+    slotLoad_.assign(slots_.size(), 0);
     install(std::move(scene));
     good_ = {base_.bounces, base_.accel};
-    mega_.pipeline = makePipeline(PipelineKind::Mega, &cl_);
-    wave_.pipeline = makePipeline(PipelineKind::Wave, &cl_);
+}
+
+Renderer::Held& Renderer::held(const std::string& name) {
+    for (Held& h : held_)
+        if (h.name == name) return h;
+    throw Error("--pipeline " + name + ": not a device pipeline");
+}
+
+bool Renderer::slotHeld(int s) const {
+    for (const Held& h : held_)
+        if (h.slots.count(s)) return true;
+    return backup_ && backup_->slot == s;
 }
 
 Renderer::~Renderer() {
@@ -60,11 +75,9 @@ Renderer::~Renderer() {
 }
 
 int Renderer::freeSlot() const {
-    // At most 2 + 2 held, the current and the backup slot are taken, so one of 8 is free.
-    for (int s = 0; s < kSlots; ++s)
-        if (s != current_ && !mega_.slots.count(s) && !wave_.slots.count(s) &&
-            !(backup_ && backup_->slot == s))
-            return s;
+    // At most 2 per pipeline held, the current and the backup slot are taken: one is free.
+    for (int s = 0; s < int(slots_.size()); ++s)
+        if (s != current_ && !slotHeld(s)) return s;
     throw Error("internal: no free scene slot");
 }
 
@@ -89,9 +102,9 @@ void Renderer::animate() {
 }
 
 void Renderer::dropUnusedSlots() {
-    for (int s = 0; s < kSlots; ++s)
+    for (int s = 0; s < int(slots_.size()); ++s)
         if (slotLoad_[size_t(s)] && slotLoad_[size_t(s)] != slotLoad_[size_t(current_)] &&
-            !mega_.slots.count(s) && !wave_.slots.count(s) && !(backup_ && backup_->slot == s)) {
+            !slotHeld(s)) {
             slots_[size_t(s)] = Scene();
             slotLoad_[size_t(s)] = 0;
         }
@@ -213,13 +226,13 @@ void Renderer::renderOne(const ViewRequest& r) {
     std::string failure;
     try {
         std::vector<Held*> order;
-        if (r.split) order = {&mega_, &wave_};
-        else order = {r.kind == PipelineKind::Wave ? &wave_ : &mega_};
+        if (r.split) order = {&held(r.pair[0]), &held(r.pair[1])};
+        else order = {&held(r.pipeline)};
         for (Held* h : order) {
             h->slots.insert(current_);
             Image image = h->pipeline->render(scene, o);
             h->slots = {current_};
-            PipelineFrame pf{h->pipeline->kind(), h->pipeline->stats(), {}};
+            PipelineFrame pf{h->name, h->pipeline->stats(), {}};
             encodeSrgb8(image, pf.rgb);
             f.pipelines.push_back(std::move(pf));
         }
@@ -230,10 +243,10 @@ void Renderer::renderOne(const ViewRequest& r) {
     }
 
     if (!failure.empty()) {
-        for (Held* h : {&mega_, &wave_})
-            if (h->slots.size() > 2) {  // keep freeSlot()'s count: start this one afresh
-                h->pipeline = makePipeline(h->pipeline->kind(), &cl_);
-                h->slots.clear();
+        for (Held& h : held_)
+            if (h.slots.size() > 2) {  // keep freeSlot()'s count: start this one afresh
+                h.pipeline = makePipeline(h.name, &cl_);
+                h.slots.clear();
             }
         if (backup_) {
             restoreBackup();

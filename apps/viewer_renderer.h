@@ -1,4 +1,4 @@
-// rtlab-view — the render thread. It owns the scene and both pipelines (megakernel, wavefront),
+// rtlab-view — the render thread. It owns the scene and every registered device pipeline,
 // renders whatever the window last asked for, and hands back 8-bit frames and their stats. The
 // window thread stays free for input and drawing, so a slow device (PoCL) never stalls the UI.
 //
@@ -47,15 +47,16 @@ Animation orbitFirstSphere(const Scene& scene, float radius, double period);
 // What the window wants rendered next; the latest request wins.
 struct ViewRequest {
     dev::Camera camera{};
-    bool split = false;                      // mega and wave, both full frame
-    PipelineKind kind = PipelineKind::Mega;  // when not split
+    bool split = false;                // two pipelines, both full frame
+    std::string pipeline;              // when not split: any registered device pipeline
+    std::array<std::string, 2> pair;   // split: left, right (registered device pipelines)
     int bounces = 0;
     RenderOptions::Accel accel = RenderOptions::Accel::Bv;
     uint64_t reloads = 0;  // bumped by R
 };
 
 struct PipelineFrame {
-    PipelineKind kind;
+    std::string name;  // the registered pipeline name
     FrameStats stats;
     std::vector<uint8_t> rgb;  // sRGB, 3 bytes per pixel, rows top first
 };
@@ -63,7 +64,7 @@ struct PipelineFrame {
 struct FrameOut {
     uint64_t index = 0;  // 1 for the first frame
     int width = 0, height = 0;
-    std::vector<PipelineFrame> pipelines;  // split: mega then wave
+    std::vector<PipelineFrame> pipelines;  // split: left then right
     double wallMs = 0;                     // render thread time for the frame
     RenderOptions options;                 // as rendered
     size_t deviceBytes = 0;                // ClContext::allocatedBytes()
@@ -124,18 +125,22 @@ private:
     std::function<void()> wake_;
 
     // Render-thread state. slotLoad_ says which load a slot's content comes from (0 = empty).
-    static constexpr int kSlots = 8;
-    std::array<Scene, kSlots> slots_;
-    std::array<uint64_t, kSlots> slotLoad_{};
+    // Two slots per pipeline (held_), the current and the backup, so one is always free; sized
+    // once, so that a slot's address stays put.
+    std::vector<Scene> slots_;
+    std::vector<uint64_t> slotLoad_;
     uint64_t loads_ = 0;
     int current_ = 0;
     // A pipeline and the slots whose address its device scene may carry: the one it rendered
     // last, plus the one it failed on (a failure may or may not have replaced its copy).
     struct Held {
+        std::string name;
         std::unique_ptr<Pipeline> pipeline;
         std::set<int> slots;
     };
-    Held mega_, wave_;
+    std::vector<Held> held_;  // every registered device pipeline, in registry order
+    Held& held(const std::string& name);
+    bool slotHeld(int slot) const;  // by a pipeline or the backup
     std::optional<Animation> animation_;
     RenderOptions base_;
     dev::Camera fileCamera_{};

@@ -26,6 +26,7 @@
 #include "core/cl_runtime.h"
 #include "core/error.h"
 #include "core/pipeline.h"
+#include "pipelines/registry.h"
 #include "core/scene_loader.h"
 
 namespace fs = std::filesystem;
@@ -62,7 +63,7 @@ Frame frame(Pipeline& p, const Scene& scene, RenderOptions o, bool count) {
     return {p.stats().deviceMs, count ? totalRays(p.stats()) : 0};
 }
 
-void BigMeshBvhOverNone(benchmark::State& state, PipelineKind kind) {
+void BigMeshBvhOverNone(benchmark::State& state, const std::string& kind) {
     try {
         std::optional<ClContext> cl;
         const char* dev = std::getenv("RTLAB_DEVICE");
@@ -104,13 +105,16 @@ void BigMeshBvhOverNone(benchmark::State& state, PipelineKind kind) {
 
 }  // namespace
 
-BENCHMARK_CAPTURE(BigMeshBvhOverNone, mega, PipelineKind::Mega)
-    ->Iterations(1)
-    ->UseManualTime()
-    ->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BigMeshBvhOverNone, wave, PipelineKind::Wave)
-    ->Iterations(1)
-    ->UseManualTime()
-    ->Unit(benchmark::kMillisecond);
-
-BENCHMARK_MAIN();
+// One benchmark per registered device pipeline, named after it (BigMeshBvhOverNone/mega, ...).
+int main(int argc, char** argv) {
+    for (const std::string& name : rt::pipelineRegistry().names(true))
+        benchmark::RegisterBenchmark(("BigMeshBvhOverNone/" + name).c_str(), BigMeshBvhOverNone, name)
+            ->Iterations(1)
+            ->UseManualTime()
+            ->Unit(benchmark::kMillisecond);
+    benchmark::Initialize(&argc, argv);
+    if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+    benchmark::RunSpecifiedBenchmarks();
+    benchmark::Shutdown();
+    return 0;
+}

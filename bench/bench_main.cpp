@@ -36,12 +36,12 @@ using namespace rt::bench;
 
 namespace {
 
-const char* kUsage = R"(rtlab-bench: megakernel versus wavefront, timed by OpenCL profiling events.
+const char* kUsage = R"(rtlab-bench: the registered pipelines, timed by OpenCL profiling events.
 
 Google Benchmark mode (every --benchmark_* flag works, e.g. --benchmark_filter=REGEX,
 --benchmark_out=FILE.json, --benchmark_min_time=0.1):
   --scenes=a,b,...      scene names in the scene folder [empty,spheres,shadows,cornell,mesh,envmap]
-  --pipelines=mega,wave
+  --pipelines=a,b,...   any registered pipelines (listed below) [all]
   --sizes=WxH,...       [640x360,1280x720,1920x1080,3840x2160]
   --bounces=0..8        list and/or ranges [0..8]
   --accels=bvh,...      none, bv, grid, bvh [each scene's default]
@@ -71,9 +71,15 @@ cells of stop-after-failure groups may fail: that is what they measure); 130 aft
 --benchmark_out written for the benchmarks that finished.
 )";
 
+void printUsage() {
+    std::fputs(kUsage, stdout);
+    std::printf("\nPipelines (--pipelines, and `pipelines =` in sweep files):\n%s",
+                pipelineRegistry().help().c_str());
+}
+
 struct Flags {
     std::vector<std::string> scenes{"empty", "spheres", "shadows", "cornell", "mesh", "envmap"};
-    std::vector<std::string> pipelines{"mega", "wave"};
+    std::vector<std::string> pipelines = pipelineRegistry().names(true);
     std::vector<std::string> sizes{"640x360", "1280x720", "1920x1080", "3840x2160"};
     std::string bounces = "0..8";
     std::vector<std::string> accels;  // empty: each scene's default
@@ -101,7 +107,7 @@ Flags parseFlags(int argc, char** argv) {
     for (int i = 1; i < argc; ++i) {
         std::string a = argv[i];
         if (a == "--help" || a == "-h") {
-            std::fputs(kUsage, stdout);
+            printUsage();
             std::exit(0);
         }
         if (a == "--version") {
@@ -193,7 +199,7 @@ int sweepCommand(const Flags& f) {
                 o.skip.insert(row["cell"].get<std::string>());
         }
     }
-    // Frames that are bit-identical (the two pipelines share their stage code, so they often
+    // Frames that are bit-identical (the pipelines share their stage code, so they often
     // are) are stored once: the file count and size that travel back stay small.
     std::map<uint64_t, std::string> stored;
     int unexpectedErrors = 0;  // failed cells outside stop-after-failure groups
@@ -260,7 +266,7 @@ void reportProgress(const std::string& name, double msPerFrame, bool ok) {
 }
 
 void renderBenchmark(benchmark::State& state, const std::string& name, ClContext* cl,
-                     const Scene* scene, PipelineKind kind, RenderOptions o, int warmup,
+                     const Scene* scene, std::string kind, RenderOptions o, int warmup,
                      bool countRays) {
     if (interrupted) {
         state.SkipWithError("interrupted");
@@ -313,28 +319,30 @@ void renderBenchmark(benchmark::State& state, const std::string& name, ClContext
     state.counters["wall_ms"] = Counter(wall, Counter::kAvgIterations);
     state.counters["device_bytes"] = double(cl->allocatedBytes() - before);
     state.counters["private_bytes"] = double(s.privateBytes);
-    state.counters["tree_nodes"] = double(s.treeNodes);
+    state.counters["tree_nodes"] = double(treeNodeCount(scene->branching(), o.bounces));
     state.counters["tiles"] = s.tiles;
     if (countRays) {
         Measurement m;
-        m.treeNodes = s.treeNodes;
         m.deviceMs = state.iterations() ? devSum / double(state.iterations()) : 0;
         try {
             o.countRays = true;
             pipeline->render(*scene, o);
             m.rays = pipeline->stats().rays;
             m.raysCounted = pipeline->stats().raysCounted;
+            m.extras = pipeline->stats().extras;
         } catch (const std::exception& e) {
             state.SetLabel(std::string("ray count failed: ") + e.what());
         }
-        deriveRayCounters(m, kind, o);
+        deriveRayCounters(m);
         if (m.raysCounted) {
-            static const char* names[4] = {"rays_primary", "rays_reflection", "rays_refraction",
-                                           "rays_shadow"};
-            for (int i = 0; i < 4; ++i) state.counters[names[i]] = double(m.rays[i]);
+            for (int i = 0; i < RT_RAY_TYPES; ++i)
+                state.counters[std::string("rays_") + rayTypeName(i)] = double(m.rays[size_t(i)]);
             state.counters["Mrays_per_s"] = m.mrays;
-            if (m.treeUsed >= 0) state.counters["tree_used"] = m.treeUsed;
         }
+        // Numeric extras (the wavefront's tree_used, ...) as they are.
+        for (const auto& [key, value] : m.extras.items())
+            if (value.is_number())
+                state.counters[key] = value.get<double>();
     }
 }
 
@@ -397,7 +405,7 @@ int benchmarkCommand(const Flags& f) {
                         for (const std::string& p : f.pipelines) {
                             Cell c;
                             c.scene = name;
-                            c.pipeline = parsePipeline(p);
+                            c.pipeline = pipelineInfo(p).name;
                             c.options = s->defaults;
                             if (std::sscanf(size.c_str(), "%dx%d", &c.options.width,
                                             &c.options.height) != 2 ||
@@ -413,7 +421,7 @@ int benchmarkCommand(const Flags& f) {
     for (Target& t : targets)
         for (const Cell& c : cells) {
             const RenderOptions& o = c.options;
-            std::string name = "render/" + c.scene + "/" + pipelineName(c.pipeline) + "/" +
+            std::string name = "render/" + c.scene + "/" + c.pipeline + "/" +
                                std::to_string(o.width) + "x" + std::to_string(o.height) + "/b" +
                                std::to_string(o.bounces) + "/s" + std::to_string(o.shadowSamples) +
                                "/aa" + std::to_string(o.aa) + "/" +
@@ -451,7 +459,7 @@ int benchmarkCommand(const Flags& f) {
 int main(int argc, char** argv) {
     for (int i = 1; i < argc; ++i)
         if (!std::strcmp(argv[i], "--help") || !std::strcmp(argv[i], "-h")) {
-            std::fputs(kUsage, stdout);
+            printUsage();
             std::puts("\nGoogle Benchmark's own flags: --benchmark_list_tests, --benchmark_filter, ...");
             return 0;
         }

@@ -18,24 +18,35 @@ double median(std::vector<double> v) {
 
 namespace {
 
-Measurement failure(const std::string& why) {
+// Why a step failed, and its kind as set where it was thrown (never read from the message).
+struct Failed {
+    std::string error;
+    FailureKind kind = FailureKind::None;
+    bool empty() const { return kind == FailureKind::None; }
+};
+
+Measurement failure(const Failed& why) {
     Measurement m;
-    m.error = why;
+    m.error = why.error;
+    m.failure = why.kind;
     return m;
 }
 
-// Runs f; a failure becomes the text of the error instead of an exception.
+// Runs f; a failure becomes its text and kind instead of an exception.
 template <typename F>
-std::string attempt(F&& f) {
+Failed attempt(F&& f) {
     try {
         f();
-        return "";
+        return {};
     } catch (const Error& e) {
-        return e.what();
+        return {e.what(), e.kind()};
     } catch (const cl::Error& e) {
-        return std::string(e.what()) + " failed with " + clErrorName(e.err());
+        const bool memory = e.err() == CL_OUT_OF_RESOURCES || e.err() == CL_OUT_OF_HOST_MEMORY ||
+                            e.err() == CL_MEM_OBJECT_ALLOCATION_FAILURE;
+        return {std::string(e.what()) + " failed with " + clErrorName(e.err()),
+                memory ? FailureKind::OutOfMemory : FailureKind::OpenCl};
     } catch (const std::bad_alloc&) {
-        return "out of host memory";
+        return {"out of host memory", FailureKind::OutOfMemory};
     }
 }
 
@@ -73,8 +84,8 @@ std::vector<Measurement> measureCells(ClContext& cl, const Scene& scene,
     // A fresh pipeline per cell: its buffers are its own, so the allocation delta is its memory,
     // and a large wavefront tree does not outlive the cell. Programs stay cached in the context.
     for (size_t k = 0; k < n; ++k) {
-        std::string error = attempt([&] {
-            pipelines[k] = makePipeline(variants[k].kind, &cl);
+        Failed error = attempt([&] {
+            pipelines[k] = makePipeline(variants[k].pipeline, &cl);
             for (int i = 0; i < warmup; ++i) {
                 render(k);
                 warmupWall[k] = pipelines[k]->stats().hostMs;
@@ -97,7 +108,7 @@ std::vector<Measurement> measureCells(ClContext& cl, const Scene& scene,
     for (int r = 0; r < repeats; ++r)
         for (size_t k = 0; k < n; ++k) {
             if (!pipelines[k] || capped(k)) continue;
-            std::string error = attempt([&] {
+            Failed error = attempt([&] {
                 Image frame = render(k);
                 const FrameStats& s = pipelines[k]->stats();
                 Timed& t = timed[k];
@@ -119,10 +130,9 @@ std::vector<Measurement> measureCells(ClContext& cl, const Scene& scene,
         if (!pipelines[k]) continue;
         Measurement& m = out[k];
         const FrameStats& s = pipelines[k]->stats();
-        m.treeBytes = s.treeBytes;
+        m.buffers = s.buffers;
         m.privateBytes = s.privateBytes;
-        m.treeNodes = s.treeNodes;
-        m.branching = s.branching;
+        m.extras = s.extras;
         m.tiles = s.tiles;
         m.launches = s.launches;
         const Timed& t = timed[k];
@@ -136,14 +146,15 @@ std::vector<Measurement> measureCells(ClContext& cl, const Scene& scene,
             m.kernelMs.emplace_back(name, median(t.kernels.at(name)));
         if (countRays) {
             // Untimed, and with its own program (RT_COUNT_RAYS), after the timed frames.
-            std::string error = attempt([&] {
+            Failed error = attempt([&] {
                 RenderOptions counting = variants[k].options;
                 counting.countRays = true;
                 pipelines[k]->render(scene, counting);
                 m.rays = pipelines[k]->stats().rays;
                 m.raysCounted = pipelines[k]->stats().raysCounted;
+                m.extras.update(pipelines[k]->stats().extras);  // what needs the counts
             });
-            if (error.empty()) deriveRayCounters(m, variants[k].kind, variants[k].options);
+            if (error.empty()) deriveRayCounters(m);
         }
         m.ok = true;
         pipelines[k].reset();
@@ -151,22 +162,17 @@ std::vector<Measurement> measureCells(ClContext& cl, const Scene& scene,
     return out;
 }
 
-Measurement measureCell(ClContext& cl, const Scene& scene, PipelineKind kind,
+Measurement measureCell(ClContext& cl, const Scene& scene, const std::string& pipeline,
                         const RenderOptions& options, int warmup, int repeats, bool countRays,
                         bool keepImage) {
-    return measureCells(cl, scene, {{kind, options}}, warmup, repeats, countRays, keepImage)[0];
+    return measureCells(cl, scene, {{pipeline, options}}, warmup, repeats, countRays, keepImage)[0];
 }
 
-void deriveRayCounters(Measurement& m, PipelineKind kind, const RenderOptions& o) {
+void deriveRayCounters(Measurement& m) {
     if (!m.raysCounted) return;
-    double total = double(m.rays[0] + m.rays[1] + m.rays[2] + m.rays[3]);
+    double total = 0;
+    for (uint64_t r : m.rays) total += double(r);
     if (m.deviceMs > 0) m.mrays = total / (m.deviceMs * 1e3);
-    if (kind == PipelineKind::Wave && !o.adaptiveAa) {
-        // Every traced primary, reflected or refracted ray fills one tree slot; shadow rays
-        // live inside their node.
-        double slots = double(o.width) * o.height * o.aa * o.aa * double(m.treeNodes);
-        if (slots > 0) m.treeUsed = double(m.rays[0] + m.rays[1] + m.rays[2]) / slots;
-    }
 }
 
 std::string deviceSlug(const DeviceInfo& d) {

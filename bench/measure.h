@@ -13,8 +13,10 @@
 #include <nlohmann/json.hpp>
 
 #include "core/cl_runtime.h"
+#include "core/error.h"
 #include "core/image.h"
 #include "core/pipeline.h"
+#include "pipelines/registry.h"
 #include "core/scene.h"
 
 namespace rt::bench {
@@ -22,6 +24,7 @@ namespace rt::bench {
 struct Measurement {
     bool ok = false;
     std::string error;          // why the cell could not be measured (ok = false)
+    FailureKind failure = FailureKind::None;  // its kind, as thrown
     int frames = 0;             // timed frames
     double deviceMs = 0;        // median over the timed frames of the kernels' summed time
     double deviceMsMin = 0, deviceMsMax = 0;
@@ -29,19 +32,19 @@ struct Measurement {
     std::vector<double> frameMs;  // device ms of each timed frame, in round order
     std::vector<std::pair<std::string, double>> kernelMs;  // median per kernel name
     size_t deviceBytes = 0;     // global memory the pipeline allocated for this frame
-    size_t treeBytes = 0, privateBytes = 0;
-    long long treeNodes = 0;
-    int branching = 1, tiles = 1, launches = 0;
+    std::vector<std::pair<std::string, size_t>> buffers;  // FrameStats::buffers
+    size_t privateBytes = 0;
+    int tiles = 1, launches = 0;
     double longestLaunchMs = 0; // the longest single kernel launch of any timed frame
-    std::array<uint64_t, 4> rays{};  // primary, reflection, refraction, shadow
+    RayCounts rays{};           // by RT_RAY_* type
     bool raysCounted = false;
     double mrays = 0;           // million rays per second of device time (when counted)
-    double treeUsed = -1;       // wavefront: traced slots / allocated slots (when counted)
+    nlohmann::json extras = nlohmann::json::object();  // FrameStats::extras, counting frame's last
     Image image;                // the last timed frame, when asked for
 };
 
 // Never throws for a cell that fails (CL error, a limit): the Measurement says why.
-Measurement measureCell(ClContext& cl, const Scene& scene, PipelineKind kind,
+Measurement measureCell(ClContext& cl, const Scene& scene, const std::string& pipeline,
                         const RenderOptions& options, int warmup, int repeats, bool countRays,
                         bool keepImage);
 
@@ -49,7 +52,7 @@ Measurement measureCell(ClContext& cl, const Scene& scene, PipelineKind kind,
 // by round (mega, wave, mega, wave, ...), so that their ratios see the same machine state; the
 // frames of one round are comparable one to one (Measurement::frameMs). One result per variant.
 struct Variant {
-    PipelineKind kind;
+    std::string pipeline;  // a registered name
     RenderOptions options;
 };
 // frameCapS > 0 bounds a variant's timed frames: once they add up to more than that many seconds
@@ -59,8 +62,8 @@ std::vector<Measurement> measureCells(ClContext& cl, const Scene& scene,
                                       int repeats, bool countRays, bool keepImage,
                                       double frameCapS = 0);
 
-// Fills mrays and treeUsed from the ray counts and the median device time.
-void deriveRayCounters(Measurement& m, PipelineKind kind, const RenderOptions& options);
+// Fills mrays from the ray counts and the median device time.
+void deriveRayCounters(Measurement& m);
 
 // The median of a non-empty list.
 double median(std::vector<double> v);

@@ -41,7 +41,9 @@ std::vector<std::string> words(const std::string& s) {
 class ValueParser {
 public:
     explicit ValueParser(std::string where) : where_(std::move(where)) {}
-    [[noreturn]] void fail(const std::string& why) const { throw Error(where_ + ": " + why); }
+    [[noreturn]] void fail(const std::string& why) const {
+        throw Error(where_ + ": " + why, FailureKind::InvalidOption);
+    }
 
     int integer(const std::string& w, int lo, int hi) const {
         size_t used = 0;
@@ -126,9 +128,9 @@ void applyGroupKey(SweepGroup& g, const std::string& key, const std::string& val
     } else if (key == "pipelines") {
         g.pipelines.clear();
         for (const std::string& w : words(value)) {
-            PipelineKind k = p.wrap([&] { return parsePipeline(w); });
-            if (k == PipelineKind::Cpu) p.fail("the cpu reference is not a measured pipeline");
-            g.pipelines.push_back(k);
+            const PipelineInfo& info = p.wrap([&]() -> const PipelineInfo& { return pipelineInfo(w); });
+            if (info.reference) p.fail("the " + info.name + " reference is not a measured pipeline");
+            g.pipelines.push_back(info.name);
         }
     } else if (key == "sizes") {
         g.sizes.clear();
@@ -140,7 +142,7 @@ void applyGroupKey(SweepGroup& g, const std::string& key, const std::string& val
             g.sizes.emplace_back(p.integer(m[1], 1, 16384), p.integer(m[2], 1, 16384));
         }
     } else if (key == "bounces") {
-        g.bounces = p.integers(value, 0, 16);
+        g.bounces = p.integers(value, 0, RT_MAX_BOUNCE_LIMIT);
     } else if (key == "shadow-samples") {
         g.shadowSamples = p.integers(value, 1, RT_MAX_SHADOW_SAMPLES);
     } else if (key == "aa") {
@@ -202,7 +204,7 @@ SweepConfig parseSweep(const std::string& text, const fs::path& path) {
         if (!top && !group) p.fail("unknown key '" + key + "' (see bench/sweeps/README.md)");
         if (top) {
             if (!groupNames.empty()) p.fail("'" + key + "' belongs before the first [group]");
-            if (key == "reference-bounces") c.referenceBounces = p.integer(value, 0, 16);
+            if (key == "reference-bounces") c.referenceBounces = p.integer(value, 0, RT_MAX_BOUNCE_LIMIT);
             if (key == "reference-shadow-samples")
                 c.referenceShadowSamples = p.integer(value, 1, RT_MAX_SHADOW_SAMPLES);
             if (key == "reference-aa") c.referenceAa = p.integer(value, 1, 16);
@@ -228,7 +230,7 @@ SweepConfig parseSweep(const std::string& text, const fs::path& path) {
             applyGroupKey(g, key, valueAndLine.substr(0, nl), p);
         }
         if (g.scenes.empty()) throw Error(path.string() + ": [" + g.name + "] lists no scenes");
-        if (g.pipelines.empty()) g.pipelines = {PipelineKind::Mega, PipelineKind::Wave};
+        if (g.pipelines.empty()) g.pipelines = pipelineRegistry().names(true);
         c.groups.push_back(g);
     }
     return c;
@@ -271,12 +273,12 @@ std::string Cell::batchKey() const {
     return k.str();
 }
 
-std::string Cell::key() const { return std::string(pipelineName(pipeline)) + '|' + settingKey(); }
+std::string Cell::key() const { return std::string(pipeline) + '|' + settingKey(); }
 
 std::string Cell::label() const {
     const RenderOptions& o = options;
     std::ostringstream l;
-    l << scene << ' ' << pipelineName(pipeline) << ' ' << o.width << 'x' << o.height << " b"
+    l << scene << ' ' << pipeline << ' ' << o.width << 'x' << o.height << " b"
       << o.bounces << " s" << o.shadowSamples << " aa" << o.aa;
     if (accelApplies) l << ' ' << accelName(o.accel);
     if (o.layout == RenderOptions::Layout::Weighted) l << " weighted";
@@ -307,14 +309,14 @@ std::vector<Cell> expandCells(const SweepConfig& config,
             // planes alone runs the same program whatever the accel.
             bool prims = !scene.spheres.empty() || !scene.triangles.empty();
             if (!prims) accels = {d.accel};
-            // Pipelines innermost: the two pipelines of a setting run back to back, so slow
+            // Pipelines innermost: the pipelines of a setting run back to back, so slow
             // drift of the machine (clocks, other load) hits both sides of a ratio alike.
             for (auto [w, h] : sizes)
                 for (int b : orDefault(g.bounces, d.bounces))
                     for (int s : orDefault(g.shadowSamples, d.shadowSamples))
                         for (int a : orDefault(g.aa, d.aa))
                             for (RenderOptions::Accel accel : accels)
-                                for (PipelineKind pipeline : g.pipelines) {
+                                for (std::string pipeline : g.pipelines) {
                                     Cell c;
                                     c.scene = name;
                                     c.pipeline = pipeline;
@@ -385,7 +387,7 @@ std::string skipReason(const SweepConfig& config, const Cell& cell, const std::v
                 shared = true;
         if (!shared) continue;
         std::ostringstream why;
-        why << pipelineName(cell.pipeline) << " stopped at " << a.width << 'x' << a.height << " B="
+        why << cell.pipeline << " stopped at " << a.width << 'x' << a.height << " B="
             << a.bounces << " (" << s.why << "); this setting is no smaller";
         return why.str();
     }

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "core/pipeline.h"
+#include "pipelines/registry.h"
 #include "core/scene.h"
 
 namespace rt::bench {
@@ -17,7 +18,7 @@ namespace rt::bench {
 struct SweepGroup {
     std::string name;  // "resolution", "bounces", "accel", "accuracy", or any other
     std::vector<std::string> scenes;
-    std::vector<PipelineKind> pipelines;
+    std::vector<std::string> pipelines;
     std::vector<std::pair<int, int>> sizes;
     std::vector<int> bounces, shadowSamples, aa;
     std::vector<RenderOptions::Accel> accels;
@@ -56,7 +57,7 @@ std::filesystem::path findSweep(const std::string& nameOrPath);
 // One measured cell: a scene, a pipeline and fully resolved render options.
 struct Cell {
     std::string scene;
-    PipelineKind pipeline = PipelineKind::Mega;
+    std::string pipeline;             // a registered name
     RenderOptions options;
     std::vector<std::string> groups;  // every group that asked for this cell
     bool images = false;

@@ -16,6 +16,7 @@
 #include "core/accel.h"
 #include "core/error.h"
 #include "core/version.h"
+#include "pipelines/registry.h"
 
 namespace rt::bench {
 namespace fs = std::filesystem;
@@ -33,9 +34,11 @@ std::string utcNow() {
 double cellCost(const Cell& c) {
     const RenderOptions& o = c.options;
     double frames = c.warmup + c.repeats + (c.countRays ? 1 : 0);
-    // Rays grow about with the bounce limit; the wavefront also walks every slot of its tree.
+    // Rays grow about with the bounce limit; a pipeline with a global tree (one that tiles it)
+    // also walks every slot of that tree.
     double work = 1.0 + o.bounces;
-    if (c.pipeline == PipelineKind::Wave) work += double(treeNodeCount(c.branching, o.bounces)) / 16;
+    if (pipelineInfo(c.pipeline).supports.tiling)
+        work += double(treeNodeCount(c.branching, o.bounces)) / 16;
     return double(o.width) * o.height * o.aa * o.aa * work * frames;
 }
 
@@ -120,7 +123,8 @@ nlohmann::json rowJson(const SweepConfig& config, const Cell& c, const Measureme
         {"cell", c.key()},
         {"groups", c.groups},
         {"scene", c.scene},
-        {"pipeline", pipelineName(c.pipeline)},
+        {"pipeline", c.pipeline},
+        {"pipeline_title", pipelineInfo(c.pipeline).title},
         {"width", o.width},
         {"height", o.height},
         {"bounces", o.bounces},
@@ -142,7 +146,13 @@ nlohmann::json rowJson(const SweepConfig& config, const Cell& c, const Measureme
     if (c.stopAfterFailure) row["stop_after_failure"] = true;
     if (c.maxFrameS > 0) row["max_frame_s"] = c.maxFrameS;
     if (!skipped.empty()) row["skip_reason"] = skipped;
-    if (!m.ok && skipped.empty()) row["failure"] = failureKind(m.error);
+    // The kind is the one the error was thrown with (rt::Error's FailureKind), never read from
+    // the message; a cell that failed without one is "other".
+    FailureKind failure = !skipped.empty() ? FailureKind::Skipped
+                          : m.ok           ? FailureKind::None
+                          : m.failure == FailureKind::None ? FailureKind::Other
+                                                           : m.failure;
+    row["failure"] = failureKindName(failure);
     if (m.ok) {
         nlohmann::json kernels = nlohmann::json::object();
         for (const auto& [name, ms] : m.kernelMs) kernels[name] = ms;
@@ -153,22 +163,25 @@ nlohmann::json rowJson(const SweepConfig& config, const Cell& c, const Measureme
                     {"frame_ms", m.frameMs},
                     {"kernel_ms", kernels},
                     {"device_bytes", m.deviceBytes},
-                    {"tree_bytes", m.treeBytes},
+                    {"tree_bytes", m.extras.value("tree_bytes", size_t(0))},
                     {"private_bytes", m.privateBytes},
-                    {"tree_nodes", m.treeNodes},
-                    {"branching", m.branching},
+                    {"tree_nodes", treeNodeCount(c.branching, o.bounces)},
+                    {"branching", c.branching},
                     {"tiles", m.tiles},
                     {"launches", m.launches},
                     {"longest_launch_ms", m.longestLaunchMs},
                     {"frames", m.frames}});
+        nlohmann::json buffers = nlohmann::json::object();
+        for (const auto& [name, bytes] : m.buffers) buffers[name] = bytes;
+        row["buffers"] = buffers;
+        row["extras"] = m.extras;
         row["memory_tiles"] = memoryTiles(row);
         if (m.raysCounted) {
-            row["rays"] = {{"primary", m.rays[0]},
-                           {"reflection", m.rays[1]},
-                           {"refraction", m.rays[2]},
-                           {"shadow", m.rays[3]}};
+            nlohmann::json rays = nlohmann::json::object();
+            for (int t = 0; t < RT_RAY_TYPES; ++t) rays[rayTypeName(t)] = m.rays[size_t(t)];
+            row["rays"] = rays;
             row["mrays_per_s"] = m.mrays;
-            if (m.treeUsed >= 0) row["tree_used"] = m.treeUsed;
+            if (m.extras.contains("tree_used")) row["tree_used"] = m.extras["tree_used"];
         }
     }
     row["end"] = endState(row);
@@ -214,14 +227,10 @@ std::string loadAverage() {
 }  // namespace
 
 int memoryTiles(const nlohmann::json& row) {
-    if (row.value("pipeline", "") != "wave" || !row.contains("tree_bytes")) return 1;
-    double perRow = double(row.value("width", 0)) * double(row.value("tree_nodes", 0LL)) *
-                    double(sizeof(dev::Node));
-    double treeBytes = row.value("tree_bytes", 0.0);
-    if (perRow <= 0 || treeBytes <= 0) return 1;
-    long long rows = std::llround(treeBytes / perRow);
-    long long height = row.value("height", 1);
-    return rows <= 0 ? 1 : int((height + rows - 1) / rows);
+    // The pipeline counted its tiles (FrameStats::extras); rows without them ran in one piece.
+    if (row.contains("extras") && row["extras"].contains("memory_tiles"))
+        return row["extras"]["memory_tiles"].get<int>();
+    return 1;
 }
 
 std::string endState(const nlohmann::json& row) {
@@ -230,17 +239,6 @@ std::string endState(const nlohmann::json& row) {
     if (status != "ok") return "error: " + row.value("error", std::string());
     int tiles = memoryTiles(row);
     return tiles > 1 ? "ran (tiled into " + std::to_string(tiles) + " tiles)" : "ran";
-}
-
-std::string failureKind(const std::string& e) {
-    if (e.find("in private memory") != std::string::npos) return "private tree";
-    if (e.find("one row of the wavefront ray tree") != std::string::npos) return "tree row";
-    if (e.find("ALLOCATION") != std::string::npos || e.find("OUT_OF_RESOURCES") != std::string::npos ||
-        e.find("OUT_OF_HOST_MEMORY") != std::string::npos || e.find("out of host memory") != std::string::npos ||
-        e.find("per allocation") != std::string::npos || e.find("memory is left") != std::string::npos)
-        return "allocation";
-    if (e.find("CL_") != std::string::npos) return "OpenCL error";
-    return "other";
 }
 
 std::string formatDuration(double s) {
@@ -382,7 +380,7 @@ SweepSummary runSweep(const SweepConfig& config, const SweepRunOptions& options,
         }
         double batchCost = 0;
         for (size_t k : run) batchCost += cellCost(cells[k]);
-        // Frames of the same setting from both pipelines: they must agree (bit-identical by
+        // Frames of the same setting from every pipeline: they must agree (bit-identical by
         // design), which catches a silent wrong image at a limit (tiling, launch splitting).
         std::map<std::string, size_t> bySetting;
         std::map<size_t, std::pair<std::string, double>> diff;  // cell -> (other pipeline, max |d|)
@@ -392,8 +390,8 @@ SweepSummary runSweep(const SweepConfig& config, const SweepRunOptions& options,
             auto [it, fresh] = bySetting.emplace(cells[k].settingKey(), k);
             if (fresh) continue;
             double d = maxDifference(ms[it->second - i].image, m.image);
-            diff[k] = {pipelineName(cells[it->second].pipeline), d};
-            diff[it->second] = {pipelineName(cells[k].pipeline), d};
+            diff[k] = {cells[it->second].pipeline, d};
+            diff[it->second] = {cells[k].pipeline, d};
         }
         for (size_t k = i; k < j; ++k) {
             const Measurement& m = ms[k - i];
@@ -420,12 +418,12 @@ SweepSummary runSweep(const SweepConfig& config, const SweepRunOptions& options,
                 row["image_max_diff"] = it->second.second;
                 if (it->second.second != 0)
                     std::fprintf(stderr, "    WARNING: %s and %s frames differ by up to %g\n",
-                                 pipelineName(cells[k].pipeline), it->second.first.c_str(),
+                                 cells[k].pipeline.c_str(), it->second.first.c_str(),
                                  it->second.second);
             }
             if (cells[k].stopAfterFailure) {
                 if (!m.ok) {
-                    stops.push_back({cells[k], "error: " + failureKind(m.error)});
+                    stops.push_back({cells[k], std::string("error: ") + failureKindName(m.failure)});
                 } else if (cells[k].maxFrameS > 0 && m.wallMs > cells[k].maxFrameS * 1e3) {
                     char why[96];
                     std::snprintf(why, sizeof why, "a frame took %.1f s, over max-frame-s %g",

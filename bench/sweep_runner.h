@@ -55,18 +55,14 @@ nlohmann::json sweepSettingsJson(const SweepConfig& config);
 // "2m05s"
 std::string formatDuration(double seconds);
 
-// How a row's cell ended, for the limits sweep: "ran", "ran (tiled into K tiles)" (the wavefront
-// tree did not fit the device's max allocation or the memory budget in one piece),
+// How a row's cell ended, for the limits sweep: "ran", "ran (tiled into K tiles)" (a global
+// ray tree did not fit the device's max allocation or the memory budget in one piece),
 // "error: <the message>" or "skipped".
 std::string endState(const nlohmann::json& row);
 
-// Rows of the wavefront tree one memory tile holds, from the row's tree bytes: the frame's tiles
-// forced by memory (not by the launch-time planner). 1 when the whole tree fits or for the
-// megakernel.
+// Row tiles the frame was split into because its memory did not fit in one piece (the
+// max allocation or the memory budget), as the pipeline reported it ("extras": "memory_tiles");
+// 1 for a pipeline that never tiles.
 int memoryTiles(const nlohmann::json& row);
-
-// A short class of a failure message: "private tree", "tree row", "allocation", "OpenCL error",
-// "other".
-std::string failureKind(const std::string& error);
 
 }  // namespace rt::bench

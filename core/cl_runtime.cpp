@@ -91,7 +91,7 @@ void throwClError(const cl::Error& e, const std::string& what, const std::string
     const bool outOfMemory = e.err() == CL_OUT_OF_RESOURCES || e.err() == CL_OUT_OF_HOST_MEMORY ||
                              e.err() == CL_MEM_OBJECT_ALLOCATION_FAILURE;
     if (outOfMemory && !memoryHint.empty()) msg << "; " << memoryHint;
-    throw Error(msg.str());
+    throw Error(msg.str(), outOfMemory ? FailureKind::OutOfMemory : FailureKind::OpenCl);
 }
 
 std::string DeviceInfo::label() const {
@@ -107,7 +107,7 @@ static std::string trim(std::string s) {
 
 // PoCL's CPU device runs work-groups on threads it starts when the platform is first listed, with
 // the default attributes, so glibc's default stack (ulimit -s, usually 8 MiB). Its work-group
-// function lays the private arrays of the 64 work-items of a group side by side: the wavefront
+// function lays the private arrays of the 64 work-items of a group side by side: a pipeline's
 // image kernel's private tree (up to kPrivateTreeLimit, 256 KiB) then needs 16 MiB, and bounce
 // limits 10 and 11 crashed the process (SIGSEGV in Wavefront_Image). Threads started from here on
 // get at least 64 MiB of stack (address space; pages are committed only when touched).
@@ -244,7 +244,7 @@ static std::filesystem::path cacheDir() {
 cl::Program ClContext::program(const std::string& mainFile, const std::vector<std::string>& defines) {
     std::string options = "-cl-std=CL1.2";
     // OpenCL lets float division and sqrt be 2.5-3 ulp; NVIDIA's compiler then picks different
-    // approximations in different kernels, and the wavefront and megakernel images drift apart
+    // approximations in different kernels, and the pipelines' images drift apart
     // (measured on an H200: up to 2.3e-4). Correct rounding makes them bit-identical again at no
     // measurable cost.
     if (device_.correctlyRoundedDivSqrt) options += " -cl-fp32-correctly-rounded-divide-sqrt";
@@ -296,7 +296,8 @@ cl::Program ClContext::program(const std::string& mainFile, const std::vector<st
     } catch (const cl::Error& e) {
         std::string log = buildLog(p);
         throw Error("building " + mainFile + " for " + device_.name + " failed with " +
-                    clErrorName(e.err()) + " (options: " + options + ")\n" + log);
+                    clErrorName(e.err()) + " (options: " + options + ")\n" + log,
+                    FailureKind::OpenCl);
     }
     programs_[key] = p;
     lastSource_ = "built";
@@ -329,11 +330,13 @@ cl::Buffer ClContext::allocate(size_t bytes, cl_mem_flags flags, const std::stri
     if (bytes > device_.maxAlloc)
         throw Error(what + " needs " + mib(double(bytes)) + " in one buffer, but " + device_.name +
                     " allows at most " + mib(double(device_.maxAlloc)) +
-                    " per allocation (CL_DEVICE_MAX_MEM_ALLOC_SIZE)");
+                    " per allocation (CL_DEVICE_MAX_MEM_ALLOC_SIZE)",
+                    FailureKind::OutOfMemory);
     if (allocated_ + bytes > device_.globalMem)
         throw Error(what + " needs " + mib(double(bytes)) + " but only " +
                     mib(double(device_.globalMem - allocated_)) + " of " + device_.name +
-                    "'s global memory is left");
+                    "'s global memory is left",
+                    FailureKind::OutOfMemory);
     try {
         // Fault injection (issue 8, tests/stability_test.cpp): RTLAB_FAIL_ALLOC_AFTER=n fails
         // every allocation that would take this context past n bytes, as a driver would.

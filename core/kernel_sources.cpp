@@ -3,6 +3,7 @@
 #include <fstream>
 #include <set>
 #include <sstream>
+#include <vector>
 
 #include "core/error.h"
 
@@ -19,8 +20,11 @@ std::string KernelSources::file(const std::string& name) const {
             if (name == s.name) return s.text;
         throw Error("kernel source '" + name + "' is not embedded in this binary");
     }
-    for (const char* sub : {"", "core", "core/cl", "megakernel", "wavefront"}) {
-        std::filesystem::path p = dir_ / sub / name;
+    std::vector<std::filesystem::path> candidates;
+    for (const EmbeddedSource& s : embeddedKernelSources())
+        if (name == s.name) candidates.push_back(dir_ / s.path);
+    candidates.push_back(dir_ / name);
+    for (const std::filesystem::path& p : candidates) {
         if (std::filesystem::is_regular_file(p)) {
             std::ifstream in(p, std::ios::binary);
             std::stringstream ss;

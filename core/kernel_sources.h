@@ -13,6 +13,7 @@ namespace rt {
 
 struct EmbeddedSource {
     const char* name;  // file name, e.g. "intersect.cl"
+    const char* path;  // where it lives in a source checkout, e.g. "core/cl/intersect.cl"
     std::string text;
 };
 
@@ -20,8 +21,9 @@ const std::vector<EmbeddedSource>& embeddedKernelSources();
 
 class KernelSources {
 public:
-    // Empty dir: the embedded copies. Otherwise the tree is searched (core/, core/cl/,
-    // megakernel/, wavefront/ of a source checkout) for each file name.
+    // Empty dir: the embedded copies. Otherwise each file is read from dir at the path it was
+    // embedded from (the build knows every pipeline folder; this file names none), else from
+    // dir itself.
     explicit KernelSources(std::filesystem::path dir = {});
 
     // The text of one file, or throws rt::Error.

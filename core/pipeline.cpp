@@ -6,24 +6,15 @@
 
 #include "core/accel.h"
 #include "core/error.h"
-#include "megakernel/megakernel.h"
-#include "wavefront/wavefront.h"
-#include "core/reference.h"
 
 namespace rt {
 
-PipelineKind parsePipeline(const std::string& name) {
-    if (name == "cpu") return PipelineKind::Cpu;
-    if (name == "mega") return PipelineKind::Mega;
-    if (name == "wave") return PipelineKind::Wave;
-    throw Error("--pipeline " + name + ": must be one of cpu, mega, wave");
-}
-
-const char* pipelineName(PipelineKind kind) {
-    switch (kind) {
-        case PipelineKind::Cpu: return "cpu";
-        case PipelineKind::Mega: return "mega";
-        case PipelineKind::Wave: return "wave";
+const char* rayTypeName(int type) {
+    switch (type) {
+        case RT_RAY_PRIMARY: return "primary";
+        case RT_RAY_REFLECTION: return "reflection";
+        case RT_RAY_REFRACTION: return "refraction";
+        case RT_RAY_SHADOW: return "shadow";
     }
     return "?";
 }
@@ -39,54 +30,38 @@ void FrameStats::addKernel(const std::string& name, double ms) {
     kernelMs.emplace_back(name, ms);
 }
 
-namespace {
-
-class CpuPipeline : public Pipeline {
-public:
-    PipelineKind kind() const override { return PipelineKind::Cpu; }
-    Image render(const Scene& scene, const RenderOptions& options) override {
-        checkOptions(scene, options);
-        stats_ = {};
-        stats_.branching = scene.branching();
-        stats_.treeNodes = treeNodeCount(stats_.branching, options.bounces);
-        auto t0 = std::chrono::steady_clock::now();
-        Image image = renderReference(scene, options);
-        stats_.hostMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
-                            .count();
-        return image;
-    }
-};
-
-}  // namespace
-
-std::unique_ptr<Pipeline> makePipeline(PipelineKind kind, ClContext* cl) {
-    if (kind == PipelineKind::Cpu) return std::make_unique<CpuPipeline>();
-    if (!cl) throw Error(std::string("pipeline ") + pipelineName(kind) + " needs an OpenCL device");
-    if (kind == PipelineKind::Mega) return std::make_unique<MegakernelPipeline>(*cl);
-    return std::make_unique<WavefrontPipeline>(*cl);
+void FrameStats::addBuffer(const std::string& name, size_t bytes) {
+    for (auto& [n, b] : buffers)
+        if (n == name) {
+            b = bytes;
+            return;
+        }
+    buffers.emplace_back(name, bytes);
 }
 
 void checkOptions(const Scene& scene, const RenderOptions& o) {
     auto range = [](const char* flag, long long v, long long lo, long long hi) {
         if (v < lo || v > hi)
             throw Error(std::string(flag) + " " + std::to_string(v) + ": must be in " +
-                        std::to_string(lo) + ".." + std::to_string(hi));
+                        std::to_string(lo) + ".." + std::to_string(hi),
+                        FailureKind::InvalidOption);
     };
     range("--size (width)", o.width, 1, 16384);
     range("--size (height)", o.height, 1, 16384);
-    range("--bounces", o.bounces, 0, 16);
+    range("--bounces", o.bounces, 0, RT_MAX_BOUNCE_LIMIT);
     range("--shadow-samples", o.shadowSamples, 1, RT_MAX_SHADOW_SAMPLES);
     range("--aa", o.aa, 1, 16);
     if (!(o.shadowStrength >= 0.f && o.shadowStrength <= 1.f))
-        throw Error("shadow strength must be in [0, 1]");
+        throw Error("shadow strength must be in [0, 1]", FailureKind::InvalidOption);
     if (scene.lights.size() > RT_MAX_LIGHTS)
         throw Error(scene.source.string() + ": at most " + std::to_string(RT_MAX_LIGHTS) +
-                    " lights are supported");
+                    " lights are supported",
+                    FailureKind::InvalidOption);
 }
 
 size_t treePrivateBytes(int branching, int bounces) {
     // A node plus its colour (float3, 16 bytes in private memory) per tree slot.
-    return size_t(treeNodeCount(branching, bounces)) * (sizeof(dev::Node) + 16);
+    return size_t(treeNodeCount(branching, bounces)) * (sizeof(dev::Node) + sizeof(cl_float3));
 }
 
 void checkPrivateTree(int branching, int bounces, const std::string& who, bool suggestWeighted) {
@@ -100,7 +75,7 @@ void checkPrivateTree(int branching, int bounces, const std::string& who, bool s
                       std::to_string(kPrivateTreeLimit / 1024) + " KiB limit; the highest bounce " +
                       "limit that fits is " + std::to_string(fits);
     if (suggestWeighted) msg += " (or use --layout weighted)";
-    throw Error(msg);
+    throw Error(msg, FailureKind::PrivateTree);
 }
 
 std::vector<std::string> featureDefines(const Scene& scene, const RenderOptions& o) {
@@ -180,8 +155,8 @@ DeviceScene::DeviceScene(ClContext& cl, const Scene& scene, RenderOptions::Accel
         cubemap_ = upload(cl, scene.environment.cubemap, "the cubemap buffer", bytes_);
         bvh_ = upload(cl, accel.bvh, "the BVH buffer", bytes_);
         cells_ = upload(cl, accel.cells, "the grid buffer", bytes_);
-        rayCounts_ = cl.allocate(4 * sizeof(cl_uint), CL_MEM_READ_WRITE, "the ray counters");
-        bytes_ += 4 * sizeof(cl_uint);
+        rayCounts_ = cl.allocate(RT_RAY_TYPES * sizeof(cl_uint), CL_MEM_READ_WRITE, "the ray counters");
+        bytes_ += RT_RAY_TYPES * sizeof(cl_uint);
     } catch (...) {
         cl_.release(bytes_);
         throw;
@@ -191,13 +166,15 @@ DeviceScene::DeviceScene(ClContext& cl, const Scene& scene, RenderOptions::Accel
 DeviceScene::~DeviceScene() { cl_.release(bytes_); }
 
 void DeviceScene::resetRayCounts(cl::CommandQueue& queue) const {
-    queue.enqueueFillBuffer(rayCounts_, cl_uint(0), 0, 4 * sizeof(cl_uint));
+    queue.enqueueFillBuffer(rayCounts_, cl_uint(0), 0, RT_RAY_TYPES * sizeof(cl_uint));
 }
 
-std::array<uint64_t, 4> DeviceScene::readRayCounts(cl::CommandQueue& queue) const {
-    cl_uint c[4];
+RayCounts DeviceScene::readRayCounts(cl::CommandQueue& queue) const {
+    cl_uint c[RT_RAY_TYPES];
     queue.enqueueReadBuffer(rayCounts_, CL_TRUE, 0, sizeof c, c);
-    return {c[0], c[1], c[2], c[3]};
+    RayCounts out{};
+    for (int i = 0; i < RT_RAY_TYPES; ++i) out[i] = c[i];
+    return out;
 }
 
 void DeviceScene::setArgs(cl::Kernel& k, const dev::RenderSettings& settings) const {

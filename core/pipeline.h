@@ -1,5 +1,5 @@
 // rtlab — what the pipelines share on the host: the Pipeline interface that `rtlab render`, the
-// benchmarks and the viewer drive, the device copy of a scene, and the feature defines that make
+// benchmarks and the viewer drive (pipelines are found by name in core/pipeline_registry.h), the device copy of a scene, and the feature defines that make
 // each program model no more than its scene needs.
 #pragma once
 
@@ -10,6 +10,8 @@
 #include <utility>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "core/accel.h"
 #include "core/cl_runtime.h"
 #include "core/image.h"
@@ -17,37 +19,41 @@
 
 namespace rt {
 
-enum class PipelineKind { Cpu, Mega, Wave };
-PipelineKind parsePipeline(const std::string& name);  // throws rt::Error on an unknown name
-const char* pipelineName(PipelineKind kind);
+// Rays by type (RT_RAY_* in core/types.h): primary, reflection, refraction, shadow.
+using RayCounts = std::array<uint64_t, RT_RAY_TYPES>;
+const char* rayTypeName(int type);  // "primary", "reflection", "refraction", "shadow"
 
+// What one frame cost, in terms every pipeline shares; what only one pipeline has goes in extras.
 struct FrameStats {
     // Device time per kernel, summed over every launch of the frame (profiling events), in ms.
     std::vector<std::pair<std::string, double>> kernelMs;
     double deviceMs = 0;        // sum of kernelMs
     double hostMs = 0;          // wall time of render() on the host
-    size_t treeBytes = 0;       // global ray-tree buffer (wavefront)
+    // Device buffers the frame used, by name, in bytes (the scene's own are in accel).
+    std::vector<std::pair<std::string, size_t>> buffers;
     size_t privateBytes = 0;    // private ray storage per work-item (estimate from the layout)
-    long long treeNodes = 0;    // N per pixel
-    int branching = 1;          // C
     int tiles = 1;              // row tiles the frame was split into
     int launches = 0;           // kernel launches (time-bounded tiles x passes)
     double longestLaunchMs = 0; // the longest single launch of the frame (watchdog margin)
     std::string program;        // how the program was obtained: built, disk or memory cache
-    // Rays traced on the device by type (primary, reflection, refraction, shadow); filled only
-    // when RenderOptions::countRays is set, because the atomics cost time.
-    std::array<uint64_t, 4> rays{};
+    // Rays traced on the device by type; filled only when RenderOptions::countRays is set,
+    // because the atomics cost time.
+    RayCounts rays{};
     bool raysCounted = false;
     // The acceleration structure the frame traversed (DeviceScene::accelStats); its build time
     // is that of the frame that built it, since later frames reuse the device copy.
     AccelStats accel;
+    // Pipeline-specific values (numbers or strings), carried as they are into sweep rows.
+    nlohmann::json extras = nlohmann::json::object();
     void addKernel(const std::string& name, double ms);
+    void addBuffer(const std::string& name, size_t bytes);
 };
 
 class Pipeline {
 public:
     virtual ~Pipeline() = default;
-    virtual PipelineKind kind() const = 0;
+    // The registered name (PipelineRegistry): "mega".
+    virtual const char* name() const = 0;
     // Renders one frame. Device buffers are allocated on the first call and kept while the scene
     // (by address) and the frame size stay the same.
     virtual Image render(const Scene& scene, const RenderOptions& options) = 0;
@@ -56,9 +62,6 @@ public:
 protected:
     FrameStats stats_;
 };
-
-// cl may be null only for PipelineKind::Cpu.
-std::unique_ptr<Pipeline> makePipeline(PipelineKind kind, ClContext* cl);
 
 // -D defines for a scene and its options: object kinds present, C, B, N, accuracy switches.
 std::vector<std::string> featureDefines(const Scene& scene, const RenderOptions& options);
@@ -73,7 +76,7 @@ void checkOptions(const Scene& scene, const RenderOptions& options);
 size_t treePrivateBytes(int branching, int bounces);
 constexpr size_t kPrivateTreeLimit = 256 * 1024;
 // Throws when the tree of N nodes does not fit kPrivateTreeLimit, naming the bounce limit that
-// fits. `who` names the kernel ("megakernel tree layout", "wavefront image kernel").
+// fits. `who` names the kernel that keeps the tree, as the user knows it.
 void checkPrivateTree(int branching, int bounces, const std::string& who, bool suggestWeighted);
 
 // The scene's object arrays on the device, with the acceleration structure of one --accel mode.
@@ -89,7 +92,7 @@ public:
     static constexpr int kFirstKernelArg = 12;
     // Device ray counters (RenderOptions::countRays): zero them before a frame, read them after.
     void resetRayCounts(cl::CommandQueue& queue) const;
-    std::array<uint64_t, 4> readRayCounts(cl::CommandQueue& queue) const;
+    RayCounts readRayCounts(cl::CommandQueue& queue) const;
     // True when this copy was made from `scene` with `accel` (by address: scenes are not mutated
     // while a pipeline holds them, except the camera, which travels in the settings).
     bool matches(const Scene& scene, RenderOptions::Accel accel) const {

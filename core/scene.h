@@ -29,8 +29,8 @@ struct RenderOptions {
 
     // Pipeline choices; the CPU reference ignores them.
     enum class Layout { Tree, Weighted };
-    Layout layout = Layout::Tree;   // megakernel: full private ray tree, or weighted stack
-    size_t memoryBudget = 0;        // wavefront: bytes the global ray tree may use (0 = device max)
+    Layout layout = Layout::Tree;   // private rays: the full ray tree, or a weighted stack
+    size_t memoryBudget = 0;        // bytes a global ray tree may use (0 = device max)
     enum class Accel { None, Bv, Grid, Bvh };
     Accel accel = Accel::Bv;        // how rays find triangles (issue 5)
     bool countRays = false;         // count rays by type on the device (slower; benchmarks)

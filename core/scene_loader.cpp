@@ -616,7 +616,7 @@ class Loader {
         };
         r.width = n.opt("width", r.width, range(1, 16384));
         r.height = n.opt("height", r.height, range(1, 16384));
-        r.bounces = n.opt("bounces", r.bounces, range(0, 16));
+        r.bounces = n.opt("bounces", r.bounces, range(0, RT_MAX_BOUNCE_LIMIT));
         r.shadowSamples = n.opt("shadow_samples", r.shadowSamples, range(1, RT_MAX_SHADOW_SAMPLES));
         r.aa = n.opt("aa", r.aa, range(1, 16));
         r.shadowStrength = n.opt("shadow_strength", r.shadowStrength, readUnit);

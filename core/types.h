@@ -32,6 +32,16 @@ RT_DEV_BEGIN
 #define RT_MAX_LIGHTS 4         // Node keeps one occlusion count per light
 #define RT_MAX_SHADOW_SAMPLES 255  // ... in one byte
 #define RT_MAX_MATERIALS 65535  // Node keeps the material in 16 bits
+// The highest bounce limit B any front end, scene file or sweep accepts: a global ray tree at
+// B=16 already needs 2^17 nodes per pixel of a transparent scene.
+#define RT_MAX_BOUNCE_LIMIT 16
+
+// Ray types: the device's ray counters (RT_COUNT_RAY) and the host's FrameStats::rays.
+#define RT_RAY_PRIMARY 0
+#define RT_RAY_REFLECTION 1
+#define RT_RAY_REFRACTION 2
+#define RT_RAY_SHADOW 3
+#define RT_RAY_TYPES 4
 
 typedef struct Float3 {
     float x, y, z;

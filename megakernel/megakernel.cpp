@@ -3,6 +3,7 @@
 #include <chrono>
 
 #include "core/error.h"
+#include "core/pipeline_registry.h"
 
 namespace rt {
 
@@ -16,14 +17,13 @@ Image MegakernelPipeline::render(const Scene& scene, const RenderOptions& o) {
     auto t0 = std::chrono::steady_clock::now();
     checkOptions(scene, o);
     stats_ = {};
-    stats_.branching = scene.branching();
-    stats_.treeNodes = treeNodeCount(stats_.branching, o.bounces);
+    const int branching = scene.branching();
     if (o.layout == RenderOptions::Layout::Tree) {
-        checkPrivateTree(stats_.branching, o.bounces, "megakernel's tree layout", true);
-        stats_.privateBytes = treePrivateBytes(stats_.branching, o.bounces);
+        checkPrivateTree(branching, o.bounces, "megakernel's tree layout", true);
+        stats_.privateBytes = treePrivateBytes(branching, o.bounces);
     } else {
         // Pending entries: a ray (2 x float3), a weight (float3) and a depth, 64 bytes.
-        stats_.privateBytes = size_t(o.bounces * (stats_.branching - 1) + 1) * 64;
+        stats_.privateBytes = size_t(o.bounces * (branching - 1) + 1) * 64;
     }
 
     cl::Program program = cl_.program("megakernel.cl", defines(scene, o));
@@ -48,6 +48,8 @@ Image MegakernelPipeline::render(const Scene& scene, const RenderOptions& o) {
         image_ = image;
         imageBytes_ = bytes;
     }
+    stats_.addBuffer("image", bytes);
+    stats_.addBuffer("adaptive-AA centres", bytes);
 
     dev::RenderSettings settings = makeSettings(scene, o);
     Image out(o.width, o.height);
@@ -102,6 +104,20 @@ Image MegakernelPipeline::render(const Scene& scene, const RenderOptions& o) {
     stats_.hostMs =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     return out;
+}
+
+}  // namespace rt
+
+namespace rt {
+
+void registerMegakernel(PipelineRegistry& registry) {
+    PipelineInfo p;
+    p.name = "mega";
+    p.title = "megakernel";
+    p.description = "one kernel launch per frame; each work-item keeps its rays in private memory";
+    p.supports = {.layouts = true, .adaptiveAa = true, .tiling = false};
+    p.make = [](ClContext* cl) { return std::make_unique<MegakernelPipeline>(*cl); };
+    registry.add(std::move(p));
 }
 
 }  // namespace rt

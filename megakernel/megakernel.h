@@ -12,7 +12,7 @@ class MegakernelPipeline : public Pipeline {
 public:
     explicit MegakernelPipeline(ClContext& cl) : cl_(cl) {}
     ~MegakernelPipeline() override { cl_.release(2 * imageBytes_); }  // keep the device-memory tally true
-    PipelineKind kind() const override { return PipelineKind::Mega; }
+    const char* name() const override { return "mega"; }
     Image render(const Scene& scene, const RenderOptions& options) override;
 
     // The defines the program is built with (tests check them).

@@ -18,8 +18,9 @@
 #include "image/compare.h"
 #include "image/image_io.h"
 #include "megakernel/megakernel.h"
+#include "pipelines/registry.h"
 #include "test_device.h"
-#include "wavefront/wavefront.h"
+#include "wavefront/tree/wavefront.h"
 
 namespace rt {
 namespace {
@@ -207,11 +208,11 @@ void expectSameImage(const Image& a, const Image& b, const std::string& what) {
     EXPECT_LE(d.meanAbs, 0.1 / 255.0) << what;
 }
 
-std::unique_ptr<Pipeline> pipeline(PipelineKind kind) {
+std::unique_ptr<Pipeline> pipeline(std::string kind) {
     return makePipeline(kind, &test::device());
 }
 
-class AccelImages : public ::testing::TestWithParam<std::tuple<const char*, PipelineKind>> {};
+class AccelImages : public ::testing::TestWithParam<std::tuple<const char*, std::string>> {};
 
 TEST_P(AccelImages, EveryModeMatchesNone) {
     auto [name, kind] = GetParam();
@@ -233,11 +234,11 @@ TEST_P(AccelImages, EveryModeMatchesNone) {
 
 INSTANTIATE_TEST_SUITE_P(StandardScenes, AccelImages,
                          ::testing::Combine(::testing::ValuesIn(kScenes),
-                                            ::testing::Values(PipelineKind::Mega,
-                                                              PipelineKind::Wave)),
+                                            ::testing::Values("mega",
+                                                              "wave")),
                          [](const auto& info) {
                              return std::string(std::get<0>(info.param)) + "_" +
-                                    pipelineName(std::get<1>(info.param));
+                                    std::get<1>(info.param);
                          });
 
 // The stress scenes at reduced size (4,096 spheres, 20,000 triangles): every mode against none.
@@ -245,7 +246,7 @@ TEST(AccelStress, SmallStressScenesMatchNone) {
     fs::path dir = stressScenes("stress-small", "--side 64 --terrain 100");
     for (const char* name : {"many-spheres", "big-mesh"}) {
         Scene scene = loadScene(dir / (std::string(name) + ".json"), readImage);
-        for (PipelineKind kind : {PipelineKind::Mega, PipelineKind::Wave}) {
+        for (std::string kind : {"mega", "wave"}) {
             RenderOptions o = scene.defaults;
             o.width = 48;
             o.height = 27;
@@ -256,7 +257,7 @@ TEST(AccelStress, SmallStressScenesMatchNone) {
             for (Accel a : {Accel::Bv, Accel::Grid, Accel::Bvh}) {
                 o.accel = a;
                 expectSameImage(p->render(scene, o), none,
-                                std::string(name) + " " + pipelineName(kind) + " " + accelName(a));
+                                std::string(name) + " " + kind + " " + accelName(a));
             }
         }
     }
@@ -274,9 +275,9 @@ TEST(AccelStress, FullStressScenesMatchBvh) {
         RenderOptions crop = scene.defaults;
         crop.bounces = 2;
         cropToCenter(cropped, crop, 10, 6);
-        for (PipelineKind kind : {PipelineKind::Mega, PipelineKind::Wave}) {
+        for (std::string kind : {"mega", "wave"}) {
             auto p = pipeline(kind);
-            std::string what = std::string(name) + " " + pipelineName(kind) + " ";
+            std::string what = std::string(name) + " " + kind + " ";
             RenderOptions o = scene.defaults;
             o.width = 64;
             o.height = 36;
@@ -302,7 +303,7 @@ TEST(Accel, CropIsTheCentreOfTheFrame) {
     o.width = 64;
     o.height = 48;
     o.bounces = 2;
-    auto p = pipeline(PipelineKind::Mega);
+    auto p = pipeline("mega");
     Image full = p->render(scene, o);
     Scene cropped = scene;
     cropToCenter(cropped, o, 32, 16);

@@ -12,6 +12,7 @@
 #include <unistd.h>
 
 #include "core/cl_runtime.h"
+#include "pipelines/registry.h"
 
 namespace {
 
@@ -115,7 +116,8 @@ INSTANTIATE_TEST_SUITE_P(
     caseName);
 
 TEST(Cli, RendersWithEveryPipeline) {
-    for (const char* p : {"cpu", "mega", "wave"}) {
+    for (const std::string& name : rt::pipelineRegistry().names()) {
+        const char* p = name.c_str();
         std::string out = ::testing::TempDir() + "cli_" + std::to_string(getpid()) + "_" + p + ".exr";
         Result r = run(std::string("render scenes/shadows.json --size 32x24 --pipeline ") + p +
                        " --stats -o " + out);
@@ -126,6 +128,17 @@ TEST(Cli, RendersWithEveryPipeline) {
             EXPECT_NE(r.out.find("ray tree"), std::string::npos) << r.out;
         }
     }
+}
+
+TEST(Cli, PipelineHelpListsTheRegistry) {
+    Result r = run("render --help");
+    EXPECT_EQ(r.status, 0);
+    for (const rt::PipelineInfo& p : rt::pipelineRegistry().all()) {
+        EXPECT_NE(r.out.find(p.name + ": " + p.title), std::string::npos) << p.name << "\n" << r.out;
+    }
+    Result c = run("compare --help");
+    for (const std::string& name : rt::pipelineRegistry().names(true))
+        EXPECT_NE(c.out.find(name), std::string::npos) << name << "\n" << c.out;
 }
 
 TEST(Cli, DevicesListsEveryDevice) {

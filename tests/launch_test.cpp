@@ -9,7 +9,7 @@
 #include "image/image_io.h"
 #include "megakernel/megakernel.h"
 #include "test_device.h"
-#include "wavefront/wavefront.h"
+#include "wavefront/tree/wavefront.h"
 
 namespace rt {
 namespace {

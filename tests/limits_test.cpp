@@ -13,6 +13,8 @@
 #include "core/launch_planner.h"
 #include "core/pipeline.h"
 #include "core/scene_loader.h"
+#include "pipelines/registry.h"
+#include "wavefront/tree/wavefront.h"
 #include "test_device.h"
 
 namespace rt {
@@ -45,7 +47,7 @@ TEST(LimitsSweep, FileParsesIntoLimitsGroups) {
     EXPECT_EQ(c.groups[0].bounces.back(), 16);
     EXPECT_EQ(c.groups[1].layout, RenderOptions::Layout::Weighted);
     EXPECT_EQ(c.groups[2].memoryBudget, size_t(32) << 20);
-    EXPECT_EQ(c.groups[2].pipelines, std::vector<PipelineKind>{PipelineKind::Wave});
+    EXPECT_EQ(c.groups[2].pipelines, std::vector<std::string>{"wave"});
     EXPECT_EQ(c.groups[3].bounces, std::vector<int>{8});
     EXPECT_EQ(c.groups[3].sizes.back(), std::make_pair(15360, 8640));
 
@@ -88,26 +90,26 @@ TEST(LimitsSweep, SkipsOnlySettingsNoSmallerThanAFailure) {
         "[other]\nscenes = spheres\nstop-after-failure = no\nsizes = 256x144\nbounces = 5\n",
         "tiny");
     std::vector<Cell> cells = cellsOf(c);
-    auto find = [&](PipelineKind k, int w, int b) {
+    auto find = [&](std::string k, int w, int b) {
         for (const Cell& x : cells)
             if (x.pipeline == k && x.options.width == w && x.options.bounces == b) return x;
         ADD_FAILURE() << "no cell " << w << " b" << b;
         return Cell{};
     };
-    std::vector<bench::Stop> stops{{find(PipelineKind::Mega, 64, 4), "error: private tree"}};
-    auto why = [&](PipelineKind k, int w, int b) {
+    std::vector<bench::Stop> stops{{find("mega", 64, 4), "error: private tree"}};
+    auto why = [&](std::string k, int w, int b) {
         return bench::skipReason(c, find(k, w, b), stops);
     };
-    EXPECT_EQ(why(PipelineKind::Mega, 64, 4), "");  // the failed cell itself
-    EXPECT_EQ(why(PipelineKind::Mega, 64, 3), "");  // smaller bounce limit
-    EXPECT_EQ(why(PipelineKind::Wave, 64, 5), "");  // the other pipeline
-    EXPECT_EQ(why(PipelineKind::Mega, 128, 5),
+    EXPECT_EQ(why("mega", 64, 4), "");  // the failed cell itself
+    EXPECT_EQ(why("mega", 64, 3), "");  // smaller bounce limit
+    EXPECT_EQ(why("wave", 64, 5), "");  // the other pipeline
+    EXPECT_EQ(why("mega", 128, 5),
               "mega stopped at 64x36 B=4 (error: private tree); this setting is no smaller");
-    EXPECT_NE(why(PipelineKind::Mega, 64, 5), "");
-    EXPECT_NE(why(PipelineKind::Mega, 128, 4), "");
-    EXPECT_EQ(why(PipelineKind::Mega, 128, 3), "");  // larger size but smaller bounce limit
+    EXPECT_NE(why("mega", 64, 5), "");
+    EXPECT_NE(why("mega", 128, 4), "");
+    EXPECT_EQ(why("mega", 128, 3), "");  // larger size but smaller bounce limit
     // Not in a group that stops after a failure.
-    EXPECT_EQ(why(PipelineKind::Mega, 256, 5), "");
+    EXPECT_EQ(why("mega", 256, 5), "");
 }
 
 // Runs a sweep file's text on the test device; rows by "pipeline WxH bB".
@@ -151,21 +153,23 @@ TEST(LimitsSweep, RowsRecordHowEachCellEnded) {
               "error: --bounces 12: the megakernel's tree layout keeps 8191 ray-tree nodes (511 KiB) "
               "in private memory per work-item, over the 256 KiB limit; the highest bounce limit "
               "that fits is 11 (or use --layout weighted)");
-    EXPECT_EQ(rows["mega 32x18 b12"]["failure"], "private tree");
-    EXPECT_EQ(rows["wave 32x18 b12"]["failure"], "private tree");
+    EXPECT_EQ(rows["mega 32x18 b12"]["failure"], "private_tree");
+    EXPECT_EQ(rows["wave 32x18 b12"]["failure"], "private_tree");
+    EXPECT_EQ(rows["mega 32x18 b11"]["failure"], "");
     for (const char* k : {"mega 32x18 b13", "wave 32x18 b13"}) {
         EXPECT_EQ(rows[k]["status"], "skipped") << k;
         EXPECT_EQ(rows[k]["end"], "skipped") << k;
         EXPECT_NE(rows[k]["skip_reason"].get<std::string>().find("stopped at 32x18 B=12"),
                   std::string::npos);
         EXPECT_FALSE(rows[k].contains("device_ms"));
+        EXPECT_EQ(rows[k]["failure"], "skipped") << k;
     }
     // 32 pixels x 15 nodes x 48 B = 23040 B a row; 100 KiB hold 4 of the 18 rows: 5 tiles.
     EXPECT_EQ(rows["wave 32x18 b3"]["end"], "ran (tiled into 5 tiles)");
     EXPECT_EQ(rows["wave 32x18 b3"]["tree_bytes"], 4 * 23040);
     EXPECT_EQ(rows["wave 64x36 b3"]["end"], "ran (tiled into 18 tiles)");  // 2 rows a tile
     // 320 x 15 x 48 = 230400 B: not even one row fits; 640x360 would not be tried.
-    EXPECT_EQ(rows["wave 320x180 b3"]["failure"], "tree row");
+    EXPECT_EQ(rows["wave 320x180 b3"]["failure"], "tree_row");
     EXPECT_NE(rows["wave 320x180 b3"]["end"].get<std::string>().find(
                   "error: one row of the wavefront ray tree at bounce limit 3"),
               std::string::npos);
@@ -188,18 +192,33 @@ TEST(LimitsSweep, FrameCapStopsLargerSettings) {
 
 TEST(LimitsSweep, EndStateAndFailureKind) {
     nlohmann::json ok = {{"status", "ok"}, {"pipeline", "wave"}, {"width", 10}, {"height", 7},
-                         {"tree_nodes", 3}, {"tree_bytes", 2 * 10 * 3 * 48}};
+                         {"extras", {{"memory_tiles", 4}}}};
     EXPECT_EQ(bench::memoryTiles(ok), 4);
     EXPECT_EQ(bench::endState(ok), "ran (tiled into 4 tiles)");
-    ok["pipeline"] = "mega";
+    ok.erase("extras");  // a pipeline that never tiles reports no memory tiles
     EXPECT_EQ(bench::endState(ok), "ran");
     EXPECT_EQ(bench::endState({{"status", "error"}, {"error", "boom"}}), "error: boom");
     EXPECT_EQ(bench::endState({{"status", "skipped"}}), "skipped");
-    EXPECT_EQ(bench::failureKind("allocating the wavefront ray tree (1.0 MiB) failed with "
-                                 "CL_MEM_OBJECT_ALLOCATION_FAILURE"),
-              "allocation");
-    EXPECT_EQ(bench::failureKind("clEnqueueNDRangeKernel failed with CL_INVALID_WORK_GROUP_SIZE"),
-              "OpenCL error");
+}
+
+// The failure kind travels with the exception from where it is thrown; no code reads the message.
+TEST(LimitsSweep, FailureKindsAreSetWhereThrown) {
+    try {
+        checkPrivateTree(2, 12, "test", false);
+        FAIL() << "a 511 KiB private tree passed";
+    } catch (const Error& e) {
+        EXPECT_EQ(e.kind(), FailureKind::PrivateTree);
+    }
+    try {
+        WavefrontPipeline::tileRows(320, 180, 2, 3, 1024, "a budget");
+        FAIL() << "a row over the budget passed";
+    } catch (const Error& e) {
+        EXPECT_EQ(e.kind(), FailureKind::TreeRow);
+    }
+    EXPECT_EQ(std::string(failureKindName(FailureKind::OutOfMemory)), "out_of_memory");
+    EXPECT_EQ(std::string(failureKindName(FailureKind::OpenCl)), "opencl");
+    EXPECT_EQ(std::string(failureKindName(FailureKind::InvalidOption)), "invalid_option");
+    EXPECT_EQ(std::string(failureKindName(FailureKind::None)), "");
 }
 
 // Bounce limit 11 on spheres: every pixel finite and in range. Before the device normalized its
@@ -215,15 +234,15 @@ TEST(LimitsSweep, DeepBounceLimitsGiveSaneImages) {
     o.memoryBudget = 64 << 20;
     Image images[2];
     int n = 0;
-    for (PipelineKind k : {PipelineKind::Mega, PipelineKind::Wave}) {
+    for (std::string k : {"mega", "wave"}) {
         auto p = makePipeline(k, &cl);
         images[n] = p->render(spheres(), o);
         float worst = 0;
         for (float v : images[n].rgb) {
-            ASSERT_TRUE(std::isfinite(v)) << pipelineName(k);
+            ASSERT_TRUE(std::isfinite(v)) << k;
             worst = std::max(worst, v);
         }
-        EXPECT_LT(worst, 2.0f) << pipelineName(k);
+        EXPECT_LT(worst, 2.0f) << k;
         ++n;
     }
     EXPECT_EQ(images[0].rgb, images[1].rgb);

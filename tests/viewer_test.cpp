@@ -146,6 +146,23 @@ TEST_F(Viewer, SplitViewHalvesMatchTheirPipelinesRenders) {
     expectSame(shot, wave, divider, shot.width, "right (wavefront)");
 }
 
+TEST_F(Viewer, SplitPairPicksWhichPipelineIsOnWhichSide) {
+    const std::string scene = "scenes/spheres.json";
+    std::string shotPath = ::testing::TempDir() + "viewer_split_pair.png";
+    fs::remove(shotPath);
+    Result r = run(kXvfb + kBin + "/rtlab-view " + scene +
+                   " --frames 30 --split wave,mega --no-overlay --scale 1 --screenshot " + shotPath);
+    ASSERT_EQ(r.status, 0) << r.out << r.err;
+    EXPECT_NE(r.out.find("wave"), std::string::npos) << r.out;
+    rt::Image shot = rt::readImage(shotPath);
+    rt::Image mega = rt::readImage(renderPng(scene, "mega"));
+    rt::Image wave = rt::readImage(renderPng(scene, "wave"));
+    ASSERT_EQ(shot.width, wave.width);
+    int divider = shot.width / 2;
+    expectSame(shot, wave, 0, divider, "left (wavefront)");
+    expectSame(shot, mega, divider, shot.width, "right (megakernel)");
+}
+
 TEST_F(Viewer, SceneErrorOnReloadKeepsTheOldSceneWithOneLine) {
     std::string dir = privateDir("reload");
     std::string scene = dir + "scene.json", shotPath = dir + "after.png";
@@ -202,6 +219,17 @@ TEST(ViewerErrors, NoDisplayEndsInOneLine) {
     EXPECT_LT(r.status, 128) << "crashed";
     EXPECT_EQ(lines(r.err), 1) << r.err;
     EXPECT_NE(r.err.find("display"), std::string::npos) << r.err;
+}
+
+TEST(ViewerErrors, SplitPairOutsideTheRegistryEndsInOneLine) {
+    if (!fs::exists(kBin + "/rtlab-view")) GTEST_SKIP() << "rtlab-view was not built";
+    for (const char* pair : {"mega,nope", "mega", "cpu,mega"}) {
+        Result r = run(kBin + "/rtlab-view scenes/spheres.json --split " + pair);
+        EXPECT_NE(r.status, 0) << pair;
+        EXPECT_LT(r.status, 128) << pair << ": crashed";
+        EXPECT_EQ(lines(r.err), 1) << pair << ": " << r.err;
+        EXPECT_NE(r.err.find("--split " + std::string(pair)), std::string::npos) << r.err;
+    }
 }
 
 TEST(ViewerErrors, BadSceneEndsInOneLine) {

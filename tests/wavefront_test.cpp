@@ -12,7 +12,7 @@
 #include "image/image_io.h"
 #include "megakernel/megakernel.h"
 #include "test_device.h"
-#include "wavefront/wavefront.h"
+#include "wavefront/tree/wavefront.h"
 
 namespace rt {
 namespace {
@@ -20,6 +20,9 @@ namespace {
 const char* kScenes[] = {"empty", "spheres", "shadows", "cornell", "mesh", "envmap"};
 
 Scene load(const std::string& name) { return loadScene("scenes/" + name + ".json", readImage); }
+
+// The global tree's size, as the pipeline reports it among its extras.
+size_t treeBytes(const FrameStats& s) { return s.extras.value("tree_bytes", size_t(0)); }
 
 // Both pipelines call the same device functions (core/cl/raytree.cl) with FP_CONTRACT OFF and sum
 // AA samples in the same order, so the target is bit-identical; the acceptance bound is 1e-5.
@@ -60,11 +63,13 @@ TEST(Wavefront, TiledFrameEqualsUntiled) {
     WavefrontPipeline wave(test::device());
     Image whole = wave.render(scene, o);
     EXPECT_EQ(wave.stats().tiles, 1);
-    EXPECT_EQ(wave.stats().treeBytes, size_t(40 * 30 * 15 * 48));
+    EXPECT_EQ(treeBytes(wave.stats()), size_t(40 * 30 * 15 * 48));
+    EXPECT_EQ(wave.stats().extras["memory_tiles"], 1);
     o.memoryBudget = 100'000;  // 3 rows per tile
     Image tiled = wave.render(scene, o);
     EXPECT_EQ(wave.stats().tiles, 10);
-    EXPECT_EQ(wave.stats().treeBytes, size_t(40 * 3 * 15 * 48));
+    EXPECT_EQ(treeBytes(wave.stats()), size_t(40 * 3 * 15 * 48));
+    EXPECT_EQ(wave.stats().extras["memory_tiles"], 10);
     EXPECT_EQ(std::memcmp(whole.rgb.data(), tiled.rgb.data(), whole.rgb.size() * 4), 0);
 }
 
@@ -103,7 +108,12 @@ TEST(Wavefront, StatsReportKernelsAndTreeBytes) {
     EXPECT_EQ(s.kernelMs[1].first, "image");
     EXPECT_EQ(s.kernelMs[2].first, "reset");
     for (const auto& [name, ms] : s.kernelMs) EXPECT_GT(ms, 0.0) << name;
-    EXPECT_EQ(s.treeBytes, size_t(16 * 12) * size_t(s.treeNodes) * 48);
+    EXPECT_EQ(treeBytes(s), size_t(16 * 12) * size_t(treeNodeCount(scene.branching(), 2)) *
+                                sizeof(dev::Node));
+    // The buffers are named in the generic stats, the tree among them with the same size.
+    ASSERT_FALSE(s.buffers.empty());
+    EXPECT_EQ(s.buffers[0].first, "ray tree");
+    EXPECT_EQ(s.buffers[0].second, treeBytes(s));
 }
 
 }  // namespace

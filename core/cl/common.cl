@@ -1,7 +1,7 @@
 // rtlab — basics every kernel file includes: the shared records, Float3 <-> float3, the ray.
 //
 // FP_CONTRACT OFF: the compiler must not fuse a*b+c into an fma in one kernel and not in another;
-// the wavefront and megakernel pipelines call the same functions and must round identically.
+// every pipeline calls the same functions, and they must round identically.
 #pragma OPENCL FP_CONTRACT OFF
 #ifndef RTLAB_CL_COMMON
 #define RTLAB_CL_COMMON

@@ -22,12 +22,7 @@ typedef struct SceneData {
     RenderSettings settings;
 } SceneData;
 
-// Ray types for the device-side ray counters.
-#define RT_RAY_PRIMARY 0
-#define RT_RAY_REFLECTION 1
-#define RT_RAY_REFRACTION 2
-#define RT_RAY_SHADOW 3
-
+// Ray types (RT_RAY_*) are defined once in core/types.h, shared with the host.
 #ifdef RT_COUNT_RAYS
 #define RT_COUNT_RAY(sc, type) atomic_inc(&(sc)->rayCounts[type])
 #else

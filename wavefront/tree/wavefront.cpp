@@ -1,10 +1,11 @@
-#include "wavefront/wavefront.h"
+#include "wavefront/tree/wavefront.h"
 
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 
 #include "core/error.h"
+#include "core/pipeline_registry.h"
 
 namespace rt {
 
@@ -25,7 +26,7 @@ int WavefrontPipeline::tileRows(int width, int height, int branching, int bounce
                           " B) exceeds " + budgetName + " (" + std::to_string(budget) + " B); ";
         msg += fits >= 0 ? "the highest bounce limit that fits is " + std::to_string(fits)
                          : "not even bounce limit 0 fits";
-        throw Error(msg);
+        throw Error(msg, FailureKind::TreeRow);
     }
     return int(std::min<size_t>(size_t(height), budget / row));
 }
@@ -39,9 +40,8 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
         throw Error("--adaptive: the wavefront pipeline has no adaptive anti-aliasing (the "
                     "megakernel and cpu pipelines do); drop the flag or use --pipeline mega");
     stats_ = {};
-    int C = scene.branching();
-    stats_.branching = C;
-    stats_.treeNodes = treeNodeCount(C, o.bounces);
+    const int C = scene.branching();
+    const long long treeNodes = treeNodeCount(C, o.bounces);
     checkPrivateTree(C, o.bounces, "wavefront image kernel", false);
     stats_.privateBytes = treePrivateBytes(C, o.bounces);
 
@@ -55,15 +55,16 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
     int rows = tileRows(o.width, o.height, C, o.bounces, budget, budgetName);
     // What an out-of-memory error from the driver is told about the frame (NVIDIA's, for one, can
     // fail at launch when the image kernel's private trees and the global tree together do not fit).
+    const int memoryTiles = tileCount(o.height, rows);
     auto memoryHint = [&] {
-        const double gib = double(size_t(o.width) * rows * stats_.treeNodes * sizeof(dev::Node)) /
+        const double gib = double(size_t(o.width) * rows * treeNodes * sizeof(dev::Node)) /
                            double(1ull << 30);
         char buf[256];
         std::snprintf(buf, sizeof buf,
                       "the frame needs a %.2f GiB ray tree (%d row tile%s) and %zu KiB of private "
                       "tree per work-item in the image kernel; lower --bounces or --size, or set "
                       "--memory-budget",
-                      gib, (o.height + rows - 1) / rows, (o.height + rows - 1) / rows == 1 ? "" : "s",
+                      gib, memoryTiles, memoryTiles == 1 ? "" : "s",
                       stats_.privateBytes / 1024);
         return std::string(buf);
     };
@@ -74,7 +75,7 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
         scene_ = std::make_unique<DeviceScene>(cl_, scene, o.accel);
     stats_.accel = scene_->accelStats();
 
-    size_t nodes = size_t(o.width) * rows * size_t(stats_.treeNodes);
+    size_t nodes = size_t(o.width) * rows * size_t(treeNodes);
     size_t treeBytes = nodes * sizeof(dev::Node);
     size_t imageBytes = size_t(o.width) * o.height * 3 * sizeof(float);
     try {
@@ -98,7 +99,10 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
     } catch (const cl::Error& e) {
         throwClError(e, "preparing wavefront buffers", memoryHint());
     }
-    stats_.treeBytes = treeBytes;
+    stats_.addBuffer("ray tree", treeBytes);
+    stats_.addBuffer("image", imageBytes);
+    stats_.extras["tree_bytes"] = treeBytes;
+    stats_.extras["memory_tiles"] = memoryTiles;
 
     cl::Kernel trace(program, "Wavefront_Trace"), image(program, "Wavefront_Image"),
         reset(program, "Wavefront_Reset");
@@ -153,7 +157,7 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
                 cl_.queue().enqueueNDRangeKernel(image, cl::NullRange, range.global, range.local,
                                                  &waitImage, &ei);
                 // Only this tile's slices were written, so only they need clearing.
-                size_t tileNodes = size_t(o.width) * size_t(tile) * size_t(stats_.treeNodes);
+                size_t tileNodes = size_t(o.width) * size_t(tile) * size_t(treeNodes);
                 reset.setArg(1, cl_uint(tileNodes));
                 std::vector<cl::Event> waitReset{ei};
                 cl_.queue().enqueueNDRangeKernel(reset, cl::NullRange, cl::NDRange(tileNodes),
@@ -176,6 +180,13 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
         if (o.countRays) {
             stats_.rays = scene_->readRayCounts(cl_.queue());
             stats_.raysCounted = true;
+            // Every traced primary, reflected or refracted ray fills one tree slot; shadow rays
+            // live inside their node. What share of the slots a frame touched.
+            double slots = double(o.width) * o.height * samples * double(treeNodes);
+            if (!o.adaptiveAa && slots > 0)
+                stats_.extras["tree_used"] =
+                    double(stats_.rays[RT_RAY_PRIMARY] + stats_.rays[RT_RAY_REFLECTION] +
+                           stats_.rays[RT_RAY_REFRACTION]) / slots;
         }
         static const char* names[3] = {"trace", "image", "reset"};
         for (size_t i = 0; i < events.size(); ++i) stats_.addKernel(names[i % 3], eventMs(events[i]));
@@ -185,6 +196,20 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
     stats_.hostMs =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     return out;
+}
+
+}  // namespace rt
+
+namespace rt {
+
+void registerWavefrontTree(PipelineRegistry& registry) {
+    PipelineInfo p;
+    p.name = "wave";
+    p.title = "wavefront (report's tree)";
+    p.description = "trace, image and reset kernels around a global ray tree of W x rows x N nodes";
+    p.supports = {.layouts = false, .adaptiveAa = false, .tiling = true};
+    p.make = [](ClContext* cl) { return std::make_unique<WavefrontPipeline>(*cl); };
+    registry.add(std::move(p));
 }
 
 }  // namespace rt

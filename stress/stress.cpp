@@ -1,8 +1,8 @@
 // rtlab-stress — the numerical stress suite of issue 8, run through the device code of both
 // pipelines (probe kernels at the end of core/cl/probe.cl) on any OpenCL device, and written as
-// results/<device-slug>/stability.md. It links rtlab_core only (no OpenImageIO), so it can be
-// carried to a GPU machine with its binary. tests/stability_test.cpp includes this file with
-// RTLAB_STRESS_NO_MAIN and asserts the robust methods' figures on the same functions.
+// results/<device-slug>/stability.md (stress_main.cpp). The cases are a library (stress.h) that
+// rtlab-stress and tests/stability_test.cpp both link, so the tool and the test cannot drift
+// apart; it needs no OpenImageIO, so rtlab-stress can be carried to a GPU machine.
 //
 // Each case counts a failure of the plain method (the report's algorithm) and of the robust one:
 //   (a) leaks through shared edges and vertices of a closed mesh: Moller-Trumbore vs watertight,
@@ -34,28 +34,20 @@
 #include "core/cl_runtime.h"
 #include "core/error.h"
 #include "core/pipeline.h"
+#include "pipelines/registry.h"
 #include "core/reference.h"
 #include "core/scene_loader.h"
-#include "core/version.h"
+#include "stress/stress.h"
 
 namespace rt::stress {
 
 using glm::dvec3;
 
-struct Counts {
-    long long rays = 0, bad = 0;
-    double rate() const { return rays ? double(bad) / double(rays) : 0.0; }
-    Counts& operator+=(const Counts& c) {
-        rays += c.rays;
-        bad += c.bad;
-        return *this;
-    }
-};
 
 // ---- scenes built by hand ----
 dev::Float3 f3(dvec3 v) { return {float(v.x), float(v.y), float(v.z)}; }
 
-dev::Material material(float opacity = 1.f, float ior = 1.f, float reflectance = 0.f) {
+dev::Material material(float opacity, float ior, float reflectance) {
     dev::Material m{};
     m.ambient = {0.05f, 0.05f, 0.05f};
     m.diffuse = {0.6f, 0.6f, 0.6f};
@@ -167,14 +159,11 @@ dvec3 randomUnit(std::mt19937& rng) {
 }
 
 // ---- (a) leaks through a closed mesh ----
-struct LeakResult {
-    Counts random, edges, vertices;
-};
 
 // Embree's watertightness test: a sphere of radius 2 centred at `center`, rays from points of
 // the cube [-1, 1]^3 around the centre in random directions; also rays aimed exactly at edge
 // midpoints and at vertices, where a leak is most likely. Misses are leaks.
-LeakResult leaks(ClContext& cl, bool watertight, dvec3 center, int randomRays, int rings = 64) {
+LeakResult leaks(ClContext& cl, bool watertight, dvec3 center, int randomRays, int rings) {
     Scene scene = emptyScene("leaks");
     std::vector<dev::Float3> verts = addMeshSphere(scene, center, 2.0, rings, 2 * rings);
     finalizeScene(scene);
@@ -215,10 +204,6 @@ LeakResult leaks(ClContext& cl, bool watertight, dvec3 center, int randomRays, i
 }
 
 // ---- (b) tiny spheres far away ----
-struct SphereResult {
-    Counts misses;      // rays aimed within 0.9 r of the centre that missed
-    Counts falseHits;   // rays aimed 1.1 r to 2 r off the centre that hit
-};
 
 // Spheres of radius r at distance D from the camera (the world origin), in random directions.
 SphereResult tinySpheres(ClContext& cl, bool robust, double distance, double radius, int rays) {
@@ -253,9 +238,6 @@ SphereResult tinySpheres(ClContext& cl, bool robust, double distance, double rad
 }
 
 // ---- (c) self-intersection of secondary rays ----
-struct AcneResult {
-    Counts meshOut, meshIn, meshEscape, sphereOut, sphereIn, sphereEscape;
-};
 
 // A triangulated sphere and an analytic one, radius `scale`, at 4 * scale in front of the
 // camera at the origin. From every primary hit, `spawn` rays leave outward (reflection and
@@ -303,10 +285,6 @@ AcneResult acne(ClContext& cl, double scale, bool scaledOffset, int primary, int
 // (mixed: every coordinate its own exponent, as pbrt; else one scale 10^lo for the whole
 // triangle, coordinates in [-1, 1] times it), hit by a ray from an origin drawn the same way,
 // then `spawn` rays leave the hit point. Re-hits of the same triangle are counted.
-struct ReintersectResult {
-    int triangles = 0, missed = 0, withRehits = 0;
-    Counts rehits;
-};
 
 ReintersectResult reintersect(ClContext& cl, bool scaledOffset, double lo, double hi, bool mixed,
                               int triangles, int spawn) {
@@ -354,9 +332,6 @@ ReintersectResult reintersect(ClContext& cl, bool scaledOffset, double lo, doubl
 }
 
 // ---- (d) grazing rays and the critical angle ----
-struct CriticalResult {
-    long long cases = 0, nonFinite = 0, inconsistent = 0, nonUnit = 0, disagree = 0, tirDevice = 0;
-};
 
 // Rays inside a medium of index ior toward air at the critical angle asin(1/ior) (as float,
 // and 256 neighbouring angles 1e-7 rad apart on each side), through Shade_Refract and
@@ -405,7 +380,7 @@ CriticalResult criticalAngle(ClContext& cl) {
 // Rays at angles 10^-k (k = 1..7) and exactly 0 to a unit triangle in the plane y = 0, aimed at
 // interior points from 10 units away. Index k holds angle 10^-k; index 0 the coplanar rays
 // (which must miss); bad = misses for k >= 1, hits for k = 0.
-std::vector<Counts> grazing(ClContext& cl, bool watertight, int perAngle = 512) {
+std::vector<Counts> grazing(ClContext& cl, bool watertight, int perAngle) {
     std::vector<std::string> defines = {"RT_HAS_TRIANGLES"};
     if (watertight) defines.push_back("RT_WATERTIGHT");
     cl::Program program = cl.program("probe.cl", defines);
@@ -446,10 +421,6 @@ std::vector<Counts> grazing(ClContext& cl, bool watertight, int perAngle = 512) 
 }
 
 // ---- (e) nested dielectrics ----
-struct NestedResult {
-    long long pixels = 0, nonFinite = 0, within = 0;  // within 2/255 of the CPU reference
-    double meanAbs = 0, maxAbs = 0;
-};
 
 // A glass sphere (ior 1.5) inside a glass sphere (ior 1.33) over a checker of diffuse spheres
 // on a plane; transparent, so C = 2.
@@ -491,7 +462,7 @@ NestedResult compare(const Image& a, const Image& b) {
     return r;
 }
 
-NestedResult nested(ClContext& cl, PipelineKind kind, int width, int height, int bounces) {
+NestedResult nested(ClContext& cl, const std::string& kind, int width, int height, int bounces) {
     Scene scene = nestedScene();
     RenderOptions o;
     o.width = width;
@@ -502,9 +473,6 @@ NestedResult nested(ClContext& cl, PipelineKind kind, int width, int height, int
 }
 
 // ---- (f) NaN and Inf rays ----
-struct NanResult {
-    long long rays = 0, badHits = 0, nanPixels = 0;
-};
 
 // Spheres, a plane and a closed mesh; rays whose origin, direction or both hold NaN, +Inf or
 // -Inf in one or all components. badHits: a reported hit with a non-finite or negative t or an
@@ -564,266 +532,3 @@ NanResult nanRays(ClContext& cl, RenderOptions::Accel accel) {
 }
 
 }  // namespace rt::stress
-
-#ifndef RTLAB_STRESS_NO_MAIN
-// ---- the report: rtlab-stress [--device SPEC] [--out DIR] [--quick] ----
-#include <chrono>
-#include <ctime>
-
-namespace {
-
-using namespace rt;
-using namespace rt::stress;
-
-// The folder name of a device, as rtlab-bench and rtlab sweep write it (bench/measure.cpp).
-std::string deviceSlug(const DeviceInfo& d) {
-    std::string name = d.name, platform = d.platformName;
-    for (char& c : platform) c = char(std::tolower(static_cast<unsigned char>(c)));
-    if (platform.find("portable computing language") != std::string::npos ||
-        platform.find("pocl") != std::string::npos)
-        name = "pocl " + name;
-    std::string slug;
-    for (unsigned char c : name) {
-        if (std::isalnum(c))
-            slug += char(std::tolower(c));
-        else if (!slug.empty() && slug.back() != '-')
-            slug += '-';
-    }
-    while (!slug.empty() && slug.back() == '-') slug.pop_back();
-    return slug.empty() ? "unknown-device" : slug;
-}
-
-std::string fmt(const char* f, double v) {
-    char b[64];
-    std::snprintf(b, sizeof b, f, v);
-    return b;
-}
-
-// "12 / 200,000 (6.0e-05)"
-std::string counts(const Counts& c) {
-    std::string n = std::to_string(c.rays), grouped;
-    for (size_t i = 0; i < n.size(); ++i) {
-        if (i && (n.size() - i) % 3 == 0) grouped += ',';
-        grouped += n[i];
-    }
-    return std::to_string(c.bad) + " / " + grouped + " (" + fmt("%.1e", c.rate()) + ")";
-}
-
-struct Report {
-    std::ostringstream md;
-    int failed = 0;
-    std::string check(bool ok) {
-        if (!ok) ++failed;
-        return ok ? "pass" : "**FAIL**";
-    }
-};
-
-double seconds(std::chrono::steady_clock::time_point t0) {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-
-void runAll(ClContext& cl, bool quick, Report& R) {
-    std::ostringstream& md = R.md;
-    const int scaleDown = quick ? 10 : 1;
-    auto t0 = std::chrono::steady_clock::now();
-
-    md << "## (a) Leaks through shared edges and vertices of a closed mesh\n\n"
-       << "Embree's watertightness test: a UV sphere of radius 2 (64 x 128 segments, 16,128 "
-          "triangles, every vertex rounded to float once), rays from random points of the cube "
-          "[-1, 1]^3 around its centre in random directions, plus one ray at the float midpoint "
-          "of each triangle edge (each shared edge twice) and one at each vertex. A miss is a "
-          "leak. Whole closest-hit query through the BVH (`Probe_Closest`). Bar (Embree): miss "
-          "rate <= 2e-5 for the watertight test.\n\n"
-       << "| centre | test | random rays | edge midpoints | vertices | bar |\n"
-       << "| --- | --- | --- | --- | --- | --- |\n";
-    for (dvec3 c : {dvec3(0, 0, 0), dvec3(148376, 1234, -223423)})
-        for (bool wt : {false, true}) {
-            LeakResult r = leaks(cl, wt, c, 200000 / scaleDown);
-            Counts all = r.random;
-            all += r.edges;
-            all += r.vertices;
-            md << "| (" << c.x << ", " << c.y << ", " << c.z << ") | "
-               << (wt ? "watertight" : "Moller-Trumbore") << " | " << counts(r.random) << " | "
-               << counts(r.edges) << " | " << counts(r.vertices) << " | "
-               << (wt ? R.check(r.random.rate() <= 2e-5) : std::string("recorded")) << " |\n";
-        }
-    md << "\n(" << fmt("%.1f", seconds(t0)) << " s)\n\n";
-
-    t0 = std::chrono::steady_clock::now();
-    md << "## (b) Tiny spheres far from the origin\n\n"
-       << "Spheres of radius r at distance D from the camera in random directions. Half the "
-          "rays aim within 0.9 r of the centre (a miss is an error), half 1.1 r to 2 r off it (a "
-          "hit is an error). `Probe_Sphere`, plain = report Algorithm 2, robust = Ray Tracing "
-          "Gems ch. 7. Bar: no error for the robust test at D = 1e3, r = 1e-2 (r/D = 1e-5).\n\n"
-       << "| D | r | r/D | plain: misses | plain: false hits | robust: misses | robust: false "
-          "hits |\n| --- | --- | --- | --- | --- | --- | --- |\n";
-    for (double D : {1e2, 1e3, 1e4})
-        for (double r : {1.0, 1e-1, 1e-2, 1e-3}) {
-            SphereResult p = tinySpheres(cl, false, D, r, 20000 / scaleDown);
-            SphereResult q = tinySpheres(cl, true, D, r, 20000 / scaleDown);
-            bool barCase = D == 1e3 && r == 1e-2;
-            md << "| " << fmt("%g", D) << " | " << fmt("%g", r) << " | " << fmt("%.0e", r / D)
-               << " | " << counts(p.misses) << " | " << counts(p.falseHits) << " | "
-               << counts(q.misses) << " | " << counts(q.falseHits)
-               << (barCase ? " " + R.check(q.misses.bad == 0 && q.falseHits.bad == 0) : "")
-               << " |\n";
-        }
-    md << "\n(" << fmt("%.1f", seconds(t0)) << " s)\n\n";
-
-    t0 = std::chrono::steady_clock::now();
-    md << "## (c) Self-intersection of secondary rays (shadow acne) at every scale\n\n"
-       << "A triangulated sphere (24 x 48) and an analytic sphere of radius s at distance 4 s "
-          "from the camera at the origin; from each of 2,000 primary hits, 64 random rays leave "
-          "as the pipelines spawn them (`Probe_Spawn`: hit point o + t d, shading normal, "
-          "`Shade_Offset`). *out*: reflection/shadow side, a hit on the same object is acne; "
-          "*in*: refraction side, a hit on the same triangle (or on the sphere within 1e-3 r) is "
-          "acne; *escaped*: refraction rays that never hit the object they start in, because "
-          "the offset pushed the origin through it. fixed = 1e-4, scaled = 1e-4 max(1, |p|) "
-          "(core/SHADING.md section 3). Bar: 0 acne and 0 escapes for the scaled offset at "
-          "s = 1e-3 and s = 1e5.\n\n"
-       << "| s | offset | mesh out | mesh in | mesh escaped | sphere out | sphere in | sphere "
-          "escaped | bar |\n| --- | --- | --- | --- | --- | --- | --- | --- | --- |\n";
-    for (double s : {1e-8, 1e-5, 1e-3, 1.0, 1e3, 1e5, 1e8})
-        for (bool scaled : {false, true}) {
-            AcneResult a = acne(cl, s, scaled, 2000 / scaleDown, 64);
-            bool barCase = scaled && (s == 1e-3 || s == 1e5);
-            long long bad = a.meshOut.bad + a.meshIn.bad + a.meshEscape.bad + a.sphereOut.bad +
-                            a.sphereIn.bad + a.sphereEscape.bad;
-            md << "| " << fmt("%g", s) << " | " << (scaled ? "scaled" : "fixed") << " | "
-               << counts(a.meshOut) << " | " << counts(a.meshIn) << " | "
-               << counts(a.meshEscape) << " | " << counts(a.sphereOut) << " | "
-               << counts(a.sphereIn) << " | " << counts(a.sphereEscape) << " | "
-               << (barCase ? R.check(bad == 0) : std::string("recorded")) << " |\n";
-        }
-    md << "\npbrt-v4's `Triangle.Reintersect` (`Probe_Reintersect`): 1,000 lone triangles, a ray "
-          "from a random origin to a random point of each (hit point o + t d, as the pipelines "
-          "compute it), then 1,000 random directions leave it with the offset on the side they "
-          "point to. *mixed*: every coordinate of vertices and origin is 10^U(-8, 8) on its own, "
-          "as in pbrt; *scale s*: coordinates in [-1, 1] s, origin in [-4, 4] s. pbrt's bar: 0 "
-          "re-hits.\n\n"
-       << "| triangles | offset | first ray missed | triangles with re-hits | re-hits / rays |\n"
-       << "| --- | --- | --- | --- | --- |\n";
-    auto reRow = [&](const std::string& label, bool mixed, double lo, double hi) {
-        for (bool scaled : {false, true}) {
-            ReintersectResult r = reintersect(cl, scaled, lo, hi, mixed, 1000 / scaleDown, 1000);
-            md << "| " << label << " | " << (scaled ? "scaled" : "fixed") << " | " << r.missed
-               << " | " << r.withRehits << " | " << counts(r.rehits) << " |\n";
-        }
-    };
-    reRow("mixed 1e-8..1e8", true, -8, 8);
-    for (double e : {-8.0, -5.0, -3.0, 0.0, 3.0, 5.0, 8.0})
-        reRow("scale " + fmt("%g", std::pow(10.0, e)), false, e, e);
-    md << "\n(" << fmt("%.1f", seconds(t0)) << " s)\n\n";
-
-    t0 = std::chrono::steady_clock::now();
-    CriticalResult c = criticalAngle(cl);
-    md << "## (d) Grazing rays and the critical angle\n\n"
-       << "Rays leaving a medium of index 1.0001, 1.1, 1.333, 1.5, 1.7, 2.42 and 4 at its "
-          "critical angle and at 256 angles 1e-7 rad apart on each side, through "
-          "`Shade_Refract` and `Shade_Fresnel` (`Probe_Refract`). Bar: no non-finite output, "
-          "F in [0, 1], F = 1 whenever no refracted ray is made, refracted rays of unit "
-          "length.\n\n"
-       << "| cases | total internal reflection (device) | non-finite | inconsistent F | "
-          "non-unit | TIR decision differs from double | bar |\n"
-       << "| --- | --- | --- | --- | --- | --- | --- |\n"
-       << "| " << c.cases << " | " << c.tirDevice << " | " << c.nonFinite << " | "
-       << c.inconsistent << " | " << c.nonUnit << " | " << c.disagree << " | "
-       << R.check(c.nonFinite == 0 && c.inconsistent == 0 && c.nonUnit == 0) << " |\n\n"
-       << "Grazing rays (`Probe_TriangleHits`): 512 rays per elevation angle, aimed at interior "
-          "points (5% clear of the edges) of a triangle in the plane y = 0 from 10 units away; "
-          "angle 0 means exactly in the plane (a hit is the error there), otherwise a miss "
-          "is.\n\n| elevation | Moller-Trumbore | watertight |\n| --- | --- | --- |\n";
-    std::vector<Counts> mt = grazing(cl, false), wt = grazing(cl, true);
-    for (int k = 0; k <= 7; ++k)
-        md << "| " << (k ? "1e-" + std::to_string(k) : std::string("0 (in the plane)")) << " | "
-           << counts(mt[k]) << " | " << counts(wt[k]) << " |\n";
-    md << "\n(" << fmt("%.1f", seconds(t0)) << " s)\n\n";
-
-    t0 = std::chrono::steady_clock::now();
-    md << "## (e) Nested dielectrics\n\n"
-       << "A glass sphere (ior 1.5, opacity 0.1) inside a glass sphere (ior 1.33), a mirror and "
-          "a diffuse sphere on a plane, 64 x 48, against the double-precision CPU reference. "
-          "Bar: every pixel finite, >= 99% within 2/255.\n\n"
-       << "| pipeline | bounces | non-finite pixels | within 2/255 | mean abs error | max abs "
-          "error | bar |\n| --- | --- | --- | --- | --- | --- | --- |\n";
-    for (PipelineKind k : {PipelineKind::Mega, PipelineKind::Wave})
-        for (int b : {2, 6}) {
-            NestedResult n = nested(cl, k, 64, 48, b);
-            double within = double(n.within) / double(n.pixels);
-            md << "| " << pipelineName(k) << " | " << b << " | " << n.nonFinite << " | "
-               << fmt("%.2f%%", 100 * within) << " | " << fmt("%.3f/255", n.meanAbs * 255)
-               << " | " << fmt("%.2f/255", n.maxAbs * 255) << " | "
-               << R.check(n.nonFinite == 0 && within >= 0.99) << " |\n";
-        }
-    md << "\n(" << fmt("%.1f", seconds(t0)) << " s)\n\n";
-
-    t0 = std::chrono::steady_clock::now();
-    md << "## (f) NaN and Inf rays\n\n"
-       << "252 rays whose origin, direction or both hold NaN, +Inf or -Inf in one to three "
-          "components, against spheres, a plane and a closed mesh (Embree's NaN/Inf tests). "
-          "*bad hits*: a reported hit with a non-finite or non-positive t or an object out of "
-          "range. *non-finite colours*: whole ray trees (`Probe_Shade`, 2 bounces) whose colour "
-          "is not finite. Bar: it returns (no crash, no hang) and reports no bad hit; the "
-          "colours are recorded (camera rays of a loaded scene are always finite: the loader "
-          "rejects non-finite cameras and geometry).\n\n"
-       << "| accel | rays | bad hits | non-finite colours | bar |\n| --- | --- | --- | --- | --- |\n";
-    for (RenderOptions::Accel a : {RenderOptions::Accel::None, RenderOptions::Accel::Bv,
-                                   RenderOptions::Accel::Grid, RenderOptions::Accel::Bvh}) {
-        NanResult n = nanRays(cl, a);
-        md << "| " << accelName(a) << " | " << n.rays << " | " << n.badHits << " | "
-           << n.nanPixels << " | " << R.check(n.badHits == 0) << " |\n";
-    }
-    md << "\n(" << fmt("%.1f", seconds(t0)) << " s)\n";
-}
-
-}  // namespace
-
-int main(int argc, char** argv) {
-    std::string deviceSpec, out;
-    bool quick = false;
-    for (int i = 1; i < argc; ++i) {
-        std::string a = argv[i];
-        if ((a == "--device" || a == "--out") && i + 1 < argc) {
-            (a == "--device" ? deviceSpec : out) = argv[++i];
-        } else if (a == "--quick") {
-            quick = true;
-        } else {
-            std::fprintf(stderr,
-                         "usage: rtlab-stress [--device INDEX|NAME|cpu|gpu] [--out DIR] [--quick]\n"
-                         "  Runs the numerical stress suite (issue 8) on one OpenCL device and "
-                         "writes DIR/stability.md\n  (default DIR: results/<device-slug>). "
-                         "--quick: a tenth of the rays. Exit 2 when a bar fails.\n");
-            return a == "--help" || a == "-h" ? 0 : 1;
-        }
-    }
-    try {
-        ClContext cl(selectDevice(deviceSpec));
-        const DeviceInfo& d = cl.device();
-        if (out.empty()) out = "results/" + deviceSlug(d);
-        std::fprintf(stderr, "rtlab-stress: %s\n", d.label().c_str());
-        auto t0 = std::chrono::steady_clock::now();
-        Report R;
-        runAll(cl, quick, R);
-        std::time_t now = std::time(nullptr);
-        char date[32];
-        std::strftime(date, sizeof date, "%Y-%m-%d", std::gmtime(&now));
-        std::filesystem::create_directories(out);
-        std::ofstream f(std::filesystem::path(out) / "stability.md");
-        f << "# Numerical stress suite: " << d.name << "\n\n"
-          << "Written by `rtlab-stress" << (quick ? " --quick" : "") << "` (apps/stress.cpp, "
-          << "issue 8) on " << d.label() << ", commit " << RTLAB_COMMIT << ", " << date
-          << ", in " << fmt("%.0f", seconds(t0)) << " s. Counts are *errors / cases (rate)*. "
-          << "Each case asserts the robust method's figure (column *bar*; the same checks run "
-          << "in tests/stability_test.cpp) and records the plain one's.\n\n"
-          << (R.failed ? std::to_string(R.failed) + " bar(s) FAILED.\n\n" : "Every bar holds.\n\n")
-          << R.md.str();
-        if (!f) throw Error(out + "/stability.md: cannot write");
-        std::printf("rtlab-stress: wrote %s/stability.md (%s)\n", out.c_str(),
-                    R.failed ? "some bars FAILED" : "every bar holds");
-        return R.failed ? 2 : 0;
-    } catch (const std::exception& e) {
-        std::fprintf(stderr, "rtlab-stress: %s\n", e.what());
-        return 1;
-    }
-}
-#endif

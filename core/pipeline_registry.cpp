@@ -1,0 +1,87 @@
+// rtlab — the pipeline registry (see pipeline_registry.h) and the CPU reference's entry.
+#include "core/pipeline_registry.h"
+
+#include <algorithm>
+#include <chrono>
+
+#include "core/error.h"
+#include "core/reference.h"
+
+namespace rt {
+
+void PipelineRegistry::add(PipelineInfo info) {
+    if (info.name.empty() || !info.make) throw Error("a pipeline registered without a name or factory");
+    if (find(info.name)) throw Error("pipeline '" + info.name + "' is registered twice");
+    entries_.push_back(std::move(info));
+}
+
+const PipelineInfo* PipelineRegistry::find(const std::string& name) const {
+    for (const PipelineInfo& p : entries_)
+        if (p.name == name) return &p;
+    return nullptr;
+}
+
+const PipelineInfo& PipelineRegistry::get(const std::string& name) const {
+    if (const PipelineInfo* p = find(name)) return *p;
+    throw Error("--pipeline " + name + ": must be one of " + joinedNames(), FailureKind::InvalidOption);
+}
+
+std::vector<std::string> PipelineRegistry::names(bool devicesOnly) const {
+    std::vector<std::string> out;
+    for (const PipelineInfo& p : entries_)
+        if (!devicesOnly || !p.reference) out.push_back(p.name);
+    return out;
+}
+
+std::string PipelineRegistry::joinedNames(bool devicesOnly) const {
+    std::string out;
+    for (const std::string& n : names(devicesOnly)) out += (out.empty() ? "" : ", ") + n;
+    return out;
+}
+
+std::string PipelineRegistry::help() const {
+    size_t width = 0;
+    for (const PipelineInfo& p : entries_) width = std::max(width, p.name.size());
+    std::string out;
+    for (const PipelineInfo& p : entries_)
+        out += "  " + p.name + std::string(width - p.name.size() + 2, ' ') + p.title + ": " +
+               p.description + "\n";
+    return out;
+}
+
+std::unique_ptr<Pipeline> PipelineRegistry::make(const std::string& name, ClContext* cl) const {
+    const PipelineInfo& info = get(name);
+    if (!info.reference && !cl) throw Error("pipeline " + name + " needs an OpenCL device");
+    return info.make(cl);
+}
+
+namespace {
+
+class CpuPipeline : public Pipeline {
+public:
+    const char* name() const override { return "cpu"; }
+    Image render(const Scene& scene, const RenderOptions& options) override {
+        checkOptions(scene, options);
+        stats_ = {};
+        auto t0 = std::chrono::steady_clock::now();
+        Image image = renderReference(scene, options);
+        stats_.hostMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
+                            .count();
+        return image;
+    }
+};
+
+}  // namespace
+
+PipelineInfo referencePipelineInfo() {
+    PipelineInfo p;
+    p.name = "cpu";
+    p.title = "CPU reference";
+    p.description = "the same algorithm in double precision on the host; the accuracy oracle";
+    p.reference = true;
+    p.supports = {false, true, false};
+    p.make = [](ClContext*) { return std::make_unique<CpuPipeline>(); };
+    return p;
+}
+
+}  // namespace rt
