@@ -261,10 +261,10 @@ class Tracer {
                 n = sphereNormal(ray, c, sp.radius, hit.t);
                 s.p = c + double(sp.radius) * n;
             } else {
-                n = (s.p - c) / double(sp.radius);
+                n = (s.p - c) / double(sp.radius);  // the report's normal
+                if (bound) s.p = c + double(sp.radius) * glm::normalize(n);
             }
-            s.err = gamma(5) * (glm::abs(c) + double(sp.radius) * glm::abs(n));
-            if (!opt_.robustSphere) s.err += gamma(5) * glm::abs(s.p);
+            s.err = gamma(5) * (glm::abs(c) + double(sp.radius) * glm::abs(glm::normalize(n)));
             s.material = sp.material;
         } else {
             const dev::Plane& pl = scene_.planes[hit.object];

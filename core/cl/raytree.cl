@@ -57,10 +57,7 @@ inline float3 RayTree_SpawnOrigin(const SceneData* sc, const Node* node, float s
 #ifdef RT_HAS_SPHERES
     if (node->kind == RT_KIND_SPHERE) {
         Sphere s = sc->spheres[node->object];
-        err = Shade_SphereError(f3(s.center), s.radius, f3(node->normal));
-#ifndef RT_ROBUST_SPHERE
-        err += Shade_Gamma(5) * fabs(p);  // the report's p = o + t d is not reprojected
-#endif
+        err = Shade_SphereError(f3(s.center), s.radius, normalize(f3(node->normal)));
     }
 #endif
 #ifdef RT_HAS_PLANES
@@ -106,7 +103,12 @@ inline Node RayTree_TraceNode(const SceneData* sc, Ray ray, int type) {
         normal = RayTree_SphereNormal(ray, f3(s.center), s.radius, hit.t);
         p = f3(s.center) + s.radius * normal;
 #else
-        normal = (p - f3(s.center)) / s.radius;
+        normal = (p - f3(s.center)) / s.radius;  // the report's normal
+#ifdef RT_BOUND_OFFSET
+        // The report's t is off by up to an ulp of |o - c| (cancellation in -b - s): put the
+        // point back on the sphere so that the sphere's error bound holds for it.
+        p = f3(s.center) + s.radius * normalize(normal);
+#endif
 #endif
         inside = dot(normal, ray.dir) > 0.0f;
         material = s.material;
