@@ -83,7 +83,9 @@ void writeCsv(const nlohmann::json& rows, const fs::path& path) {
         "end", "failure", "skip_reason", "memory_tiles", "launches", "longest_launch_ms",
         "max_launch_ms", "frames", "image_max_diff", "image_nonfinite",
         // Added with the pipeline registry; then one column per buffer and per extra.
-        "pipeline_title"};
+        "pipeline_title",
+        // Added with issue 17: fixed, scaled or bound.
+        "offset"};
     const char* counts[6] = {"objects", "spheres", "planes", "triangles", "meshes", "lights"};
     std::ofstream f(path);
     if (!f) throw Error(path.string() + ": cannot write");

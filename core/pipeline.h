@@ -22,6 +22,9 @@ namespace rt {
 // Rays by type (RT_RAY_* in core/types.h): primary, reflection, refraction, shadow.
 using RayCounts = std::array<uint64_t, RT_RAY_TYPES>;
 const char* rayTypeName(int type);  // "primary", "reflection", "refraction", "shadow"
+// --offset names: fixed, scaled, bound. parseOffset throws rt::Error naming the flag.
+RenderOptions::Offset parseOffset(const std::string& name);
+const char* offsetName(RenderOptions::Offset offset);
 
 // What one frame cost, in terms every pipeline shares; what only one pipeline has goes in extras.
 struct FrameStats {

@@ -12,7 +12,9 @@
 //       over a scene and pbrt-v4's Triangle.Reintersect (lone triangles, coordinates 1e-8..1e8);
 //   (d) grazing rays and refraction at exactly the critical angle;
 //   (e) nested dielectrics against the CPU reference;
-//   (f) NaN and Inf rays through every acceleration structure.
+//   (f) NaN and Inf rays through every acceleration structure;
+//   (g) scale sweep: pixels that change when a standard scene is scaled by 1e-4..1e5, per offset
+//       method and pipeline, and a sphere of radius 1e-3 at distance 1e4 (issue 17).
 #include <glm/glm.hpp>
 
 #include <algorithm>
@@ -38,6 +40,7 @@
 #include "core/reference.h"
 #include "core/scene_loader.h"
 #include "stress/stress.h"
+#include "core/scene_scale.h"
 
 namespace rt::stress {
 
@@ -244,14 +247,14 @@ SphereResult tinySpheres(ClContext& cl, bool robust, double distance, double rad
 // shadow rays: a hit on the same object is acne) and inward (refraction rays: a hit on the same
 // triangle, or the sphere right at the start, is acne; leaving without hitting it means the
 // offset pushed the origin through the object).
-AcneResult acne(ClContext& cl, double scale, bool scaledOffset, int primary, int spawn) {
+AcneResult acne(ClContext& cl, double scale, RenderOptions::Offset offset, int primary, int spawn) {
     Scene scene = emptyScene("acne");
     const dvec3 meshC = scale * dvec3(-1.2, 0.1, 4), sphereC = scale * dvec3(1.2, -0.1, 4);
     addMeshSphere(scene, meshC, scale, 24, 48);
     scene.spheres.push_back({f3(sphereC), float(scale), 0, {0, 0, 0}});
     finalizeScene(scene);
     RenderOptions o;
-    o.scaledOffset = scaledOffset;
+    o.offset = offset;
     o.accel = RenderOptions::Accel::Bvh;
     o.bounces = 1;
     std::mt19937 rng(3);
@@ -286,12 +289,12 @@ AcneResult acne(ClContext& cl, double scale, bool scaledOffset, int primary, int
 // triangle, coordinates in [-1, 1] times it), hit by a ray from an origin drawn the same way,
 // then `spawn` rays leave the hit point. Re-hits of the same triangle are counted.
 
-ReintersectResult reintersect(ClContext& cl, bool scaledOffset, double lo, double hi, bool mixed,
-                              int triangles, int spawn) {
+ReintersectResult reintersect(ClContext& cl, RenderOptions::Offset offset, double lo, double hi,
+                              bool mixed, int triangles, int spawn) {
     Scene scene = emptyScene("reintersect");  // only for the program's defines
     addMeshSphere(scene, dvec3(0, 0, 4), 1, 4, 8);
     RenderOptions o;
-    o.scaledOffset = scaledOffset;
+    o.offset = offset;
     cl::Program program = cl.program("probe.cl", featureDefines(scene, o));
     std::mt19937 rng(11);
     std::uniform_real_distribution<double> e(lo, hi), s(-1, 1), u(0, 1);
@@ -529,6 +532,43 @@ NanResult nanRays(ClContext& cl, RenderOptions::Accel accel) {
             !std::isfinite(rgb[i * 3 + 2]))
             ++r.nanPixels;
     return r;
+}
+
+// ---- (g) scale sweep ----
+// Pixels (of 2/255 or more) by which copies of `scene` scaled by 10^e (core/scene_scale.h)
+// differ from the unscaled render in one pipeline, per exponent in `exps`.
+std::vector<long long> scaleSweep(ClContext& cl, const Scene& scene, RenderOptions o,
+                                  const std::string& kind, const std::vector<int>& exps) {
+    std::vector<Scene> copies;  // alive to the end: pipelines key their device copy by address
+    for (int e : exps) copies.push_back(scaleScene(scene, std::pow(10.0, e)));
+    std::unique_ptr<Pipeline> p = makePipeline(kind, &cl);
+    const Image base = p->render(scene, o);
+    std::vector<long long> off;
+    for (const Scene& c : copies) {
+        NestedResult r = compare(p->render(c, o), base);
+        off.push_back(r.pixels - r.within);
+    }
+    return off;
+}
+
+// A Blinn-Phong sphere of radius r at distance D straight ahead, lit from the camera: the
+// centre pixel (odd image, ray exactly +z) of a device pipeline against the CPU reference.
+double farSphereCentreError(ClContext& cl, const std::string& kind, bool robust, double D, double r) {
+    Scene s = emptyScene("far-sphere");
+    s.spheres.push_back({{0, 0, float(D)}, float(r), 0, {0, 0, 0}});
+    s.lights.push_back({{0, 0, 0}, 0.f, {1, 1, 1}, 0.f});
+    s.camera.fovY = 0.5f;
+    finalizeScene(s);
+    RenderOptions o;
+    o.width = 41;
+    o.height = 31;
+    o.bounces = 1;
+    o.robustSphere = robust;
+    const Image ref = renderReference(s, o), img = makePipeline(kind, &cl)->render(s, o);
+    double worst = 0;
+    for (int c = 0; c < 3; ++c)
+        worst = std::max(worst, double(std::abs(img.pixel(20, 15)[c] - ref.pixel(20, 15)[c])));
+    return worst;
 }
 
 }  // namespace rt::stress

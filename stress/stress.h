@@ -67,8 +67,11 @@ LeakResult leaks(ClContext& cl, bool watertight, dvec3 center, int randomRays, i
 // (b) spheres of `radius` at `distance`, hit by `rays` random rays.
 SphereResult tinySpheres(ClContext& cl, bool robust, double distance, double radius, int rays);
 // (c) self-intersection at one scale, and pbrt-v4's Triangle.Reintersect.
-AcneResult acne(ClContext& cl, double scale, bool scaledOffset, int primary, int spawn);
-ReintersectResult reintersect(ClContext& cl, bool scaledOffset, double lo, double hi, bool mixed,
+// The offset methods of core/SHADING.md section 3, in the order the report lists them.
+constexpr RenderOptions::Offset kOffsets[] = {
+    RenderOptions::Offset::Fixed, RenderOptions::Offset::Scaled, RenderOptions::Offset::Bound};
+AcneResult acne(ClContext& cl, double scale, RenderOptions::Offset offset, int primary, int spawn);
+ReintersectResult reintersect(ClContext& cl, RenderOptions::Offset offset, double lo, double hi, bool mixed,
                               int triangles, int spawn);
 // (d) refraction at the critical angle, and grazing rays per angle.
 CriticalResult criticalAngle(ClContext& cl);
@@ -77,5 +80,12 @@ std::vector<Counts> grazing(ClContext& cl, bool watertight, int perAngle = 512);
 NestedResult nested(ClContext& cl, const std::string& pipeline, int width, int height, int bounces);
 // (f) NaN and Inf rays through one acceleration structure.
 NanResult nanRays(ClContext& cl, RenderOptions::Accel accel);
+// (g) pixels (2/255 or more) by which copies of `scene` scaled by 10^e differ from the unscaled
+// render in one pipeline, per exponent; and the centre-pixel error of a sphere of radius r at
+// distance D against the CPU reference.
+std::vector<long long> scaleSweep(ClContext& cl, const Scene& scene, RenderOptions o,
+                                  const std::string& pipeline, const std::vector<int>& exps);
+double farSphereCentreError(ClContext& cl, const std::string& pipeline, bool robust, double D,
+                            double r);
 
 }  // namespace rt::stress
