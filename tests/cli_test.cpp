@@ -86,13 +86,17 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"render scenes/spheres.json --pipeline mega --bounces 15 -o /tmp/x.png",
                 "--layout weighted"},
         BadCase{"render scenes/spheres.json --accel kdtree -o /tmp/x.png", "--accel"},
+        BadCase{"render scenes/spheres.json --pipeline queue --pool 0 -o /tmp/x.png",
+                "--pool 0: must be in 1..67108864"},
+        BadCase{"render scenes/spheres.json --pipeline queue --pool 8 --bounces 6 -o /tmp/x.png",
+                "use --pool 64 or more"},
         BadCase{"render tests/data/bad_scenes/negative_radius.json -o /tmp/x.png",
                 "tests/data/bad_scenes/negative_radius.json: /spheres/"},
         BadCase{"render scenes/spheres.json --kernel-dir /no/such -o /tmp/x.png", "--kernel-dir"},
         BadCase{"bogus", "unknown command 'bogus'"}));
 
 TEST(Cli, RendersWithEveryPipeline) {
-    for (const char* p : {"cpu", "mega", "wave"}) {
+    for (const char* p : {"cpu", "mega", "wave", "queue"}) {
         std::string out = ::testing::TempDir() + "cli_" + p + ".exr";
         Result r = run(std::string("render scenes/shadows.json --size 32x24 --pipeline ") + p +
                        " --stats -o " + out);
@@ -101,6 +105,10 @@ TEST(Cli, RendersWithEveryPipeline) {
         if (std::string(p) == "wave") {
             EXPECT_NE(r.out.find("trace"), std::string::npos) << r.out;
             EXPECT_NE(r.out.find("ray tree"), std::string::npos) << r.out;
+        }
+        if (std::string(p) == "queue") {
+            EXPECT_NE(r.out.find("pool"), std::string::npos) << r.out;
+            EXPECT_NE(r.out.find("shade diffuse"), std::string::npos) << r.out;
         }
     }
 }

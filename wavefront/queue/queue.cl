@@ -79,10 +79,10 @@ kernel void Queue_Extend(RT_SCENE_PARAMS, QUEUE_RAYS_PARAMS(rays), int n, global
                          global int* classQueues, int pool, global int* shadowQueue,
                          global int* counters) {
     local int count[RT_Q_CLASSES + 1], base[RT_Q_CLASSES + 1];
-    local int histogram[(RT_MAX_BOUNCES + 1) * RT_Q_CLASSES];
+    local int histogram[(RT_Q_MAX_DEPTH + 1) * RT_Q_CLASSES];
     int lid = get_local_id(0), size = get_local_size(0), i = get_global_id(0);
     for (int k = lid; k < RT_Q_CLASSES + 1; k += size) count[k] = 0;
-    for (int k = lid; k < (RT_MAX_BOUNCES + 1) * RT_Q_CLASSES; k += size) histogram[k] = 0;
+    for (int k = lid; k < (RT_Q_MAX_DEPTH + 1) * RT_Q_CLASSES; k += size) histogram[k] = 0;
     barrier(CLK_LOCAL_MEM_FENCE);
     int cls = -1, slot = 0, shadowSlot = -1;
     if (i < n) {
@@ -102,7 +102,7 @@ kernel void Queue_Extend(RT_SCENE_PARAMS, QUEUE_RAYS_PARAMS(rays), int n, global
     barrier(CLK_LOCAL_MEM_FENCE);
     for (int k = lid; k < RT_Q_CLASSES + 1; k += size)
         base[k] = count[k] ? atomic_add(&counters[RT_Q_COUNT + k], count[k]) : 0;
-    for (int k = lid; k < (RT_MAX_BOUNCES + 1) * RT_Q_CLASSES; k += size)
+    for (int k = lid; k < (RT_Q_MAX_DEPTH + 1) * RT_Q_CLASSES; k += size)
         if (histogram[k]) atomic_add(&counters[RT_Q_HISTOGRAM + k], histogram[k]);
     barrier(CLK_LOCAL_MEM_FENCE);
     if (cls >= 0) classQueues[cls * pool + base[cls] + slot] = i;

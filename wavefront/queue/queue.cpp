@@ -27,6 +27,19 @@ std::string stageName(const std::string& kernel) {
     return out;
 }
 
+// The scene's feature defines, but one program for every bounce limit: B travels in the
+// settings, and the histogram is sized for the most bounces there can be (RT_Q_MAX_DEPTH), so
+// changing B (the viewer's +/-, a sweep over B) builds nothing. No tree is kept: N is 1.
+std::vector<std::string> programDefines(const Scene& scene, const RenderOptions& o, int group) {
+    std::vector<std::string> d;
+    for (const std::string& x : featureDefines(scene, o))
+        if (x.rfind("RT_MAX_BOUNCES=", 0) != 0 && x.rfind("RT_TREE_NODES=", 0) != 0) d.push_back(x);
+    d.push_back("RT_MAX_BOUNCES=" + std::to_string(RT_Q_MAX_DEPTH));
+    d.push_back("RT_TREE_NODES=1");
+    d.push_back("RT_QUEUE_GROUP=" + std::to_string(group));
+    return d;
+}
+
 // One frame's launches, named for --stats: kernels, their local sizes, the events to time.
 class QueueFrame {
 public:
@@ -261,9 +274,7 @@ Image QueuePipeline::render(const Scene& scene, const RenderOptions& o) {
     const DeviceInfo& dev = cl_.device();
     size_t pool = poolSize(dev, C, o.bounces, o);
     int group = groupSize(dev);
-    std::vector<std::string> defines = featureDefines(scene, o);
-    defines.push_back("RT_QUEUE_GROUP=" + std::to_string(group));
-    cl::Program program = cl_.program("queue.cl", defines);
+    cl::Program program = cl_.program("queue.cl", programDefines(scene, o, group));
     stats_.program = cl_.lastProgramSource();
     if (!scene_ || !scene_->matches(scene, o.accel))
         scene_ = std::make_unique<DeviceScene>(cl_, scene, o.accel);

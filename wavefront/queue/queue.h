@@ -38,7 +38,8 @@ public:
     // --pool is below that.
     static size_t poolSize(const DeviceInfo& device, int branching, int bounces,
                            const RenderOptions& options);
-    // Device bytes per pool slot: ray fields, staging, node, queues (independent of B).
+    // Device bytes per pool slot: ray fields, staging, node, queues (independent of B). A pool
+    // takes pool * bytesPerRay + 4 + RT_Q_WORDS * 4 bytes (FrameStats::poolBytes).
     static size_t bytesPerRay(int branching);
     // Work-group size of the scan (and the most any queue kernel uses): a power of two.
     static int groupSize(const DeviceInfo& device);

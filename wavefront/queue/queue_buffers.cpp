@@ -19,7 +19,7 @@ size_t QueuePipeline::bytesPerRay(int branching) {
     return kRayFieldBytes * size_t(1 + branching)  // the queue and its C staging slots
            + sizeof(dev::Node)                      // extend's hit record, read by shade
            + 12                                     // contribution
-           + 4 * 3                                  // children, offsets, retry list
+           + 4 * 4                                  // children, offsets, block sums, retry
            + 4 * (RT_Q_CLASSES + 1);                // class queues and shadow queue
 }
 
