@@ -9,6 +9,7 @@
 #include <cstring>
 #include <numeric>
 
+#include "bench/sweep_config.h"
 #include "core/error.h"
 #include "core/scene_loader.h"
 #include "image/compare.h"
@@ -164,6 +165,27 @@ TEST(Queue, RejectsAdaptiveAntiAliasing) {
                   std::string::npos)
             << e.what();
     }
+}
+
+// bench/sweeps/queue, the benchmark: the headline against both megakernel layouts and the
+// tree wavefront, and the queue along the bounce limit to 16.
+TEST(Queue, BenchmarkSweepCoversTheHeadlineAndEveryBounceLimit) {
+    bench::SweepConfig c = bench::loadSweep(bench::findSweep("queue"));
+    Scene cornell = load("cornell");
+    std::vector<bench::Cell> cells =
+        bench::expandCells(c, [&](const std::string&) -> const Scene& { return cornell; });
+    int queue = 0, weighted = 0, wave = 0;
+    for (const bench::Cell& cell : cells) {
+        queue += cell.pipeline == PipelineKind::Queue;
+        wave += cell.pipeline == PipelineKind::Wave;
+        weighted += cell.pipeline == PipelineKind::Mega &&
+                    cell.options.layout == RenderOptions::Layout::Weighted;
+        EXPECT_EQ(cell.options.width, 1920);
+        EXPECT_EQ(cell.options.shadowSamples, 8);
+    }
+    EXPECT_EQ(queue, 17);  // B = 0..16, the headline's B = 8 among them
+    EXPECT_EQ(weighted, 1);
+    EXPECT_EQ(wave, 1);
 }
 
 }  // namespace
