@@ -4,6 +4,7 @@
 // with them; the stage kernels within a bounce are launched over the queue's upper bound and read
 // their exact length from the device, so a bounce costs one host round trip, not one per queue.
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <chrono>
 #include <deque>
@@ -38,6 +39,18 @@ std::vector<std::string> programDefines(const Scene& scene, const RenderOptions&
     d.push_back("RT_TREE_NODES=1");
     d.push_back("RT_QUEUE_GROUP=" + std::to_string(group));
     return d;
+}
+
+// The shading classes a scene's materials can produce: the others' kernels are not launched.
+std::array<bool, RT_Q_CLASSES> sceneClasses(const Scene& scene) {
+    std::array<bool, RT_Q_CLASSES> c{};
+    c[RT_Q_MISS] = true;
+    for (const dev::Material& m : scene.materials) {
+        if (m.opacity < 1.0f) c[RT_Q_GLASS] = true;
+        else if (m.reflectance > 0.0f) c[RT_Q_MIRROR] = true;
+        else c[RT_Q_DIFFUSE] = true;
+    }
+    return c;
 }
 
 // One frame's launches, named for --stats: kernels, their local sizes, the events to time.
@@ -103,10 +116,14 @@ class QueuePass {
 public:
     QueuePass(ClContext& cl, QueueFrame& f, const QueueBuffers& b, const RenderOptions& o,
               FrameStats& stats)
-        : cl_(cl), f_(f), b_(b), o_(o), stats_(stats), limit_(b.pool) {}
+        : cl_(cl), f_(f), b_(b), o_(o), stats_(stats),
+          // --max-launch-ms: start with a probe and learn what a ray costs (see adaptLimit).
+          limit_(o.maxLaunchMs > 0 ? std::min(b.pool, kProbeRays) : b.pool) {}
 
-    void run(const dev::RenderSettings& settings) {
+    // classes: which shade kernels the scene can need (a class without a material never runs).
+    void run(const dev::RenderSettings& settings, const std::array<bool, RT_Q_CLASSES>& classes) {
         lights_ = settings.lightCount;
+        classes_ = classes;
         bindKernels(settings);
         next_ = 0;
         retry_.clear();
@@ -199,11 +216,11 @@ private:
         cl::CommandQueue& q = cl_.queue();
         q.enqueueFillBuffer(b_.counters, cl_int(0), 0, RT_Q_PER_ITERATION * 4);
         f_.kernel("Queue_Extend").setArg(DeviceScene::kFirstKernelArg + 5, cl_int(n));
+        size_t firstEvent = f_.events().size();
         f_.launch("Queue_Extend", n);
-        size_t extendEvent = f_.events().size() - 1;
         if (lights_ > 0) f_.launch("Queue_Shadow", n);
         for (int c = 0; c < RT_Q_CLASSES; ++c)
-            if (c != RT_Q_GLASS || b_.branching == 2) f_.launch(kShadeKernels[c], n);
+            if (classes_[c]) f_.launch(kShadeKernels[c], n);
         size_t group = size_t(QueuePipeline::groupSize(cl_.device()));
         size_t blocks = (n + group - 1) / group;
         f_.kernel("Queue_ScanBlocks").setArg(1, cl_int(n));
@@ -212,6 +229,7 @@ private:
         f_.launch("Queue_ScanSums", 1);
         cl_int c[RT_Q_PER_ITERATION];
         q.enqueueReadBuffer(b_.counters, CL_TRUE, 0, sizeof c, c);
+        size_t doneEvents = f_.events().size();  // complete now: their times can be read
         ++stats_.iterations;
         size_t cut = n, kept = size_t(c[RT_Q_CHILDREN]);
         if (kept > b_.pool) {
@@ -227,7 +245,7 @@ private:
         f_.launch("Queue_Accumulate", cut);
         f_.kernel("Queue_Compact").setArg(8, cl_int(cut));
         f_.launch("Queue_Compact", cut);
-        if (o_.maxLaunchMs > 0) adaptLimit(n, eventMs(f_.events()[extendEvent].second));
+        if (o_.maxLaunchMs > 0) adaptLimit(n, firstEvent, doneEvents);
         return admit(kept);
     }
 
@@ -243,13 +261,21 @@ private:
             }
     }
 
-    // --max-launch-ms: admit no more rays than the slowest stage (extend) traces in that time.
-    void adaptLimit(size_t n, double ms) {
+    // --max-launch-ms: admit no more rays than the slowest stage of this bounce (extend or
+    // shadow, as a rule) handles in that time.
+    void adaptLimit(size_t n, size_t firstEvent, size_t endEvent) {
+        double ms = 0;
+        for (size_t e = firstEvent; e < endEvent; ++e)
+            ms = std::max(ms, eventMs(f_.events()[e].second));
         if (ms <= 0) return;
+        // 0.8: aim below the target, bounces differ in cost; grow at most twofold per bounce,
+        // as core/launch_planner.h does with rows it has not seen.
         double fit = double(n) * 0.8 * o_.maxLaunchMs / ms;
-        limit_ = std::clamp(size_t(fit), std::min<size_t>(1024, b_.pool), b_.pool);
+        size_t grown = std::min(size_t(fit), 2 * std::max(n, limit_));
+        limit_ = std::clamp(grown, std::min(b_.pool, kProbeRays / 4), b_.pool);
     }
 
+    static constexpr size_t kProbeRays = 4096;
     ClContext& cl_;
     QueueFrame& f_;
     const QueueBuffers& b_;
@@ -257,6 +283,7 @@ private:
     FrameStats& stats_;
     size_t limit_, next_ = 0;
     int lights_ = 0;
+    std::array<bool, RT_Q_CLASSES> classes_{};
     std::deque<cl_int> retry_;
 };
 
@@ -307,7 +334,7 @@ Image QueuePipeline::render(const Scene& scene, const RenderOptions& o) {
         QueuePass pass(cl_, frame, buf_, o, stats_);
         for (int s = 0; s < o.aa * o.aa; ++s) {
             settings.sampleIndex = s;
-            pass.run(settings);
+            pass.run(settings, sceneClasses(scene));
             resolve.setArg(3, cl_int(s));
             frame.launch("Queue_Resolve", pixels);
         }
