@@ -32,8 +32,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 from matplotlib.ticker import LogFormatter, MaxNLocator, NullLocator  # noqa: E402
 
-COLORS = {"mega": "#1f77b4", "wave": "#d62728"}
-NAMES = {"mega": "megakernel", "wave": "wavefront"}
+COLORS = {"mega": "#1f77b4", "wave": "#d62728", "queue": "#2ca02c"}
+NAMES = {"mega": "megakernel", "wave": "wavefront", "queue": "queue wavefront"}
 KERNEL_COLORS = {"megakernel": "#1f77b4", "centers": "#6baed6", "edges": "#08519c",
                  "trace": "#d62728", "image": "#ff9896", "reset": "#7f7f7f"}
 
@@ -326,7 +326,9 @@ def readme_module():
 LIMIT_STYLES = {("mega", "tree", False): dict(color="#1f77b4", linestyle="-"),
                 ("mega", "weighted", False): dict(color="#17becf", linestyle="-."),
                 ("wave", "tree", False): dict(color="#d62728", linestyle="--"),
-                ("wave", "tree", True): dict(color="#ff7f0e", linestyle=":")}
+                ("wave", "tree", True): dict(color="#ff7f0e", linestyle=":"),
+                ("queue", "tree", False): dict(color="#2ca02c", linestyle="-."),
+                ("queue", "weighted", False): dict(color="#2ca02c", linestyle="-.")}
 HOW_SHORT = {"private tree": "private tree > limit", "tree row": "tree row > budget",
              "allocation": "allocation failed", "OpenCL error": "OpenCL error",
              "time cap": "frame > time cap", "other": "error", "skipped": "not run"}

@@ -234,7 +234,8 @@ TEST_P(AccelImages, EveryModeMatchesNone) {
 INSTANTIATE_TEST_SUITE_P(StandardScenes, AccelImages,
                          ::testing::Combine(::testing::ValuesIn(kScenes),
                                             ::testing::Values(PipelineKind::Mega,
-                                                              PipelineKind::Wave)),
+                                                              PipelineKind::Wave,
+                                                              PipelineKind::Queue)),
                          [](const auto& info) {
                              return std::string(std::get<0>(info.param)) + "_" +
                                     pipelineName(std::get<1>(info.param));

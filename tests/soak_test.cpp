@@ -112,7 +112,7 @@ TEST(Soak, DestroyedPipelinesGiveTheirDeviceBytesBack) {
     o.width = 16;
     o.height = 12;
     o.bounces = 2;
-    for (PipelineKind k : {PipelineKind::Mega, PipelineKind::Wave}) {
+    for (PipelineKind k : {PipelineKind::Mega, PipelineKind::Wave, PipelineKind::Queue}) {
         size_t before = cl.allocatedBytes();
         makePipeline(k, &cl)->render(scene, o);
         EXPECT_EQ(cl.allocatedBytes(), before) << pipelineName(k);
@@ -121,6 +121,7 @@ TEST(Soak, DestroyedPipelinesGiveTheirDeviceBytesBack) {
 
 TEST(Soak, MegakernelDoesNotGrow) { check(PipelineKind::Mega); }
 TEST(Soak, WavefrontDoesNotGrow) { check(PipelineKind::Wave); }
+TEST(Soak, QueueWavefrontDoesNotGrow) { check(PipelineKind::Queue); }
 TEST(Soak, CpuReferenceDoesNotGrow) { check(PipelineKind::Cpu); }
 
 }  // namespace

@@ -144,7 +144,8 @@ TEST(Stability, GrazingViewRendersFinite) {
     o.width = 32;
     o.height = 24;
     o.bounces = 4;
-    for (PipelineKind k : {PipelineKind::Cpu, PipelineKind::Mega, PipelineKind::Wave})
+    for (PipelineKind k : {PipelineKind::Cpu, PipelineKind::Mega, PipelineKind::Wave,
+                           PipelineKind::Queue})
         for (bool robust : {false, true}) {
             o.watertight = o.robustSphere = o.scaledOffset = robust;
             Image img = makePipeline(k, &test::device())->render(s, o);
@@ -154,7 +155,7 @@ TEST(Stability, GrazingViewRendersFinite) {
 
 // ---- (e) ----
 TEST(Stability, NestedDielectricsMatchTheReference) {
-    for (PipelineKind k : {PipelineKind::Mega, PipelineKind::Wave}) {
+    for (PipelineKind k : {PipelineKind::Mega, PipelineKind::Wave, PipelineKind::Queue}) {
         NestedResult n = nested(test::device(), k, 32, 24, 6);
         EXPECT_EQ(n.nonFinite, 0) << pipelineName(k);
         EXPECT_GE(double(n.within) / double(n.pixels), 0.99)
@@ -322,7 +323,7 @@ TEST(Stability, AllocationFailureEndsTheFrameWithAClearError) {
     o.height = 12;
     o.bounces = 2;
     ClContext& cl = test::device();
-    for (PipelineKind k : {PipelineKind::Mega, PipelineKind::Wave}) {
+    for (PipelineKind k : {PipelineKind::Mega, PipelineKind::Wave, PipelineKind::Queue}) {
         size_t before = cl.allocatedBytes();
         std::unique_ptr<Pipeline> p = makePipeline(k, &cl);
         setenv("RTLAB_FAIL_ALLOC_AFTER", std::to_string(before + 1024).c_str(), 1);

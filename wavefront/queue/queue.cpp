@@ -56,9 +56,8 @@ std::array<bool, RT_Q_CLASSES> sceneClasses(const Scene& scene) {
 // One frame's launches, named for --stats: kernels, their local sizes, the events to time.
 class QueueFrame {
 public:
-    QueueFrame(ClContext& cl, cl::Program& program, const DeviceScene& scene,
-               const QueueBuffers& buf, int group)
-        : cl_(cl), program_(program), scene_(scene), b_(buf), group_(group) {}
+    QueueFrame(ClContext& cl, cl::Program& program, const DeviceScene& scene, int group)
+        : cl_(cl), program_(program), scene_(scene), group_(group) {}
 
     cl::Kernel& kernel(const std::string& name) {
         auto it = kernels_.find(name);
@@ -101,7 +100,6 @@ private:
     ClContext& cl_;
     cl::Program& program_;
     const DeviceScene& scene_;
-    const QueueBuffers& b_;
     int group_;
     std::map<std::string, cl::Kernel> kernels_;
     std::map<std::string, size_t> locals_;
@@ -160,6 +158,11 @@ private:
             k.setArg(at, b_.contrib);
             k.setArg(at + 1, b_.children);
         }
+        bindBookkeeping();
+    }
+
+    // The scan, cut, accumulate and compact kernels: buffers only, no scene.
+    void bindBookkeeping() {
         cl::Kernel& scan = f_.kernel("Queue_ScanBlocks");
         scan.setArg(0, b_.children);
         scan.setArg(2, b_.offsets);
@@ -180,7 +183,7 @@ private:
         acc.setArg(2, b_.contrib);
         acc.setArg(4, b_.sums);
         cl::Kernel& comp = f_.kernel("Queue_Compact");
-        at = QueueFrame::setRays(comp, 0, b_.staging);
+        int at = QueueFrame::setRays(comp, 0, b_.staging);
         comp.setArg(at, b_.children);
         comp.setArg(at + 1, b_.offsets);
         comp.setArg(at + 2, b_.blockSums);
@@ -322,7 +325,7 @@ Image QueuePipeline::render(const Scene& scene, const RenderOptions& o) {
 
     dev::RenderSettings settings = makeSettings(scene, o);
     Image out(o.width, o.height);
-    QueueFrame frame(cl_, program, *scene_, buf_, group);
+    QueueFrame frame(cl_, program, *scene_, group);
     try {
         if (o.countRays) scene_->resetRayCounts(cl_.queue());
         cl_.queue().enqueueFillBuffer(buf_.counters, cl_int(0), 0, RT_Q_WORDS * 4);
