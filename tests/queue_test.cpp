@@ -98,6 +98,21 @@ TEST(Queue, SameBitsFromRunToRunAndForAnyPoolSize) {
     EXPECT_TRUE(sameBits(first, queue.render(scene, o)));
 }
 
+// --max-launch-ms only limits how many rays a bounce admits (learned from the launches it times,
+// kept from frame to frame): the image stays the same bits, whatever the timings were.
+TEST(Queue, LaunchTimeLimitChangesNoPixel) {
+    Scene scene = load("cornell");
+    RenderOptions o = small(scene, 5);
+    o.width = 64;
+    o.height = 48;
+    QueuePipeline queue(test::device());
+    Image free = queue.render(scene, o);
+    o.maxLaunchMs = 1e-3;  // below any launch: admission drops to its floor
+    Image first = queue.render(scene, o), second = queue.render(scene, o);
+    EXPECT_TRUE(sameBits(free, first));
+    EXPECT_TRUE(sameBits(free, second));
+}
+
 TEST(Queue, DeviceMemoryDoesNotGrowWithTheBounceLimit) {
     Scene scene = load("spheres");
     QueuePipeline queue(test::device());

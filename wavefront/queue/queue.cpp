@@ -112,11 +112,15 @@ const char* const kShadeKernels[RT_Q_CLASSES] = {"Queue_ShadeMiss", "Queue_Shade
 // The bounces of one AA sample: which pixels are still to start, and the pool's live rays.
 class QueuePass {
 public:
+    // learned: the admission limit an earlier frame of the same workload ended with, else 0.
     QueuePass(ClContext& cl, QueueFrame& f, const QueueBuffers& b, const RenderOptions& o,
-              FrameStats& stats)
+              FrameStats& stats, size_t learned)
         : cl_(cl), f_(f), b_(b), o_(o), stats_(stats),
           // --max-launch-ms: start with a probe and learn what a ray costs (see adaptLimit).
-          limit_(o.maxLaunchMs > 0 ? std::min(b.pool, kProbeRays) : b.pool) {}
+          limit_(o.maxLaunchMs <= 0 ? b.pool
+                 : learned         ? std::min(b.pool, learned)
+                                   : std::min(b.pool, kProbeRays)) {}
+    size_t limit() const { return limit_; }
 
     // classes: which shade kernels the scene can need (a class without a material never runs).
     void run(const dev::RenderSettings& settings, const std::array<bool, RT_Q_CLASSES>& classes) {
@@ -334,13 +338,21 @@ Image QueuePipeline::render(const Scene& scene, const RenderOptions& o) {
         resolve.setArg(1, buf_.image);
         resolve.setArg(2, cl_int(pixels));
         resolve.setArg(4, cl_int(o.aa * o.aa));
-        QueuePass pass(cl_, frame, buf_, o, stats_);
+        // What --max-launch-ms learned is kept while the workload stays the same.
+        std::string key = std::to_string(o.maxLaunchMs) + " " + std::to_string(o.width) + "x" +
+                          std::to_string(o.height) + " B" + std::to_string(o.bounces) + " s" +
+                          std::to_string(o.shadowSamples) + " " + scene.source.string();
+        for (const std::string& d : programDefines(scene, o, group)) key += " " + d;
+        if (key != learnedKey_) learnedLimit_ = 0;
+        QueuePass pass(cl_, frame, buf_, o, stats_, learnedLimit_);
         for (int s = 0; s < o.aa * o.aa; ++s) {
             settings.sampleIndex = s;
             pass.run(settings, sceneClasses(scene));
             resolve.setArg(3, cl_int(s));
             frame.launch("Queue_Resolve", pixels);
         }
+        learnedKey_ = key;
+        learnedLimit_ = pass.limit();
         cl_.queue().enqueueReadBuffer(buf_.image, CL_TRUE, 0, pixels * 12, out.rgb.data());
         std::vector<cl_int> words(RT_Q_WORDS);
         cl_.queue().enqueueReadBuffer(buf_.counters, CL_TRUE, 0, words.size() * 4, words.data());

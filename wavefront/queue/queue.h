@@ -5,6 +5,7 @@
 #pragma once
 
 #include <memory>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -51,6 +52,9 @@ private:
     ClContext& cl_;
     std::unique_ptr<DeviceScene> scene_;
     QueueBuffers buf_;
+    // --max-launch-ms: the rays a bounce may admit, learned by the last frame of this workload.
+    std::string learnedKey_;
+    size_t learnedLimit_ = 0;
 };
 
 }  // namespace rt
