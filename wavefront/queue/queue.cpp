@@ -56,8 +56,10 @@ std::array<bool, RT_Q_CLASSES> sceneClasses(const Scene& scene) {
 // One frame's launches, named for --stats: kernels, their local sizes, the events to time.
 class QueueFrame {
 public:
-    QueueFrame(ClContext& cl, cl::Program& program, const DeviceScene& scene, int group)
-        : cl_(cl), program_(program), scene_(scene), group_(group) {}
+    QueueFrame(ClContext& cl, cl::Program& program, const DeviceScene& scene, int group,
+               QueueKernels& kernels)
+        : cl_(cl), program_(program), scene_(scene), group_(group), kernels_(kernels.kernels),
+          locals_(kernels.locals) {}
 
     cl::Kernel& kernel(const std::string& name) {
         auto it = kernels_.find(name);
@@ -101,8 +103,8 @@ private:
     cl::Program& program_;
     const DeviceScene& scene_;
     int group_;
-    std::map<std::string, cl::Kernel> kernels_;
-    std::map<std::string, size_t> locals_;
+    std::map<std::string, cl::Kernel>& kernels_;
+    std::map<std::string, size_t>& locals_;
     std::vector<std::pair<std::string, cl::Event>> events_;
 };
 
@@ -329,7 +331,8 @@ Image QueuePipeline::render(const Scene& scene, const RenderOptions& o) {
 
     dev::RenderSettings settings = makeSettings(scene, o);
     Image out(o.width, o.height);
-    QueueFrame frame(cl_, program, *scene_, group);
+    if (kernels_.program != program()) kernels_ = QueueKernels{program(), {}, {}};
+    QueueFrame frame(cl_, program, *scene_, group, kernels_);
     try {
         if (o.countRays) scene_->resetRayCounts(cl_.queue());
         cl_.queue().enqueueFillBuffer(buf_.counters, cl_int(0), 0, RT_Q_WORDS * 4);

@@ -4,6 +4,7 @@
 // and the per-pixel sums. See wavefront/queue/README.md for the design and its measurements.
 #pragma once
 
+#include <map>
 #include <memory>
 #include <string>
 #include <utility>
@@ -25,6 +26,14 @@ struct QueueBuffers {
     size_t pool = 0, pixels = 0;
     int branching = 0;
     size_t poolBytes = 0, imageBytes = 0;  // as tallied in the ClContext
+};
+
+// The kernels of the last program, created once and reused frame after frame (with their
+// work-group sizes); arguments are set again every frame.
+struct QueueKernels {
+    cl_program program = nullptr;
+    std::map<std::string, cl::Kernel> kernels;
+    std::map<std::string, size_t> locals;
 };
 
 class QueuePipeline : public Pipeline {
@@ -52,6 +61,7 @@ private:
     ClContext& cl_;
     std::unique_ptr<DeviceScene> scene_;
     QueueBuffers buf_;
+    QueueKernels kernels_;
     // --max-launch-ms: the rays a bounce may admit, learned by the last frame of this workload.
     std::string learnedKey_;
     size_t learnedLimit_ = 0;
