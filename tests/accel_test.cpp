@@ -234,8 +234,7 @@ TEST_P(AccelImages, EveryModeMatchesNone) {
 
 INSTANTIATE_TEST_SUITE_P(StandardScenes, AccelImages,
                          ::testing::Combine(::testing::ValuesIn(kScenes),
-                                            ::testing::Values("mega",
-                                                              "wave")),
+                                            ::testing::ValuesIn(rt::pipelineRegistry().names(true))),
                          [](const auto& info) {
                              return std::string(std::get<0>(info.param)) + "_" +
                                     std::get<1>(info.param);

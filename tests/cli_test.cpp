@@ -103,6 +103,10 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"render scenes/spheres.json --offset tiny -o /tmp/x.png", "--offset tiny"},
         BadCase{"render scenes/spheres.json --offset scaled --fixed-offset -o /tmp/x.png",
                 "--fixed-offset contradicts --offset scaled"},
+        BadCase{"render scenes/spheres.json --pipeline queue --pool 0 -o /tmp/x.png",
+                "--pool 0: must be in 1..67108864"},
+        BadCase{"render scenes/spheres.json --pipeline queue --pool 8 --bounces 6 -o /tmp/x.png",
+                "use --pool 64 or more"},
         BadCase{"render tests/data/bad_scenes/negative_radius.json -o /tmp/x.png",
                 "tests/data/bad_scenes/negative_radius.json: /spheres/"},
         BadCase{"render scenes/spheres.json --kernel-dir /no/such -o /tmp/x.png", "--kernel-dir"},
@@ -129,6 +133,10 @@ TEST(Cli, RendersWithEveryPipeline) {
         if (std::string(p) == "wave") {
             EXPECT_NE(r.out.find("trace"), std::string::npos) << r.out;
             EXPECT_NE(r.out.find("ray tree"), std::string::npos) << r.out;
+        }
+        if (std::string(p) == "queue") {
+            EXPECT_NE(r.out.find("pool"), std::string::npos) << r.out;
+            EXPECT_NE(r.out.find("shade diffuse"), std::string::npos) << r.out;
         }
     }
 }

@@ -10,6 +10,7 @@
 #include "bench/sweep_config.h"
 #include "core/error.h"
 #include "core/scene_loader.h"
+#include "image/compare.h"
 #include "image/image_io.h"
 #include "pipelines/registry.h"
 #include "test_device.h"
@@ -62,7 +63,10 @@ TEST(Registry, RefusesADuplicateName) {
 }
 
 // What lets a new pipeline in without a test of its own: every device pipeline renders the same
-// image, bit for bit, as the first one registered (they share the stage code in core/cl).
+// image as the first one registered (they share the stage code in core/cl): within 1e-5 per
+// channel, the bar issue 14 set for a pipeline that adds a path's contributions in another order
+// (the queue sums bounce by bounce, the megakernel depth first; float addition is not
+// associative, so glass scenes differ in the last bit).
 TEST(Registry, EveryDevicePipelineRendersTheSameImage) {
     Scene scene = loadScene("scenes/spheres.json", readImage);
     RenderOptions o = scene.defaults;
@@ -74,8 +78,9 @@ TEST(Registry, EveryDevicePipelineRendersTheSameImage) {
     for (size_t i = 1; i < names.size(); ++i) {
         Image other = makePipeline(names[i], &test::device())->render(scene, o);
         ASSERT_EQ(other.rgb.size(), first.rgb.size()) << names[i];
-        EXPECT_EQ(std::memcmp(other.rgb.data(), first.rgb.data(), first.rgb.size() * sizeof(float)), 0)
-            << names[i] << " differs from " << names[0];
+        const ImageDiff d = compareImages(other, first, 1e-5, false);
+        EXPECT_TRUE(d.allWithin()) << names[i] << " differs from " << names[0] << " by up to "
+                                   << d.maxAbs << " (" << d.nonfinite << " non-finite pixels)";
     }
 }
 

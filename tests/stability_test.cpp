@@ -179,7 +179,7 @@ TEST(Stability, GrazingViewRendersFinite) {
     o.width = 32;
     o.height = 24;
     o.bounces = 4;
-    for (std::string k : {"cpu", "mega", "wave"})
+    for (std::string k : rt::pipelineRegistry().names())
         for (bool robust : {false, true}) {
             o.watertight = o.robustSphere = robust;
             o.offset = robust ? RenderOptions::Offset::Bound : RenderOptions::Offset::Fixed;
@@ -190,7 +190,7 @@ TEST(Stability, GrazingViewRendersFinite) {
 
 // ---- (e) ----
 TEST(Stability, NestedDielectricsMatchTheReference) {
-    for (std::string k : {"mega", "wave"}) {
+    for (std::string k : rt::pipelineRegistry().names(true)) {
         NestedResult n = nested(test::device(), k, 32, 24, 6);
         EXPECT_EQ(n.nonFinite, 0) << k;
         EXPECT_GE(double(n.within) / double(n.pixels), 0.99)
@@ -374,7 +374,7 @@ TEST(Stability, AllocationFailureEndsTheFrameWithAClearError) {
     o.height = 12;
     o.bounces = 2;
     ClContext& cl = test::device();
-    for (std::string k : {"mega", "wave"}) {
+    for (std::string k : rt::pipelineRegistry().names(true)) {
         size_t before = cl.allocatedBytes();
         std::unique_ptr<Pipeline> p = makePipeline(k, &cl);
         setenv("RTLAB_FAIL_ALLOC_AFTER", std::to_string(before + 1024).c_str(), 1);

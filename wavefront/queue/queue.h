@@ -1,0 +1,84 @@
+// rtlab — host driver of the queue wavefront (wavefront/queue/queue.cl, issue 14): a pool of ray
+// records sized by --pool, not by pixels x tree nodes, refilled with camera rays as paths end;
+// each bounce runs extend, shadow, one shade kernel per material class, a prefix-sum compaction
+// and the per-pixel sums. See wavefront/queue/README.md for the design and its measurements.
+#pragma once
+
+#include <array>
+#include <map>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/pipeline.h"
+
+namespace rt {
+
+// The pool's device buffers. `rays` is the queue of live rays, `staging` holds the children of
+// the bounce (C slots per ray) until they are compacted back into `rays`.
+struct QueueBuffers {
+    struct Rays {
+        cl::Buffer origin, dir, weight, pixel, meta;
+    };
+    Rays rays, staging;
+    cl::Buffer nodes, contrib, children, offsets, blockSums, classQueues, shadowQueue, retry,
+        counters, sums, image;
+    size_t pool = 0, pixels = 0;
+    int branching = 0;
+    size_t poolBytes = 0, imageBytes = 0;  // as tallied in the ClContext
+};
+
+// The kernels of the last program, created once and reused frame after frame (with their
+// work-group sizes); arguments are set again every frame.
+struct QueueKernels {
+    cl_program program = nullptr;
+    std::map<std::string, cl::Kernel> kernels;
+    std::map<std::string, size_t> locals;
+};
+
+// What a queue frame did beyond the generic FrameStats (also written to its extras): ray slots and
+// device bytes of the pool with its queues and staging (not the image), bounces run, paths cut
+// for room and started again, and the rays per bounce (depth 0..B) in each class queue: miss,
+// diffuse, mirror, glass.
+struct QueueStats {
+    size_t poolRays = 0, poolBytes = 0;
+    int iterations = 0;
+    long long restartedPaths = 0;
+    std::vector<std::array<long long, 4>> queueLengths;
+};
+
+class QueuePipeline : public Pipeline {
+public:
+    explicit QueuePipeline(ClContext& cl) : cl_(cl) {}
+    ~QueuePipeline() override;
+    const char* name() const override { return "queue"; }
+    Image render(const Scene& scene, const RenderOptions& options) override;
+    const QueueStats& queueStats() const { return queue_; }
+
+    // Ray slots a frame uses: --pool, else a size chosen from the device (and --memory-budget);
+    // never fewer than C^B, the most rays one path can hold at once. Throws rt::Error when
+    // --pool is below that.
+    static size_t poolSize(const DeviceInfo& device, int branching, int bounces,
+                           const RenderOptions& options);
+    // Device bytes per pool slot: ray fields, staging, node, queues (independent of B). A pool
+    // takes pool * bytesPerRay + 4 + RT_Q_WORDS * 4 bytes (QueueStats::poolBytes).
+    static size_t bytesPerRay(int branching);
+    // Work-group size of the scan (and the most any queue kernel uses): a power of two.
+    static int groupSize(const DeviceInfo& device);
+
+private:
+    void prepareBuffers(size_t pool, int branching, size_t pixels);
+    void releaseBuffers();
+
+    ClContext& cl_;
+    std::unique_ptr<DeviceScene> scene_;
+    QueueBuffers buf_;
+    QueueKernels kernels_;
+    QueueStats queue_;
+    // --max-launch-ms: the rays a bounce may admit, learned by the last frame of this workload.
+    std::string learnedKey_;
+    size_t learnedLimit_ = 0;
+};
+
+}  // namespace rt
