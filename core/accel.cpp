@@ -21,6 +21,8 @@ const char* accelName(RenderOptions::Accel accel) {
             return "grid";
         case RenderOptions::Accel::Bvh:
             return "bvh";
+        case RenderOptions::Accel::Wide:
+            return "wide";
     }
     return "?";
 }
@@ -30,7 +32,8 @@ RenderOptions::Accel parseAccel(const std::string& name) {
     if (name == "bv") return RenderOptions::Accel::Bv;
     if (name == "grid") return RenderOptions::Accel::Grid;
     if (name == "bvh") return RenderOptions::Accel::Bvh;
-    throw Error("--accel " + name + ": must be one of none, bv, grid, bvh");
+    if (name == "wide") return RenderOptions::Accel::Wide;
+    throw Error("--accel " + name + ": must be one of none, bv, grid, bvh, wide");
 }
 
 RenderOptions::Accel defaultAccel(const Scene& scene) {
@@ -92,6 +95,10 @@ std::string fmt(const char* format, double a, double b = 0, double c = 0) {
     char buf[128];
     std::snprintf(buf, sizeof buf, format, a, b, c);
     return buf;
+}
+
+double msSince(std::chrono::steady_clock::time_point t0) {
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
 }  // namespace
@@ -173,9 +180,22 @@ AccelData buildAccel(const Scene& scene, RenderOptions::Accel accel) {
                            leaves ? double(prims) / double(leaves) : 0.0);
             break;
         }
+        case RenderOptions::Accel::Wide: {
+            buildBvh(out);
+            double binaryMs = msSince(t0);
+            buildWide(out);
+            s.nodes = (long long)out.wide.size();
+            s.bytes = out.wide.size() * sizeof(dev::WideNode);
+            double slots = 0;
+            for (const dev::WideNode& n : out.wide)
+                for (int k = 0; k < 4; ++k) slots += n.child[k] != -1;
+            s.detail = fmt("%.2f children/node, binned SAH %.1f ms, collapse %.1f ms",
+                           out.wide.empty() ? 0.0 : slots / double(out.wide.size()), binaryMs,
+                           msSince(t0) - binaryMs);
+            break;
+        }
     }
-    s.buildMs =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    s.buildMs = msSince(t0);
     return out;
 }
 
