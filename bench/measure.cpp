@@ -124,6 +124,7 @@ std::vector<Measurement> measureCells(ClContext& cl, const Scene& scene,
         m.branching = s.branching;
         m.tiles = s.tiles;
         m.launches = s.launches;
+        m.accelBuildMs = s.accel.buildMs;
         const Timed& t = timed[k];
         m.frames = int(t.device.size());
         m.frameMs = t.device;

@@ -37,6 +37,7 @@ struct Measurement {
     bool raysCounted = false;
     double mrays = 0;           // million rays per second of device time (when counted)
     double treeUsed = -1;       // wavefront: traced slots / allocated slots (when counted)
+    double accelBuildMs = 0;    // host wall time of the acceleration structure's build
     Image image;                // the last timed frame, when asked for
 };
 

@@ -159,7 +159,8 @@ nlohmann::json rowJson(const SweepConfig& config, const Cell& c, const Measureme
                     {"tiles", m.tiles},
                     {"launches", m.launches},
                     {"longest_launch_ms", m.longestLaunchMs},
-                    {"frames", m.frames}});
+                    {"frames", m.frames},
+                    {"accel_build_ms", m.accelBuildMs}});
         row["memory_tiles"] = memoryTiles(row);
         if (m.raysCounted) {
             row["rays"] = {{"primary", m.rays[0]},

@@ -1,0 +1,314 @@
+// rtlab-trace-bench — Embree as a peer inside the benchmark (issue 18). Traces exactly the rays
+// of a scene's camera (one primary ray per pixel centre, then one shadow ray per primary hit
+// towards each light) through Embree on every CPU thread and through rtlab's structures on the
+// OpenCL CPU device (PoCL), on the same cores, interleaved round by round, and reports rays/s
+// side by side. Hit counts must agree: a ray that grazes a shared edge or the silhouette may hit
+// in one and miss in the other (Embree's watertight test against rtlab's padded boxes and its own
+// triangle test), so up to 0.01% of the rays of a batch (at least 2) may disagree; more ends in
+// exit status 1. Both peers see the scene's triangles only (planes and spheres are dropped).
+#include <CLI/CLI.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <thread>
+
+#include "bench/embree_peer.h"
+#include "bench/measure.h"
+#include "core/accel.h"
+#include "core/cl_runtime.h"
+#include "core/error.h"
+#include "core/pipeline.h"
+#include "core/scene_loader.h"
+
+namespace rt {
+namespace {
+
+// Primary rays in 8x8 tiles, the order both peers take them in chunks (coherent packets).
+std::vector<BatchRay> primaryRays(const Scene& s, int W, int H) {
+    const dev::Camera& c = s.camera;
+    float D = 1.f / std::tan(c.fovY * 0.5f);
+    float ca = std::cos(c.pitch), sa = std::sin(c.pitch), cb = std::cos(c.yaw),
+          sb = std::sin(c.yaw);
+    std::vector<BatchRay> rays;
+    rays.reserve(size_t(W) * H);
+    for (int ty = 0; ty < H; ty += 8)
+        for (int tx = 0; tx < W; tx += 8)
+            for (int y = ty; y < std::min(H, ty + 8); ++y)
+                for (int x = tx; x < std::min(W, tx + 8); ++x) {
+                    // core/cl/camera.cl, Camera_PrimaryRay, at the pixel centre.
+                    float nx = (2.f * (float(x) + 0.5f) / float(W) - 1.f) * (float(W) / float(H));
+                    float ny = 1.f - 2.f * (float(y) + 0.5f) / float(H);
+                    float oy = ny * ca + D * sa, oz = D * ca - ny * sa;
+                    float dx = nx * cb + oz * sb, dz = oz * cb - nx * sb;
+                    float len = std::sqrt(dx * dx + oy * oy + dz * dz);
+                    rays.push_back({c.position.x, c.position.y, c.position.z, INFINITY,
+                                    dx / len, oy / len, dz / len, 0.f});
+                }
+    return rays;
+}
+
+// One shadow ray per hit and light, from the hit point lifted off the surface along the
+// geometric normal (towards the viewer) by a millionth of the scene's size.
+std::vector<BatchRay> shadowRays(const Scene& s, const std::vector<BatchRay>& primary,
+                                 const std::vector<float>& t,
+                                 const std::vector<dev::Float3>& normal, float sceneSize) {
+    std::vector<BatchRay> rays;
+    float lift = 1e-6f * sceneSize;
+    for (size_t i = 0; i < primary.size(); ++i) {
+        if (t[i] < 0.f) continue;
+        const BatchRay& r = primary[i];
+        dev::Float3 n = normal[i];
+        float nl = std::sqrt(n.x * n.x + n.y * n.y + n.z * n.z);
+        float side = n.x * r.dx + n.y * r.dy + n.z * r.dz > 0.f ? -1.f : 1.f;
+        float k = nl > 0.f ? side * lift / nl : 0.f;
+        float px = r.ox + t[i] * r.dx + k * n.x, py = r.oy + t[i] * r.dy + k * n.y,
+              pz = r.oz + t[i] * r.dz + k * n.z;
+        for (const dev::Light& l : s.lights) {
+            float dx = l.position.x - px, dy = l.position.y - py, dz = l.position.z - pz;
+            float d = std::sqrt(dx * dx + dy * dy + dz * dz);
+            if (d > 0.f) rays.push_back({px, py, pz, d, dx / d, dy / d, dz / d, 0.f});
+        }
+    }
+    return rays;
+}
+
+// rtlab's side: one --accel structure on the device, and the two batch kernels bound to it.
+struct RtlabPeer {
+    RtlabPeer(ClContext& cl, const Scene& s, const RenderOptions& o)
+        : device(cl, s, o.accel),
+          program(cl.program("trace_rays.cl", featureDefines(s, o))),
+          closest(program, "Rays_Closest"),
+          occluded(program, "Rays_Occluded") {
+        device.setArgs(closest, makeSettings(s, o));
+        device.setArgs(occluded, makeSettings(s, o));
+    }
+    // Wall seconds from the launch to the end of the kernel (the read-back is not timed).
+    double run(ClContext& cl, cl::Kernel& k, const cl::Buffer& in, const cl::Buffer& out,
+               size_t n) {
+        k.setArg(DeviceScene::kFirstKernelArg, in);
+        k.setArg(DeviceScene::kFirstKernelArg + 1, out);
+        auto t0 = std::chrono::steady_clock::now();
+        cl.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(n), cl::NullRange);
+        cl.queue().finish();
+        return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    }
+    DeviceScene device;
+    cl::Program program;
+    cl::Kernel closest, occluded;
+};
+
+template <typename T>
+cl::Buffer upload(ClContext& cl, const std::vector<T>& v) {
+    return cl::Buffer(cl.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR,
+                      std::max<size_t>(v.size() * sizeof(T), 16), const_cast<T*>(v.data()));
+}
+
+template <typename T>
+std::vector<T> download(ClContext& cl, const cl::Buffer& b, size_t n) {
+    std::vector<T> v(n);
+    if (n) cl.queue().enqueueReadBuffer(b, CL_TRUE, 0, n * sizeof(T), v.data());
+    return v;
+}
+
+double median(std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v.empty() ? 0 : v[v.size() / 2];
+}
+
+struct PeerResult {
+    std::string name;
+    double buildMs = 0;
+    std::vector<double> primaryS, shadowS;
+    long long hits = 0, blocked = 0, primaryMismatch = 0, shadowMismatch = 0;
+};
+
+struct Args {
+    std::string scene, size, accels = "bvh,wide", device = "cpu", out;
+    int rounds = 5;
+    unsigned threads = std::max(1u, std::thread::hardware_concurrency());
+    double distance = 0;
+};
+
+// Puts the camera `radii` bounding radii from the mesh's centre, looking at it along its view.
+void placeCamera(Scene& s, double radii) {
+    const dev::MeshInstance& m = s.meshes.at(0);
+    dev::Camera& c = s.camera;
+    double fx = std::cos(c.pitch) * std::sin(c.yaw), fy = std::sin(c.pitch),
+           fz = std::cos(c.pitch) * std::cos(c.yaw);
+    double d = radii * m.sphereRadius;
+    c.position = {float(m.sphereCenter.x - d * fx), float(m.sphereCenter.y - d * fy),
+                  float(m.sphereCenter.z - d * fz)};
+}
+
+int run(const Args& a) {
+    Scene scene = loadScene(a.scene);
+    scene.spheres.clear();
+    scene.planes.clear();
+    if (scene.triangles.empty()) throw Error(a.scene + ": no triangles to trace");
+    if (scene.lights.empty()) throw Error(a.scene + ": no light for the shadow rays");
+    if (a.distance > 0) placeCamera(scene, a.distance);
+    RenderOptions o = scene.defaults;
+    if (!a.size.empty() && std::sscanf(a.size.c_str(), "%dx%d", &o.width, &o.height) != 2)
+        throw Error("--size " + a.size + ": expected WxH");
+    if (o.width < 1 || o.height < 1) throw Error("--size " + a.size + ": must be positive");
+    float sceneSize = 0;
+    for (const dev::MeshInstance& m : scene.meshes) sceneSize = std::max(sceneSize, m.sphereRadius);
+
+    ClContext cl(selectDevice(a.device));
+    EmbreePeer embree(scene, a.threads);
+    std::vector<PeerResult> peers(1);
+    peers[0].name = "embree";
+    peers[0].buildMs = embree.buildMs();
+    std::vector<std::unique_ptr<RtlabPeer>> rtlab;
+    std::string list = a.accels;
+    for (size_t p = 0; p <= list.size();) {
+        size_t q = std::min(list.find(',', p), list.size());
+        o.accel = parseAccel(list.substr(p, q - p));
+        rtlab.push_back(std::make_unique<RtlabPeer>(cl, scene, o));
+        peers.push_back({std::string("rtlab ") + accelName(o.accel), rtlab.back()->device.accelStats().buildMs});
+        p = q + 1;
+    }
+
+    std::vector<BatchRay> primary = primaryRays(scene, o.width, o.height);
+    std::vector<float> t;
+    std::vector<dev::Float3> normal;
+    embree.intersect(primary, t, normal);
+    std::vector<BatchRay> shadow = shadowRays(scene, primary, t, normal, sceneSize);
+    cl::Buffer primaryIn = upload(cl, primary), shadowIn = upload(cl, shadow);
+    cl::Buffer tOut(cl.context(), CL_MEM_WRITE_ONLY, primary.size() * 4);
+    cl::Buffer occOut(cl.context(), CL_MEM_WRITE_ONLY, std::max<size_t>(shadow.size(), 4) * 4);
+
+    std::vector<int> blocked;
+    for (int round = -1; round < a.rounds; ++round) {  // round -1 warms up and checks the hits
+        double s = embree.intersect(primary, t, normal);
+        if (round >= 0) peers[0].primaryS.push_back(s);
+        for (size_t k = 0; k < rtlab.size(); ++k) {
+            s = rtlab[k]->run(cl, rtlab[k]->closest, primaryIn, tOut, primary.size());
+            if (round >= 0) peers[k + 1].primaryS.push_back(s);
+            if (round >= 0) continue;
+            std::vector<float> mine = download<float>(cl, tOut, primary.size());
+            for (size_t i = 0; i < primary.size(); ++i) {
+                peers[k + 1].hits += mine[i] >= 0.f;
+                peers[k + 1].primaryMismatch += (mine[i] >= 0.f) != (t[i] >= 0.f);
+            }
+        }
+        s = embree.occluded(shadow, blocked);
+        if (round >= 0) peers[0].shadowS.push_back(s);
+        for (size_t k = 0; k < rtlab.size(); ++k) {
+            if (shadow.empty()) break;
+            s = rtlab[k]->run(cl, rtlab[k]->occluded, shadowIn, occOut, shadow.size());
+            if (round >= 0) peers[k + 1].shadowS.push_back(s);
+            if (round >= 0) continue;
+            std::vector<int> mine = download<int>(cl, occOut, shadow.size());
+            for (size_t i = 0; i < shadow.size(); ++i) {
+                peers[k + 1].blocked += mine[i];
+                peers[k + 1].shadowMismatch += mine[i] != blocked[i];
+            }
+        }
+        if (round < 0) {
+            for (float x : t) peers[0].hits += x >= 0.f;
+            for (int b : blocked) peers[0].blocked += b;
+        }
+    }
+
+    // ---- report ----
+    auto mrays = [](size_t n, const std::vector<double>& s) {
+        double m = median(s);
+        return m > 0 ? double(n) / m * 1e-6 : 0.0;
+    };
+    auto allowed = [](size_t n) { return std::max<long long>(2, (long long)(1e-4 * double(n))); };
+    std::printf("rtlab-trace-bench: %s, %dx%d, %zu primary rays (%.1f%% hit), %zu shadow rays to %zu "
+                "light(s), %d rounds interleaved\n",
+                scene.name.c_str(), o.width, o.height, primary.size(),
+                100.0 * double(peers[0].hits) / double(primary.size()), shadow.size(),
+                scene.lights.size(), a.rounds);
+    std::printf("rtlab on %s; Embree %s on %u threads\n\n", cl.device().label().c_str(),
+                embree.version().c_str(), a.threads);
+    std::printf("%-12s %10s %14s %14s %10s %10s %9s %9s\n", "peer", "build ms", "primary Mray/s",
+                "shadow Mray/s", "hits", "occluded", "x embree", "mismatch");
+    bool agree = true;
+    nlohmann::json rows = nlohmann::json::array();
+    double ep = mrays(primary.size(), peers[0].primaryS), es = mrays(shadow.size(), peers[0].shadowS);
+    for (const PeerResult& p : peers) {
+        double mp = mrays(primary.size(), p.primaryS), ms = mrays(shadow.size(), p.shadowS);
+        bool ok = p.primaryMismatch <= allowed(primary.size()) &&
+                  p.shadowMismatch <= allowed(shadow.size());
+        agree = agree && ok;
+        std::printf("%-12s %10.1f %14.2f %14.2f %10lld %10lld %4.2f/%4.2f %4lld/%lld%s\n",
+                    p.name.c_str(), p.buildMs, mp, ms, p.hits, p.blocked, ep > 0 ? mp / ep : 0,
+                    es > 0 ? ms / es : 0, p.primaryMismatch, p.shadowMismatch, ok ? "" : "  DISAGREE");
+        rows.push_back({{"peer", p.name},
+                        {"build_ms", p.buildMs},
+                        {"primary_mrays_per_s", mp},
+                        {"shadow_mrays_per_s", ms},
+                        {"primary_s", p.primaryS},
+                        {"shadow_s", p.shadowS},
+                        {"primary_hits", p.hits},
+                        {"occluded", p.blocked},
+                        {"primary_vs_embree", ep > 0 ? mp / ep : 0},
+                        {"shadow_vs_embree", es > 0 ? ms / es : 0},
+                        {"primary_mismatch", p.primaryMismatch},
+                        {"shadow_mismatch", p.shadowMismatch}});
+    }
+    if (!a.out.empty()) {
+        nlohmann::json doc = bench::deviceJson(cl.device());
+        doc.update({{"bench", "trace-peer"},
+                    {"scene", scene.name},
+                    {"scene_file", a.scene},
+                    {"width", o.width},
+                    {"height", o.height},
+                    {"camera_radii", a.distance},
+                    {"triangles", scene.triangles.size()},
+                    {"primary_rays", primary.size()},
+                    {"shadow_rays", shadow.size()},
+                    {"rounds", a.rounds},
+                    {"embree_version", embree.version()},
+                    {"embree_threads", a.threads},
+                    {"agree", agree},
+                    {"peers", rows}});
+        std::filesystem::create_directories(a.out);
+        std::string file = a.out + "/trace-" + scene.name + "-" + std::to_string(o.width) + "x" +
+                           std::to_string(o.height) + ".json";
+        std::ofstream(file) << doc.dump(2) << "\n";
+        std::printf("\nwrote %s\n", file.c_str());
+    }
+    if (!agree) {
+        std::fprintf(stderr, "rtlab-trace-bench: hit counts disagree beyond 0.01%% of the rays\n");
+        return 1;
+    }
+    return 0;
+}
+
+}  // namespace
+}  // namespace rt
+
+int main(int argc, char** argv) {
+    rt::Args a;
+    CLI::App app{"Embree as a peer: the same camera and shadow rays through Embree and rtlab"};
+    app.add_option("scene", a.scene, "Scene file (.json) or a bare .obj")->required();
+    app.add_option("--size", a.size, "Frame WxH [scene default]");
+    app.add_option("--accels", a.accels, "rtlab structures, comma-separated [bvh,wide]");
+    app.add_option("--device", a.device, "OpenCL device for rtlab [cpu]");
+    app.add_option("--rounds", a.rounds, "Timed rounds after one warm-up [5]")
+        ->check(CLI::Range(1, 1000));
+    app.add_option("--threads", a.threads, "Embree threads [every core]")->check(CLI::Range(1, 4096));
+    app.add_option("--distance", a.distance,
+                   "Camera distance from the mesh's centre in bounding radii [scene camera]")
+        ->check(CLI::PositiveNumber);
+    app.add_option("--out", a.out, "Folder for the JSON result [none]");
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::ParseError& e) {
+        return app.exit(e);
+    }
+    try {
+        return rt::run(a);
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "rtlab-trace-bench: %s\n", e.what());
+        return 1;
+    }
+}
