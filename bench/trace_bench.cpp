@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -18,6 +19,7 @@
 
 #include "bench/embree_peer.h"
 #include "bench/measure.h"
+#include "bench/trace_visits.h"
 #include "core/accel.h"
 #include "core/cl_runtime.h"
 #include "core/error.h"
@@ -88,11 +90,15 @@ struct RtlabPeer {
     }
     // Wall seconds from the launch to the end of the kernel (the read-back is not timed).
     double run(ClContext& cl, cl::Kernel& k, const cl::Buffer& in, const cl::Buffer& out,
-               size_t n) {
+               size_t n, size_t local) {
         k.setArg(DeviceScene::kFirstKernelArg, in);
         k.setArg(DeviceScene::kFirstKernelArg + 1, out);
+        k.setArg(DeviceScene::kFirstKernelArg + 2, cl_int(n));
         auto t0 = std::chrono::steady_clock::now();
-        cl.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(n), cl::NullRange);
+        // A local size must divide the global one: round up; the kernels skip the padding.
+        size_t global = local ? (n + local - 1) / local * local : n;
+        cl.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(global),
+                                        local ? cl::NDRange(local) : cl::NullRange);
         cl.queue().finish();
         return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     }
@@ -129,6 +135,7 @@ struct PeerResult {
 struct Args {
     std::string scene, size, accels = "bvh,wide", device = "cpu", out;
     int rounds = 5;
+    int local = 0;
     unsigned threads = std::max(1u, std::thread::hardware_concurrency());
     double distance = 0;
 };
@@ -158,7 +165,9 @@ int run(const Args& a) {
     float sceneSize = 0;
     for (const dev::MeshInstance& m : scene.meshes) sceneSize = std::max(sceneSize, m.sphereRadius);
 
-    ClContext cl(selectDevice(a.device));
+    // $RTLAB_KERNEL_DIR reads the kernels from a source tree, as in rtlab (no rebuild).
+    const char* kernelDir = std::getenv("RTLAB_KERNEL_DIR");
+    ClContext cl(selectDevice(a.device), KernelSources(kernelDir ? kernelDir : ""));
     EmbreePeer embree(scene, a.threads);
     std::vector<PeerResult> peers(1);
     peers[0].name = "embree";
@@ -187,7 +196,7 @@ int run(const Args& a) {
         double s = embree.intersect(primary, t, normal);
         if (round >= 0) peers[0].primaryS.push_back(s);
         for (size_t k = 0; k < rtlab.size(); ++k) {
-            s = rtlab[k]->run(cl, rtlab[k]->closest, primaryIn, tOut, primary.size());
+            s = rtlab[k]->run(cl, rtlab[k]->closest, primaryIn, tOut, primary.size(), a.local);
             if (round >= 0) peers[k + 1].primaryS.push_back(s);
             if (round >= 0) continue;
             std::vector<float> mine = download<float>(cl, tOut, primary.size());
@@ -200,7 +209,7 @@ int run(const Args& a) {
         if (round >= 0) peers[0].shadowS.push_back(s);
         for (size_t k = 0; k < rtlab.size(); ++k) {
             if (shadow.empty()) break;
-            s = rtlab[k]->run(cl, rtlab[k]->occluded, shadowIn, occOut, shadow.size());
+            s = rtlab[k]->run(cl, rtlab[k]->occluded, shadowIn, occOut, shadow.size(), a.local);
             if (round >= 0) peers[k + 1].shadowS.push_back(s);
             if (round >= 0) continue;
             std::vector<int> mine = download<int>(cl, occOut, shadow.size());
@@ -254,6 +263,21 @@ int run(const Args& a) {
                         {"primary_mismatch", p.primaryMismatch},
                         {"shadow_mismatch", p.shadowMismatch}});
     }
+    // The work behind the figures: what a ray does in the wide BVH, and the time per node visit
+    // that rtlab's rays/s implies on the cores both peers share.
+    AccelData wide = buildAccel(scene, RenderOptions::Accel::Wide);
+    TraversalCost pc = wideTraversalCost(wide, primary, false);
+    TraversalCost sc = wideTraversalCost(wide, shadow, true);
+    std::printf("\nwide BVH, per ray (host count over %zu + %zu rays): primary %.1f nodes, %.1f "
+                "triangles, %.0f B; shadow %.1f nodes, %.1f triangles, %.0f B\n",
+                pc.rays, sc.rays, pc.nodes, pc.triangles, pc.bytes, sc.nodes, sc.triangles, sc.bytes);
+    nlohmann::json cost = {{"primary_nodes_per_ray", pc.nodes},
+                           {"primary_triangles_per_ray", pc.triangles},
+                           {"primary_bytes_per_ray", pc.bytes},
+                           {"shadow_nodes_per_ray", sc.nodes},
+                           {"shadow_triangles_per_ray", sc.triangles},
+                           {"shadow_bytes_per_ray", sc.bytes},
+                           {"rays_sampled", pc.rays + sc.rays}};
     if (!a.out.empty()) {
         nlohmann::json doc = bench::deviceJson(cl.device());
         doc.update({{"bench", "trace-peer"},
@@ -266,10 +290,12 @@ int run(const Args& a) {
                     {"primary_rays", primary.size()},
                     {"shadow_rays", shadow.size()},
                     {"rounds", a.rounds},
+                    {"local_size", a.local},
                     {"embree_version", embree.version()},
                     {"embree_threads", a.threads},
                     {"agree", agree},
-                    {"peers", rows}});
+                    {"peers", rows},
+                    {"wide_cost", cost}});
         std::filesystem::create_directories(a.out);
         std::string file = a.out + "/trace-" + scene.name + "-" + std::to_string(o.width) + "x" +
                            std::to_string(o.height) + ".json";
@@ -299,6 +325,8 @@ int main(int argc, char** argv) {
     app.add_option("--distance", a.distance,
                    "Camera distance from the mesh's centre in bounding radii [scene camera]")
         ->check(CLI::PositiveNumber);
+    app.add_option("--local", a.local, "Work-group size of rtlab's kernels [0: the driver's]")
+        ->check(CLI::Range(0, 1024));
     app.add_option("--out", a.out, "Folder for the JSON result [none]");
     try {
         app.parse(argc, argv);
