@@ -297,8 +297,10 @@ int run(const Args& a) {
                     {"peers", rows},
                     {"wide_cost", cost}});
         std::filesystem::create_directories(a.out);
+        char radii[32] = "";
+        if (a.distance > 0) std::snprintf(radii, sizeof radii, "-r%g", a.distance);
         std::string file = a.out + "/trace-" + scene.name + "-" + std::to_string(o.width) + "x" +
-                           std::to_string(o.height) + ".json";
+                           std::to_string(o.height) + radii + ".json";
         std::ofstream(file) << doc.dump(2) << "\n";
         std::printf("\nwrote %s\n", file.c_str());
     }
