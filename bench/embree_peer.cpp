@@ -56,6 +56,8 @@ void setRay(RTCRay& r, const BatchRay& b) {
 
 }  // namespace
 
+bool EmbreePeer::available() { return true; }
+
 EmbreePeer::EmbreePeer(const Scene& scene, unsigned threads) : threads_(std::max(1u, threads)) {
     if (scene.triangles.empty()) throw Error("the Embree peer needs a scene with triangles");
     std::string config = "threads=" + std::to_string(threads_);

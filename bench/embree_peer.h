@@ -1,6 +1,6 @@
 // rtlab — Embree 3 as a peer of rtlab's traversal (issue 18): the triangles of a scene in one
-// Embree scene, and batches of given rays traced through it on every CPU thread. Built only when
-// CMake finds Embree (the rtlab-trace-bench target); everything else builds without it.
+// Embree scene, and batches of given rays traced through it on every CPU thread. Compiled only
+// when CMake finds Embree; without it bench/embree_none.cpp stands in and available() is false.
 #pragma once
 
 #include <string>
@@ -19,6 +19,8 @@ struct BatchRay {
 
 class EmbreePeer {
   public:
+    // False when rtlab was built without Embree (bench/embree_none.cpp stands in).
+    static bool available();
     EmbreePeer(const Scene& scene, unsigned threads);  // throws rt::Error
     ~EmbreePeer();
     EmbreePeer(const EmbreePeer&) = delete;

@@ -6,6 +6,7 @@
 // in one and miss in the other (Embree's watertight test against rtlab's padded boxes and its own
 // triangle test), so up to 0.01% of the rays of a batch (at least 2) may disagree; more ends in
 // exit status 1. Both peers see the scene's triangles only (planes and spheres are dropped).
+// Built without Embree (a GPU host), it times rtlab's structures alone, against the first one.
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
@@ -54,7 +55,8 @@ std::vector<BatchRay> primaryRays(const Scene& s, int W, int H) {
 }
 
 // One shadow ray per hit and light, from the hit point lifted off the surface along the
-// geometric normal (towards the viewer) by a millionth of the scene's size.
+// geometric normal (towards the viewer) by a millionth of the scene's size; back along the
+// primary ray when there is no normal (no Embree).
 std::vector<BatchRay> shadowRays(const Scene& s, const std::vector<BatchRay>& primary,
                                  const std::vector<float>& t,
                                  const std::vector<dev::Float3>& normal, float sceneSize) {
@@ -63,7 +65,7 @@ std::vector<BatchRay> shadowRays(const Scene& s, const std::vector<BatchRay>& pr
     for (size_t i = 0; i < primary.size(); ++i) {
         if (t[i] < 0.f) continue;
         const BatchRay& r = primary[i];
-        dev::Float3 n = normal[i];
+        dev::Float3 n = normal.empty() ? dev::Float3{-r.dx, -r.dy, -r.dz} : normal[i];
         float nl = std::sqrt(n.x * n.x + n.y * n.y + n.z * n.z);
         float side = n.x * r.dx + n.y * r.dy + n.z * r.dz > 0.f ? -1.f : 1.f;
         float k = nl > 0.f ? side * lift / nl : 0.f;
@@ -138,6 +140,7 @@ struct Args {
     int local = 0;
     unsigned threads = std::max(1u, std::thread::hardware_concurrency());
     double distance = 0;
+    double pitch = 1000;  // degrees; 1000 keeps the scene's
 };
 
 // Puts the camera `radii` bounding radii from the mesh's centre, looking at it along its view.
@@ -157,6 +160,7 @@ int run(const Args& a) {
     scene.planes.clear();
     if (scene.triangles.empty()) throw Error(a.scene + ": no triangles to trace");
     if (scene.lights.empty()) throw Error(a.scene + ": no light for the shadow rays");
+    if (a.pitch != 1000) scene.camera.pitch = float(a.pitch * M_PI / 180.0);
     if (a.distance > 0) placeCamera(scene, a.distance);
     RenderOptions o = scene.defaults;
     if (!a.size.empty() && std::sscanf(a.size.c_str(), "%dx%d", &o.width, &o.height) != 2)
@@ -168,10 +172,13 @@ int run(const Args& a) {
     // $RTLAB_KERNEL_DIR reads the kernels from a source tree, as in rtlab (no rebuild).
     const char* kernelDir = std::getenv("RTLAB_KERNEL_DIR");
     ClContext cl(selectDevice(a.device), KernelSources(kernelDir ? kernelDir : ""));
-    EmbreePeer embree(scene, a.threads);
-    std::vector<PeerResult> peers(1);
-    peers[0].name = "embree";
-    peers[0].buildMs = embree.buildMs();
+    std::unique_ptr<EmbreePeer> embree;
+    std::vector<PeerResult> peers;
+    if (EmbreePeer::available()) {
+        embree = std::make_unique<EmbreePeer>(scene, a.threads);
+        peers.push_back({"embree", embree->buildMs()});
+    }
+    const size_t off = peers.size();  // rtlab structure k is peers[off + k]
     std::vector<std::unique_ptr<RtlabPeer>> rtlab;
     std::string list = a.accels;
     for (size_t p = 0; p <= list.size();) {
@@ -182,43 +189,52 @@ int run(const Args& a) {
         p = q + 1;
     }
 
+    // The reference hits (Embree's, else the first structure's) give the shadow rays.
     std::vector<BatchRay> primary = primaryRays(scene, o.width, o.height);
+    cl::Buffer primaryIn = upload(cl, primary);
+    cl::Buffer tOut(cl.context(), CL_MEM_WRITE_ONLY, primary.size() * 4);
     std::vector<float> t;
     std::vector<dev::Float3> normal;
-    embree.intersect(primary, t, normal);
+    if (embree) {
+        embree->intersect(primary, t, normal);
+    } else {
+        rtlab[0]->run(cl, rtlab[0]->closest, primaryIn, tOut, primary.size(), a.local);
+        t = download<float>(cl, tOut, primary.size());
+    }
     std::vector<BatchRay> shadow = shadowRays(scene, primary, t, normal, sceneSize);
-    cl::Buffer primaryIn = upload(cl, primary), shadowIn = upload(cl, shadow);
-    cl::Buffer tOut(cl.context(), CL_MEM_WRITE_ONLY, primary.size() * 4);
+    cl::Buffer shadowIn = upload(cl, shadow);
     cl::Buffer occOut(cl.context(), CL_MEM_WRITE_ONLY, std::max<size_t>(shadow.size(), 4) * 4);
 
     std::vector<int> blocked;
     for (int round = -1; round < a.rounds; ++round) {  // round -1 warms up and checks the hits
-        double s = embree.intersect(primary, t, normal);
-        if (round >= 0) peers[0].primaryS.push_back(s);
+        double s = 0;
+        if (embree) s = embree->intersect(primary, t, normal);
+        if (embree && round >= 0) peers[0].primaryS.push_back(s);
         for (size_t k = 0; k < rtlab.size(); ++k) {
             s = rtlab[k]->run(cl, rtlab[k]->closest, primaryIn, tOut, primary.size(), a.local);
-            if (round >= 0) peers[k + 1].primaryS.push_back(s);
+            if (round >= 0) peers[off + k].primaryS.push_back(s);
             if (round >= 0) continue;
             std::vector<float> mine = download<float>(cl, tOut, primary.size());
             for (size_t i = 0; i < primary.size(); ++i) {
-                peers[k + 1].hits += mine[i] >= 0.f;
-                peers[k + 1].primaryMismatch += (mine[i] >= 0.f) != (t[i] >= 0.f);
+                peers[off + k].hits += mine[i] >= 0.f;
+                peers[off + k].primaryMismatch += (mine[i] >= 0.f) != (t[i] >= 0.f);
             }
         }
-        s = embree.occluded(shadow, blocked);
-        if (round >= 0) peers[0].shadowS.push_back(s);
+        if (embree) s = embree->occluded(shadow, blocked);
+        if (embree && round >= 0) peers[0].shadowS.push_back(s);
         for (size_t k = 0; k < rtlab.size(); ++k) {
             if (shadow.empty()) break;
             s = rtlab[k]->run(cl, rtlab[k]->occluded, shadowIn, occOut, shadow.size(), a.local);
-            if (round >= 0) peers[k + 1].shadowS.push_back(s);
+            if (round >= 0) peers[off + k].shadowS.push_back(s);
             if (round >= 0) continue;
             std::vector<int> mine = download<int>(cl, occOut, shadow.size());
+            if (!embree && k == 0) blocked = mine;  // the reference
             for (size_t i = 0; i < shadow.size(); ++i) {
-                peers[k + 1].blocked += mine[i];
-                peers[k + 1].shadowMismatch += mine[i] != blocked[i];
+                peers[off + k].blocked += mine[i];
+                peers[off + k].shadowMismatch += mine[i] != blocked[i];
             }
         }
-        if (round < 0) {
+        if (embree && round < 0) {
             for (float x : t) peers[0].hits += x >= 0.f;
             for (int b : blocked) peers[0].blocked += b;
         }
@@ -235,10 +251,13 @@ int run(const Args& a) {
                 scene.name.c_str(), o.width, o.height, primary.size(),
                 100.0 * double(peers[0].hits) / double(primary.size()), shadow.size(),
                 scene.lights.size(), a.rounds);
-    std::printf("rtlab on %s; Embree %s on %u threads\n\n", cl.device().label().c_str(),
-                embree.version().c_str(), a.threads);
+    std::printf("rtlab on %s; %s\n\n", cl.device().label().c_str(),
+                embree ? ("Embree " + embree->version() + " on " + std::to_string(a.threads) +
+                          " threads").c_str()
+                       : "built without Embree: ratios against the first structure");
+    std::string versus = "x " + peers[0].name.substr(peers[0].name.find(' ') + 1);
     std::printf("%-12s %10s %14s %14s %10s %10s %9s %9s\n", "peer", "build ms", "primary Mray/s",
-                "shadow Mray/s", "hits", "occluded", "x embree", "mismatch");
+                "shadow Mray/s", "hits", "occluded", versus.c_str(), "mismatch");
     bool agree = true;
     nlohmann::json rows = nlohmann::json::array();
     double ep = mrays(primary.size(), peers[0].primaryS), es = mrays(shadow.size(), peers[0].shadowS);
@@ -258,8 +277,8 @@ int run(const Args& a) {
                         {"shadow_s", p.shadowS},
                         {"primary_hits", p.hits},
                         {"occluded", p.blocked},
-                        {"primary_vs_embree", ep > 0 ? mp / ep : 0},
-                        {"shadow_vs_embree", es > 0 ? ms / es : 0},
+                        {"primary_vs_reference", ep > 0 ? mp / ep : 0},
+                        {"shadow_vs_reference", es > 0 ? ms / es : 0},
                         {"primary_mismatch", p.primaryMismatch},
                         {"shadow_mismatch", p.shadowMismatch}});
     }
@@ -286,13 +305,15 @@ int run(const Args& a) {
                     {"width", o.width},
                     {"height", o.height},
                     {"camera_radii", a.distance},
+                    {"camera_pitch_deg", scene.camera.pitch * 180.0 / M_PI},
                     {"triangles", scene.triangles.size()},
                     {"primary_rays", primary.size()},
                     {"shadow_rays", shadow.size()},
                     {"rounds", a.rounds},
                     {"local_size", a.local},
-                    {"embree_version", embree.version()},
-                    {"embree_threads", a.threads},
+                    {"reference", peers[0].name},
+                    {"embree_version", embree ? embree->version() : "none"},
+                    {"embree_threads", embree ? a.threads : 0},
                     {"agree", agree},
                     {"peers", rows},
                     {"wide_cost", cost}});
@@ -327,6 +348,10 @@ int main(int argc, char** argv) {
     app.add_option("--distance", a.distance,
                    "Camera distance from the mesh's centre in bounding radii [scene camera]")
         ->check(CLI::PositiveNumber);
+    app.add_option("--pitch", a.pitch,
+                   "Camera pitch in degrees, -90 looks straight down, before --distance places it "
+                   "[scene camera]")
+        ->check(CLI::Range(-90.0, 90.0));
     app.add_option("--local", a.local, "Work-group size of rtlab's kernels [0: the driver's]")
         ->check(CLI::Range(0, 1024));
     app.add_option("--out", a.out, "Folder for the JSON result [none]");
