@@ -90,7 +90,8 @@ struct RtlabPeer {
         device.setArgs(closest, makeSettings(s, o));
         device.setArgs(occluded, makeSettings(s, o));
     }
-    // Wall seconds from the launch to the end of the kernel (the read-back is not timed).
+    // Wall seconds from the launch to the end of the kernel (the read-back is not timed); the
+    // kernel's own time (profiling event) goes to lastDeviceS, for a GPU where launches count.
     double run(ClContext& cl, cl::Kernel& k, const cl::Buffer& in, const cl::Buffer& out,
                size_t n, size_t local) {
         k.setArg(DeviceScene::kFirstKernelArg, in);
@@ -99,11 +100,14 @@ struct RtlabPeer {
         auto t0 = std::chrono::steady_clock::now();
         // A local size must divide the global one: round up; the kernels skip the padding.
         size_t global = local ? (n + local - 1) / local * local : n;
+        cl::Event done;
         cl.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(global),
-                                        local ? cl::NDRange(local) : cl::NullRange);
+                                        local ? cl::NDRange(local) : cl::NullRange, nullptr, &done);
         cl.queue().finish();
+        lastDeviceS = 1e-3 * eventMs(done);
         return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     }
+    double lastDeviceS = 0;
     DeviceScene device;
     cl::Program program;
     cl::Kernel closest, occluded;
@@ -131,6 +135,7 @@ struct PeerResult {
     std::string name;
     double buildMs = 0;
     std::vector<double> primaryS, shadowS;
+    std::vector<double> primaryDevS, shadowDevS;  // rtlab: the kernels' profiling-event time
     long long hits = 0, blocked = 0, primaryMismatch = 0, shadowMismatch = 0;
 };
 
@@ -213,6 +218,7 @@ int run(const Args& a) {
         for (size_t k = 0; k < rtlab.size(); ++k) {
             s = rtlab[k]->run(cl, rtlab[k]->closest, primaryIn, tOut, primary.size(), a.local);
             if (round >= 0) peers[off + k].primaryS.push_back(s);
+            if (round >= 0) peers[off + k].primaryDevS.push_back(rtlab[k]->lastDeviceS);
             if (round >= 0) continue;
             std::vector<float> mine = download<float>(cl, tOut, primary.size());
             for (size_t i = 0; i < primary.size(); ++i) {
@@ -226,6 +232,7 @@ int run(const Args& a) {
             if (shadow.empty()) break;
             s = rtlab[k]->run(cl, rtlab[k]->occluded, shadowIn, occOut, shadow.size(), a.local);
             if (round >= 0) peers[off + k].shadowS.push_back(s);
+            if (round >= 0) peers[off + k].shadowDevS.push_back(rtlab[k]->lastDeviceS);
             if (round >= 0) continue;
             std::vector<int> mine = download<int>(cl, occOut, shadow.size());
             if (!embree && k == 0) blocked = mine;  // the reference
@@ -259,6 +266,7 @@ int run(const Args& a) {
     std::printf("%-12s %10s %14s %14s %10s %10s %9s %9s\n", "peer", "build ms", "primary Mray/s",
                 "shadow Mray/s", "hits", "occluded", versus.c_str(), "mismatch");
     bool agree = true;
+    std::string kernelOnly;
     nlohmann::json rows = nlohmann::json::array();
     double ep = mrays(primary.size(), peers[0].primaryS), es = mrays(shadow.size(), peers[0].shadowS);
     for (const PeerResult& p : peers) {
@@ -269,11 +277,16 @@ int run(const Args& a) {
         std::printf("%-12s %10.1f %14.2f %14.2f %10lld %10lld %4.2f/%4.2f %4lld/%lld%s\n",
                     p.name.c_str(), p.buildMs, mp, ms, p.hits, p.blocked, ep > 0 ? mp / ep : 0,
                     es > 0 ? ms / es : 0, p.primaryMismatch, p.shadowMismatch, ok ? "" : "  DISAGREE");
+        if (!p.primaryDevS.empty())
+            kernelOnly += " " + p.name + " " + std::to_string(mrays(primary.size(), p.primaryDevS)) +
+                          " / " + std::to_string(mrays(shadow.size(), p.shadowDevS)) + ";";
         rows.push_back({{"peer", p.name},
                         {"build_ms", p.buildMs},
                         {"primary_mrays_per_s", mp},
                         {"shadow_mrays_per_s", ms},
                         {"primary_s", p.primaryS},
+                        {"primary_mrays_per_s_device", mrays(primary.size(), p.primaryDevS)},
+                        {"shadow_mrays_per_s_device", mrays(shadow.size(), p.shadowDevS)},
                         {"shadow_s", p.shadowS},
                         {"primary_hits", p.hits},
                         {"occluded", p.blocked},
@@ -282,6 +295,8 @@ int run(const Args& a) {
                         {"primary_mismatch", p.primaryMismatch},
                         {"shadow_mismatch", p.shadowMismatch}});
     }
+    std::printf("kernel time only (profiling events), primary / shadow Mray/s:%s\n",
+                kernelOnly.c_str());
     // The work behind the figures: what a ray does in the wide BVH, and the time per node visit
     // that rtlab's rays/s implies on the cores both peers share.
     AccelData wide = buildAccel(scene, RenderOptions::Accel::Wide);
