@@ -159,7 +159,8 @@ void placeCamera(Scene& s, double radii) {
                   float(m.sphereCenter.z - d * fz)};
 }
 
-int run(const Args& a) {
+// The scene as both peers see it (triangles and lights), the camera where the flags put it.
+Scene prepareScene(const Args& a, RenderOptions& o) {
     Scene scene = loadScene(a.scene);
     scene.spheres.clear();
     scene.planes.clear();
@@ -167,87 +168,17 @@ int run(const Args& a) {
     if (scene.lights.empty()) throw Error(a.scene + ": no light for the shadow rays");
     if (a.pitch != 1000) scene.camera.pitch = float(a.pitch * M_PI / 180.0);
     if (a.distance > 0) placeCamera(scene, a.distance);
-    RenderOptions o = scene.defaults;
+    o = scene.defaults;
     if (!a.size.empty() && std::sscanf(a.size.c_str(), "%dx%d", &o.width, &o.height) != 2)
         throw Error("--size " + a.size + ": expected WxH");
     if (o.width < 1 || o.height < 1) throw Error("--size " + a.size + ": must be positive");
-    float sceneSize = 0;
-    for (const dev::MeshInstance& m : scene.meshes) sceneSize = std::max(sceneSize, m.sphereRadius);
+    return scene;
+}
 
-    // $RTLAB_KERNEL_DIR reads the kernels from a source tree, as in rtlab (no rebuild).
-    const char* kernelDir = std::getenv("RTLAB_KERNEL_DIR");
-    ClContext cl(selectDevice(a.device), KernelSources(kernelDir ? kernelDir : ""));
-    std::unique_ptr<EmbreePeer> embree;
-    std::vector<PeerResult> peers;
-    if (EmbreePeer::available()) {
-        embree = std::make_unique<EmbreePeer>(scene, a.threads);
-        peers.push_back({"embree", embree->buildMs()});
-    }
-    const size_t off = peers.size();  // rtlab structure k is peers[off + k]
-    std::vector<std::unique_ptr<RtlabPeer>> rtlab;
-    std::string list = a.accels;
-    for (size_t p = 0; p <= list.size();) {
-        size_t q = std::min(list.find(',', p), list.size());
-        o.accel = parseAccel(list.substr(p, q - p));
-        rtlab.push_back(std::make_unique<RtlabPeer>(cl, scene, o));
-        peers.push_back({std::string("rtlab ") + accelName(o.accel), rtlab.back()->device.accelStats().buildMs});
-        p = q + 1;
-    }
-
-    // The reference hits (Embree's, else the first structure's) give the shadow rays.
-    std::vector<BatchRay> primary = primaryRays(scene, o.width, o.height);
-    cl::Buffer primaryIn = upload(cl, primary);
-    cl::Buffer tOut(cl.context(), CL_MEM_WRITE_ONLY, primary.size() * 4);
-    std::vector<float> t;
-    std::vector<dev::Float3> normal;
-    if (embree) {
-        embree->intersect(primary, t, normal);
-    } else {
-        rtlab[0]->run(cl, rtlab[0]->closest, primaryIn, tOut, primary.size(), a.local);
-        t = download<float>(cl, tOut, primary.size());
-    }
-    std::vector<BatchRay> shadow = shadowRays(scene, primary, t, normal, sceneSize);
-    cl::Buffer shadowIn = upload(cl, shadow);
-    cl::Buffer occOut(cl.context(), CL_MEM_WRITE_ONLY, std::max<size_t>(shadow.size(), 4) * 4);
-
-    std::vector<int> blocked;
-    for (int round = -1; round < a.rounds; ++round) {  // round -1 warms up and checks the hits
-        double s = 0;
-        if (embree) s = embree->intersect(primary, t, normal);
-        if (embree && round >= 0) peers[0].primaryS.push_back(s);
-        for (size_t k = 0; k < rtlab.size(); ++k) {
-            s = rtlab[k]->run(cl, rtlab[k]->closest, primaryIn, tOut, primary.size(), a.local);
-            if (round >= 0) peers[off + k].primaryS.push_back(s);
-            if (round >= 0) peers[off + k].primaryDevS.push_back(rtlab[k]->lastDeviceS);
-            if (round >= 0) continue;
-            std::vector<float> mine = download<float>(cl, tOut, primary.size());
-            for (size_t i = 0; i < primary.size(); ++i) {
-                peers[off + k].hits += mine[i] >= 0.f;
-                peers[off + k].primaryMismatch += (mine[i] >= 0.f) != (t[i] >= 0.f);
-            }
-        }
-        if (embree) s = embree->occluded(shadow, blocked);
-        if (embree && round >= 0) peers[0].shadowS.push_back(s);
-        for (size_t k = 0; k < rtlab.size(); ++k) {
-            if (shadow.empty()) break;
-            s = rtlab[k]->run(cl, rtlab[k]->occluded, shadowIn, occOut, shadow.size(), a.local);
-            if (round >= 0) peers[off + k].shadowS.push_back(s);
-            if (round >= 0) peers[off + k].shadowDevS.push_back(rtlab[k]->lastDeviceS);
-            if (round >= 0) continue;
-            std::vector<int> mine = download<int>(cl, occOut, shadow.size());
-            if (!embree && k == 0) blocked = mine;  // the reference
-            for (size_t i = 0; i < shadow.size(); ++i) {
-                peers[off + k].blocked += mine[i];
-                peers[off + k].shadowMismatch += mine[i] != blocked[i];
-            }
-        }
-        if (embree && round < 0) {
-            for (float x : t) peers[0].hits += x >= 0.f;
-            for (int b : blocked) peers[0].blocked += b;
-        }
-    }
-
-    // ---- report ----
+// Prints the table and the work per ray, writes the JSON when asked; false when hits disagree.
+bool report(const Args& a, const Scene& scene, const RenderOptions& o, ClContext& cl,
+            const EmbreePeer* embree, const std::vector<PeerResult>& peers,
+            const std::vector<BatchRay>& primary, const std::vector<BatchRay>& shadow) {
     auto mrays = [](size_t n, const std::vector<double>& s) {
         double m = median(s);
         return m > 0 ? double(n) / m * 1e-6 : 0.0;
@@ -340,7 +271,89 @@ int run(const Args& a) {
         std::ofstream(file) << doc.dump(2) << "\n";
         std::printf("\nwrote %s\n", file.c_str());
     }
-    if (!agree) {
+    return agree;
+}
+
+int run(const Args& a) {
+    RenderOptions o;
+    Scene scene = prepareScene(a, o);
+    float sceneSize = 0;
+    for (const dev::MeshInstance& m : scene.meshes) sceneSize = std::max(sceneSize, m.sphereRadius);
+
+    // $RTLAB_KERNEL_DIR reads the kernels from a source tree, as in rtlab (no rebuild).
+    const char* kernelDir = std::getenv("RTLAB_KERNEL_DIR");
+    ClContext cl(selectDevice(a.device), KernelSources(kernelDir ? kernelDir : ""));
+    std::unique_ptr<EmbreePeer> embree;
+    std::vector<PeerResult> peers;
+    if (EmbreePeer::available()) {
+        embree = std::make_unique<EmbreePeer>(scene, a.threads);
+        peers.push_back({"embree", embree->buildMs()});
+    }
+    const size_t off = peers.size();  // rtlab structure k is peers[off + k]
+    std::vector<std::unique_ptr<RtlabPeer>> rtlab;
+    std::string list = a.accels;
+    for (size_t p = 0; p <= list.size();) {
+        size_t q = std::min(list.find(',', p), list.size());
+        o.accel = parseAccel(list.substr(p, q - p));
+        rtlab.push_back(std::make_unique<RtlabPeer>(cl, scene, o));
+        peers.push_back({std::string("rtlab ") + accelName(o.accel), rtlab.back()->device.accelStats().buildMs});
+        p = q + 1;
+    }
+
+    // The reference hits (Embree's, else the first structure's) give the shadow rays.
+    std::vector<BatchRay> primary = primaryRays(scene, o.width, o.height);
+    cl::Buffer primaryIn = upload(cl, primary);
+    cl::Buffer tOut(cl.context(), CL_MEM_WRITE_ONLY, primary.size() * 4);
+    std::vector<float> t;
+    std::vector<dev::Float3> normal;
+    if (embree) {
+        embree->intersect(primary, t, normal);
+    } else {
+        rtlab[0]->run(cl, rtlab[0]->closest, primaryIn, tOut, primary.size(), a.local);
+        t = download<float>(cl, tOut, primary.size());
+    }
+    std::vector<BatchRay> shadow = shadowRays(scene, primary, t, normal, sceneSize);
+    cl::Buffer shadowIn = upload(cl, shadow);
+    cl::Buffer occOut(cl.context(), CL_MEM_WRITE_ONLY, std::max<size_t>(shadow.size(), 4) * 4);
+
+    std::vector<int> blocked;
+    for (int round = -1; round < a.rounds; ++round) {  // round -1 warms up and checks the hits
+        double s = 0;
+        if (embree) s = embree->intersect(primary, t, normal);
+        if (embree && round >= 0) peers[0].primaryS.push_back(s);
+        for (size_t k = 0; k < rtlab.size(); ++k) {
+            s = rtlab[k]->run(cl, rtlab[k]->closest, primaryIn, tOut, primary.size(), a.local);
+            if (round >= 0) peers[off + k].primaryS.push_back(s);
+            if (round >= 0) peers[off + k].primaryDevS.push_back(rtlab[k]->lastDeviceS);
+            if (round >= 0) continue;
+            std::vector<float> mine = download<float>(cl, tOut, primary.size());
+            for (size_t i = 0; i < primary.size(); ++i) {
+                peers[off + k].hits += mine[i] >= 0.f;
+                peers[off + k].primaryMismatch += (mine[i] >= 0.f) != (t[i] >= 0.f);
+            }
+        }
+        if (embree) s = embree->occluded(shadow, blocked);
+        if (embree && round >= 0) peers[0].shadowS.push_back(s);
+        for (size_t k = 0; k < rtlab.size(); ++k) {
+            if (shadow.empty()) break;
+            s = rtlab[k]->run(cl, rtlab[k]->occluded, shadowIn, occOut, shadow.size(), a.local);
+            if (round >= 0) peers[off + k].shadowS.push_back(s);
+            if (round >= 0) peers[off + k].shadowDevS.push_back(rtlab[k]->lastDeviceS);
+            if (round >= 0) continue;
+            std::vector<int> mine = download<int>(cl, occOut, shadow.size());
+            if (!embree && k == 0) blocked = mine;  // the reference
+            for (size_t i = 0; i < shadow.size(); ++i) {
+                peers[off + k].blocked += mine[i];
+                peers[off + k].shadowMismatch += mine[i] != blocked[i];
+            }
+        }
+        if (embree && round < 0) {
+            for (float x : t) peers[0].hits += x >= 0.f;
+            for (int b : blocked) peers[0].blocked += b;
+        }
+    }
+
+    if (!report(a, scene, o, cl, embree.get(), peers, primary, shadow)) {
         std::fprintf(stderr, "rtlab-trace-bench: hit counts disagree beyond 0.01%% of the rays\n");
         return 1;
     }
