@@ -36,7 +36,8 @@ void SceneFlags::add(CLI::App& cmd) {
                    "--bounces) [from the device: 2M on GPUs, 64K on CPUs]");
     cmd.add_option("--accel", accel,
                    "How rays find spheres and triangles: none (per-mesh bounding sphere only), "
-                   "bv (plus 7 slab pairs per mesh), grid (uniform grid) or bvh (SAH BVH) "
+                   "bv (plus 7 slab pairs per mesh), grid (uniform grid), bvh (SAH BVH) or wide "
+                   "(the SAH BVH as 4-wide nodes with quantised boxes) "
                    "[scene's render.accel, else bvh above 64 spheres and triangles, else bv with "
                    "triangles, else none]");
     cmd.add_flag("--plain-sphere", plainSphere,

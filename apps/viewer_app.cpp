@@ -139,7 +139,7 @@ void App::onKey(int key) {
             --req_.bounces;
             break;
         case GLFW_KEY_B:
-            req_.accel = RenderOptions::Accel((int(req_.accel) + 1) % 4);
+            req_.accel = RenderOptions::Accel((int(req_.accel) + 1) % 5);
             message(std::string("accel ") + accelName(req_.accel));
             break;
         case GLFW_KEY_R:

@@ -135,6 +135,7 @@ std::vector<Measurement> measureCells(ClContext& cl, const Scene& scene,
         m.extras = s.extras;
         m.tiles = s.tiles;
         m.launches = s.launches;
+        m.accelBuildMs = s.accel.buildMs;
         const Timed& t = timed[k];
         m.frames = int(t.device.size());
         m.frameMs = t.device;

@@ -40,6 +40,7 @@ struct Measurement {
     bool raysCounted = false;
     double mrays = 0;           // million rays per second of device time (when counted)
     nlohmann::json extras = nlohmann::json::object();  // FrameStats::extras, counting frame's last
+    double accelBuildMs = 0;    // host wall time of the acceleration structure's build
     Image image;                // the last timed frame, when asked for
 };
 

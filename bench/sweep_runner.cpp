@@ -171,7 +171,8 @@ nlohmann::json rowJson(const SweepConfig& config, const Cell& c, const Measureme
                     {"tiles", m.tiles},
                     {"launches", m.launches},
                     {"longest_launch_ms", m.longestLaunchMs},
-                    {"frames", m.frames}});
+                    {"frames", m.frames},
+                    {"accel_build_ms", m.accelBuildMs}});
         nlohmann::json buffers = nlohmann::json::object();
         for (const auto& [name, bytes] : m.buffers) buffers[name] = bytes;
         row["buffers"] = buffers;

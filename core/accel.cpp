@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <ctime>
 
 #include "core/error.h"
 
@@ -21,6 +22,8 @@ const char* accelName(RenderOptions::Accel accel) {
             return "grid";
         case RenderOptions::Accel::Bvh:
             return "bvh";
+        case RenderOptions::Accel::Wide:
+            return "wide";
     }
     return "?";
 }
@@ -30,7 +33,8 @@ RenderOptions::Accel parseAccel(const std::string& name) {
     if (name == "bv") return RenderOptions::Accel::Bv;
     if (name == "grid") return RenderOptions::Accel::Grid;
     if (name == "bvh") return RenderOptions::Accel::Bvh;
-    throw Error("--accel " + name + ": must be one of none, bv, grid, bvh");
+    if (name == "wide") return RenderOptions::Accel::Wide;
+    throw Error("--accel " + name + ": must be one of none, bv, grid, bvh, wide");
 }
 
 RenderOptions::Accel defaultAccel(const Scene& scene) {
@@ -94,6 +98,13 @@ std::string fmt(const char* format, double a, double b = 0, double c = 0) {
     return buf;
 }
 
+double msSince(std::chrono::steady_clock::time_point t0) {
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// CPU time of this process (every thread) since c0.
+double cpuMsSince(std::clock_t c0) { return 1e3 * double(std::clock() - c0) / CLOCKS_PER_SEC; }
+
 }  // namespace
 
 PrimBoxes primitiveBoxes(const AccelData& data) {
@@ -129,6 +140,7 @@ PrimBoxes primitiveBoxes(const AccelData& data) {
 
 AccelData buildAccel(const Scene& scene, RenderOptions::Accel accel) {
     auto t0 = std::chrono::steady_clock::now();
+    std::clock_t c0 = std::clock();  // on a shared machine the wall clock also counts others' work
     AccelData out;
     out.spheres = scene.spheres;
     out.triangles = scene.triangles;
@@ -169,13 +181,27 @@ AccelData buildAccel(const Scene& scene, RenderOptions::Accel accel) {
             long long leaves = 0;
             for (const dev::BvhNode& n : out.bvh) leaves += n.count != 0;
             size_t prims = out.spheres.size() + out.triangles.size();
-            s.detail = fmt("%.0f leaves, %.2f primitives/leaf", double(leaves),
-                           leaves ? double(prims) / double(leaves) : 0.0);
+            s.detail = fmt("%.0f leaves, %.2f primitives/leaf, %.0f ms of CPU time", double(leaves),
+                           leaves ? double(prims) / double(leaves) : 0.0, cpuMsSince(c0));
+            break;
+        }
+        case RenderOptions::Accel::Wide: {
+            buildBvh(out);
+            double binaryMs = msSince(t0);
+            buildWide(out);
+            s.nodes = (long long)out.wide.size();
+            s.bytes = out.wide.size() * sizeof(dev::WideNode);
+            double slots = 0;
+            for (const dev::WideNode& n : out.wide)
+                for (int k = 0; k < 4; ++k) slots += n.child[k] != -1;
+            s.detail = fmt("%.2f children/node, binned SAH %.1f ms, collapse %.1f ms",
+                           out.wide.empty() ? 0.0 : slots / double(out.wide.size()), binaryMs,
+                           msSince(t0) - binaryMs) +
+                       fmt(", %.0f ms of CPU time", cpuMsSince(c0));
             break;
         }
     }
-    s.buildMs =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    s.buildMs = msSince(t0);
     return out;
 }
 

@@ -4,6 +4,7 @@
 //   bv    plus a 7-slab bounding volume per mesh (Kay-Kajiya), tested before its triangles
 //   grid  uniform grid over every sphere and triangle, 3D-DDA traversal
 //   bvh   binned-SAH BVH over every sphere and triangle, built with every core
+//   wide  the same BVH collapsed into 4-wide nodes with quantised child boxes (issue 18)
 // Planes are infinite and always tested one by one.
 #pragma once
 
@@ -36,7 +37,8 @@ struct AccelData {
     std::vector<dev::Triangle> triangles;
     std::vector<dev::MeshInstance> meshes;  // bounding spheres padded against rounding
     std::vector<dev::Kdop> kdops;           // bv: one per mesh
-    std::vector<dev::BvhNode> bvh;          // bvh: root at 0
+    std::vector<dev::BvhNode> bvh;          // bvh, wide: root at 0 (wide: the tree it collapses)
+    std::vector<dev::WideNode> wide;        // wide: root at 0, uploaded in place of bvh
     dev::Grid grid{};                       // grid: the cell layout of `cells`
     std::vector<int> cells;                 // grid: cell c's refs are cells[cells[c]..cells[c+1])
     std::vector<int> sphereSource, triangleSource;
@@ -52,6 +54,8 @@ AccelData buildAccel(const Scene& scene, RenderOptions::Accel accel);
 // core; the result does not depend on it.
 void buildBvh(AccelData& data, unsigned threads = 0);
 void buildGrid(AccelData& data);
+// Collapses data.bvh into data.wide (core/accel_wide.cpp); the primitive order is kept.
+void buildWide(AccelData& data);
 
 // Every primitive's box, padded so that float rounding in the slab and DDA tests never culls a
 // primitive that its intersection routine would hit. Spheres first, then triangles.
@@ -72,5 +76,10 @@ void cropToCenter(Scene& scene, RenderOptions& options, int w, int h);
 // Checks the BVH invariants (each primitive in exactly one leaf, each child box inside its
 // parent's, one kind per leaf, every node reachable once); returns "" or the first violation.
 std::string checkBvh(const AccelData& data);
+
+// Checks the wide BVH: each primitive in exactly one leaf, each decoded child box holding its
+// primitives and inside its parent's box, every node reachable once, and no path deeper in
+// deferred children than the device's stack; returns "" or the first violation.
+std::string checkWide(const AccelData& data);
 
 }  // namespace rt

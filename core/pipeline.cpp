@@ -115,6 +115,7 @@ std::vector<std::string> featureDefines(const Scene& scene, const RenderOptions&
     if (o.accel == RenderOptions::Accel::Bv && !scene.triangles.empty()) d.push_back("RT_ACCEL_BV");
     if (o.accel == RenderOptions::Accel::Grid && prims) d.push_back("RT_ACCEL_GRID");
     if (o.accel == RenderOptions::Accel::Bvh && prims) d.push_back("RT_ACCEL_BVH");
+    if (o.accel == RenderOptions::Accel::Wide && prims) d.push_back("RT_ACCEL_WIDE");
     return d;
 }
 
@@ -170,7 +171,9 @@ DeviceScene::DeviceScene(ClContext& cl, const Scene& scene, RenderOptions::Accel
         lights_ = upload(cl, scene.lights, "the light buffer", bytes_);
         materials_ = upload(cl, scene.materials, "the material buffer", bytes_);
         cubemap_ = upload(cl, scene.environment.cubemap, "the cubemap buffer", bytes_);
-        bvh_ = upload(cl, accel.bvh, "the BVH buffer", bytes_);
+        // The wide nodes take the BVH's buffer: kernels keep one signature for every mode.
+        bvh_ = a == RenderOptions::Accel::Wide ? upload(cl, accel.wide, "the BVH buffer", bytes_)
+                                               : upload(cl, accel.bvh, "the BVH buffer", bytes_);
         cells_ = upload(cl, accel.cells, "the grid buffer", bytes_);
         rayCounts_ = cl.allocate(RT_RAY_TYPES * sizeof(cl_uint), CL_MEM_READ_WRITE, "the ray counters");
         bytes_ += RT_RAY_TYPES * sizeof(cl_uint);

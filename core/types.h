@@ -184,6 +184,24 @@ typedef struct BvhNode {
     int32_t count;
 } BvhNode;
 
+// 4-wide BVH node (issue 18, --accel wide; Ylitie, Karras and Laine 2017): the node's box is
+// origin + [0, 255] * step per axis, step = 2^(exponent - 127) (a float's exponent bits, so the
+// device decodes it with a shift). Child k's box is origin + [lo, hi] * step, rounded outward on
+// the host, so it always contains the child's exact box. Child k is
+//   an inner node:    count[k] == 0, child[k] = its node index;
+//   a leaf:           count[k] > 0, child[k] = first primitive, spheres when bit k of sphereMask;
+//   an empty slot:    child[k] == -1.
+// 64 bytes: one cache line holds a node and the boxes of its four children.
+typedef struct WideNode {
+    Float3 origin;
+    uint8_t exponent[3];
+    uint8_t sphereMask;
+    uint8_t loX[4], loY[4], loZ[4];
+    uint8_t hiX[4], hiY[4], hiZ[4];
+    int32_t child[4];
+    uint16_t count[4];
+} WideNode;
+
 // Bounding volume of 7 slab pairs around a mesh (report 3.6.2, Kay and Kajiya 1986): slab k
 // holds the points p with lo[k] <= dot(RT_SLAB_k, p) <= hi[k], for the unnormalized normals
 // x, y, z, (1,1,1), (-1,1,1), (1,-1,1), (1,1,-1).
@@ -211,6 +229,8 @@ static_assert(sizeof(Grid) == 64);
 static_assert(sizeof(Kdop) == 64);
 static_assert(sizeof(Node) == 48);
 static_assert(sizeof(BvhNode) == 32);
+static_assert(sizeof(WideNode) == 64);
+static_assert(offsetof(WideNode, child) == 40);
 static_assert(offsetof(Node, occluded) == 44);
 static_assert(offsetof(RenderSettings, camera) == 96);
 static_assert(offsetof(RenderSettings, grid) == 128);

@@ -1,7 +1,8 @@
 // rtlab — acceleration structures on the device (issue 5; built by core/accel*.cpp). Each query
 // takes the current hit and only accepts 0 < t < hit->t; with anyHit it returns at the first
 // primitive it accepts (shadow rays), otherwise it finds the closest. Included by scene.cl after
-// SceneData and Hit; RT_ACCEL_BV, RT_ACCEL_GRID or RT_ACCEL_BVH picks the structure.
+// SceneData and Hit; RT_ACCEL_BV, RT_ACCEL_GRID, RT_ACCEL_BVH or RT_ACCEL_WIDE (accel_wide.cl)
+// picks the structure.
 #ifndef RTLAB_CL_ACCEL
 #define RTLAB_CL_ACCEL
 
@@ -229,5 +230,9 @@ inline bool Bvh_Query(const SceneData* sc, Ray ray, Hit* hit, bool anyHit) {
     }
 }
 #endif  // RT_ACCEL_BVH
+
+#ifdef RT_ACCEL_WIDE
+#include "accel_wide.cl"
+#endif
 
 #endif

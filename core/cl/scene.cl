@@ -16,7 +16,7 @@ typedef struct SceneData {
     global const Light* lights;
     global const Material* materials;
     global const float* cubemap;
-    global const BvhNode* bvh;  // RT_ACCEL_BVH: root at 0
+    global const BvhNode* bvh;  // RT_ACCEL_BVH: root at 0; RT_ACCEL_WIDE: WideNode records
     global const int* cells;    // RT_ACCEL_GRID: cell offsets, then references (core/accel.h)
     global uint* rayCounts;  // RT_RAY_* counters, written only when RT_COUNT_RAYS is defined
     RenderSettings settings;
@@ -71,7 +71,7 @@ inline Hit Scene_Query(const SceneData* sc, Ray ray, float tMax, bool anyHit) {
     hit.kind = RT_KIND_MISS;
     hit.object = -1;
     hit.uv = (float2)(0.0f, 0.0f);
-#if defined(RT_ACCEL_GRID) || defined(RT_ACCEL_BVH)
+#if defined(RT_ACCEL_GRID) || defined(RT_ACCEL_BVH) || defined(RT_ACCEL_WIDE)
 #ifdef RT_HAS_PLANES
     for (int i = 0; i < sc->settings.planeCount; ++i) {
         float t = Plane_Intersect(ray, f3(sc->planes[i].normal), sc->planes[i].offset);
@@ -85,6 +85,8 @@ inline Hit Scene_Query(const SceneData* sc, Ray ray, float tMax, bool anyHit) {
 #endif
 #ifdef RT_ACCEL_GRID
     Grid_Query(sc, ray, &hit, anyHit);
+#elif defined(RT_ACCEL_WIDE)
+    Wide_Query(sc, ray, &hit, anyHit);
 #else
     Bvh_Query(sc, ray, &hit, anyHit);
 #endif

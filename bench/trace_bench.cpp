@@ -1,0 +1,397 @@
+// rtlab-trace-bench — Embree as a peer inside the benchmark (issue 18). Traces exactly the rays
+// of a scene's camera (one primary ray per pixel centre, then one shadow ray per primary hit
+// towards each light) through Embree on every CPU thread and through rtlab's structures on the
+// OpenCL CPU device (PoCL), on the same cores, interleaved round by round, and reports rays/s
+// side by side. Hit counts must agree: a ray that grazes a shared edge or the silhouette may hit
+// in one and miss in the other (Embree's watertight test against rtlab's padded boxes and its own
+// triangle test), so up to 0.01% of the rays of a batch (at least 2) may disagree; more ends in
+// exit status 1. Both peers see the scene's triangles only (planes and spheres are dropped).
+// Built without Embree (a GPU host), it times rtlab's structures alone, against the first one.
+#include <CLI/CLI.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <thread>
+
+#include "bench/embree_peer.h"
+#include "bench/measure.h"
+#include "bench/trace_visits.h"
+#include "core/accel.h"
+#include "core/cl_runtime.h"
+#include "core/error.h"
+#include "core/pipeline.h"
+#include "core/scene_loader.h"
+
+namespace rt {
+namespace {
+
+// Primary rays in 8x8 tiles, the order both peers take them in chunks (coherent packets).
+std::vector<BatchRay> primaryRays(const Scene& s, int W, int H) {
+    const dev::Camera& c = s.camera;
+    float D = 1.f / std::tan(c.fovY * 0.5f);
+    float ca = std::cos(c.pitch), sa = std::sin(c.pitch), cb = std::cos(c.yaw),
+          sb = std::sin(c.yaw);
+    std::vector<BatchRay> rays;
+    rays.reserve(size_t(W) * H);
+    for (int ty = 0; ty < H; ty += 8)
+        for (int tx = 0; tx < W; tx += 8)
+            for (int y = ty; y < std::min(H, ty + 8); ++y)
+                for (int x = tx; x < std::min(W, tx + 8); ++x) {
+                    // core/cl/camera.cl, Camera_PrimaryRay, at the pixel centre.
+                    float nx = (2.f * (float(x) + 0.5f) / float(W) - 1.f) * (float(W) / float(H));
+                    float ny = 1.f - 2.f * (float(y) + 0.5f) / float(H);
+                    float oy = ny * ca + D * sa, oz = D * ca - ny * sa;
+                    float dx = nx * cb + oz * sb, dz = oz * cb - nx * sb;
+                    float len = std::sqrt(dx * dx + oy * oy + dz * dz);
+                    rays.push_back({c.position.x, c.position.y, c.position.z, INFINITY,
+                                    dx / len, oy / len, dz / len, 0.f});
+                }
+    return rays;
+}
+
+// One shadow ray per hit and light, from the hit point lifted off the surface along the
+// geometric normal (towards the viewer) by a millionth of the scene's size; back along the
+// primary ray when there is no normal (no Embree).
+std::vector<BatchRay> shadowRays(const Scene& s, const std::vector<BatchRay>& primary,
+                                 const std::vector<float>& t,
+                                 const std::vector<dev::Float3>& normal, float sceneSize) {
+    std::vector<BatchRay> rays;
+    float lift = 1e-6f * sceneSize;
+    for (size_t i = 0; i < primary.size(); ++i) {
+        if (t[i] < 0.f) continue;
+        const BatchRay& r = primary[i];
+        dev::Float3 n = normal.empty() ? dev::Float3{-r.dx, -r.dy, -r.dz} : normal[i];
+        float nl = std::sqrt(n.x * n.x + n.y * n.y + n.z * n.z);
+        float side = n.x * r.dx + n.y * r.dy + n.z * r.dz > 0.f ? -1.f : 1.f;
+        float k = nl > 0.f ? side * lift / nl : 0.f;
+        float px = r.ox + t[i] * r.dx + k * n.x, py = r.oy + t[i] * r.dy + k * n.y,
+              pz = r.oz + t[i] * r.dz + k * n.z;
+        for (const dev::Light& l : s.lights) {
+            float dx = l.position.x - px, dy = l.position.y - py, dz = l.position.z - pz;
+            float d = std::sqrt(dx * dx + dy * dy + dz * dz);
+            if (d > 0.f) rays.push_back({px, py, pz, d, dx / d, dy / d, dz / d, 0.f});
+        }
+    }
+    return rays;
+}
+
+// rtlab's side: one --accel structure on the device, and the two batch kernels bound to it.
+struct RtlabPeer {
+    RtlabPeer(ClContext& cl, const Scene& s, const RenderOptions& o)
+        : device(cl, s, o.accel),
+          program(cl.program("trace_rays.cl", featureDefines(s, o))),
+          closest(program, "Rays_Closest"),
+          occluded(program, "Rays_Occluded") {
+        device.setArgs(closest, makeSettings(s, o));
+        device.setArgs(occluded, makeSettings(s, o));
+    }
+    // Wall seconds from the launch to the end of the kernel (the read-back is not timed); the
+    // kernel's own time (profiling event) goes to lastDeviceS, for a GPU where launches count.
+    double run(ClContext& cl, cl::Kernel& k, const cl::Buffer& in, const cl::Buffer& out,
+               size_t n, size_t local) {
+        k.setArg(DeviceScene::kFirstKernelArg, in);
+        k.setArg(DeviceScene::kFirstKernelArg + 1, out);
+        k.setArg(DeviceScene::kFirstKernelArg + 2, cl_int(n));
+        auto t0 = std::chrono::steady_clock::now();
+        // A local size must divide the global one: round up; the kernels skip the padding.
+        size_t global = local ? (n + local - 1) / local * local : n;
+        cl::Event done;
+        cl.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(global),
+                                        local ? cl::NDRange(local) : cl::NullRange, nullptr, &done);
+        cl.queue().finish();
+        lastDeviceS = 1e-3 * eventMs(done);
+        return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    }
+    double lastDeviceS = 0;
+    DeviceScene device;
+    cl::Program program;
+    cl::Kernel closest, occluded;
+};
+
+template <typename T>
+cl::Buffer upload(ClContext& cl, const std::vector<T>& v) {
+    return cl::Buffer(cl.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR,
+                      std::max<size_t>(v.size() * sizeof(T), 16), const_cast<T*>(v.data()));
+}
+
+template <typename T>
+std::vector<T> download(ClContext& cl, const cl::Buffer& b, size_t n) {
+    std::vector<T> v(n);
+    if (n) cl.queue().enqueueReadBuffer(b, CL_TRUE, 0, n * sizeof(T), v.data());
+    return v;
+}
+
+double median(std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v.empty() ? 0 : v[v.size() / 2];
+}
+
+struct PeerResult {
+    std::string name;
+    double buildMs = 0;
+    std::vector<double> primaryS, shadowS;
+    std::vector<double> primaryDevS, shadowDevS;  // rtlab: the kernels' profiling-event time
+    long long hits = 0, blocked = 0, primaryMismatch = 0, shadowMismatch = 0;
+};
+
+struct Args {
+    std::string scene, size, accels = "bvh,wide", device = "cpu", out;
+    int rounds = 5;
+    int local = 0;
+    unsigned threads = std::max(1u, std::thread::hardware_concurrency());
+    double distance = 0;
+    double pitch = 1000;  // degrees; 1000 keeps the scene's
+};
+
+// Puts the camera `radii` bounding radii from the mesh's centre, looking at it along its view.
+void placeCamera(Scene& s, double radii) {
+    const dev::MeshInstance& m = s.meshes.at(0);
+    dev::Camera& c = s.camera;
+    double fx = std::cos(c.pitch) * std::sin(c.yaw), fy = std::sin(c.pitch),
+           fz = std::cos(c.pitch) * std::cos(c.yaw);
+    double d = radii * m.sphereRadius;
+    c.position = {float(m.sphereCenter.x - d * fx), float(m.sphereCenter.y - d * fy),
+                  float(m.sphereCenter.z - d * fz)};
+}
+
+// The scene as both peers see it (triangles and lights), the camera where the flags put it.
+Scene prepareScene(const Args& a, RenderOptions& o) {
+    Scene scene = loadScene(a.scene);
+    scene.spheres.clear();
+    scene.planes.clear();
+    if (scene.triangles.empty()) throw Error(a.scene + ": no triangles to trace");
+    if (scene.lights.empty()) throw Error(a.scene + ": no light for the shadow rays");
+    if (a.pitch != 1000) scene.camera.pitch = float(a.pitch * M_PI / 180.0);
+    if (a.distance > 0) placeCamera(scene, a.distance);
+    o = scene.defaults;
+    if (!a.size.empty() && std::sscanf(a.size.c_str(), "%dx%d", &o.width, &o.height) != 2)
+        throw Error("--size " + a.size + ": expected WxH");
+    if (o.width < 1 || o.height < 1) throw Error("--size " + a.size + ": must be positive");
+    return scene;
+}
+
+// Prints the table and the work per ray, writes the JSON when asked; false when hits disagree.
+bool report(const Args& a, const Scene& scene, const RenderOptions& o, ClContext& cl,
+            const EmbreePeer* embree, const std::vector<PeerResult>& peers,
+            const std::vector<BatchRay>& primary, const std::vector<BatchRay>& shadow) {
+    auto mrays = [](size_t n, const std::vector<double>& s) {
+        double m = median(s);
+        return m > 0 ? double(n) / m * 1e-6 : 0.0;
+    };
+    auto allowed = [](size_t n) { return std::max<long long>(2, (long long)(1e-4 * double(n))); };
+    std::printf("rtlab-trace-bench: %s, %dx%d, %zu primary rays (%.1f%% hit), %zu shadow rays to %zu "
+                "light(s), %d rounds interleaved\n",
+                scene.name.c_str(), o.width, o.height, primary.size(),
+                100.0 * double(peers[0].hits) / double(primary.size()), shadow.size(),
+                scene.lights.size(), a.rounds);
+    std::printf("rtlab on %s; %s\n\n", cl.device().label().c_str(),
+                embree ? ("Embree " + embree->version() + " on " + std::to_string(a.threads) +
+                          " threads").c_str()
+                       : "built without Embree: ratios against the first structure");
+    std::string versus = "x " + peers[0].name.substr(peers[0].name.find(' ') + 1);
+    std::printf("%-12s %10s %14s %14s %10s %10s %9s %9s\n", "peer", "build ms", "primary Mray/s",
+                "shadow Mray/s", "hits", "occluded", versus.c_str(), "mismatch");
+    bool agree = true;
+    std::string kernelOnly;
+    nlohmann::json rows = nlohmann::json::array();
+    double ep = mrays(primary.size(), peers[0].primaryS), es = mrays(shadow.size(), peers[0].shadowS);
+    for (const PeerResult& p : peers) {
+        double mp = mrays(primary.size(), p.primaryS), ms = mrays(shadow.size(), p.shadowS);
+        bool ok = p.primaryMismatch <= allowed(primary.size()) &&
+                  p.shadowMismatch <= allowed(shadow.size());
+        agree = agree && ok;
+        std::printf("%-12s %10.1f %14.2f %14.2f %10lld %10lld %4.2f/%4.2f %4lld/%lld%s\n",
+                    p.name.c_str(), p.buildMs, mp, ms, p.hits, p.blocked, ep > 0 ? mp / ep : 0,
+                    es > 0 ? ms / es : 0, p.primaryMismatch, p.shadowMismatch, ok ? "" : "  DISAGREE");
+        if (!p.primaryDevS.empty())
+            kernelOnly += " " + p.name + " " + std::to_string(mrays(primary.size(), p.primaryDevS)) +
+                          " / " + std::to_string(mrays(shadow.size(), p.shadowDevS)) + ";";
+        rows.push_back({{"peer", p.name},
+                        {"build_ms", p.buildMs},
+                        {"primary_mrays_per_s", mp},
+                        {"shadow_mrays_per_s", ms},
+                        {"primary_s", p.primaryS},
+                        {"primary_mrays_per_s_device", mrays(primary.size(), p.primaryDevS)},
+                        {"shadow_mrays_per_s_device", mrays(shadow.size(), p.shadowDevS)},
+                        {"shadow_s", p.shadowS},
+                        {"primary_hits", p.hits},
+                        {"occluded", p.blocked},
+                        {"primary_vs_reference", ep > 0 ? mp / ep : 0},
+                        {"shadow_vs_reference", es > 0 ? ms / es : 0},
+                        {"primary_mismatch", p.primaryMismatch},
+                        {"shadow_mismatch", p.shadowMismatch}});
+    }
+    std::printf("kernel time only (profiling events), primary / shadow Mray/s:%s\n",
+                kernelOnly.c_str());
+    // The work behind the figures: what a ray does in the wide BVH, and the time per node visit
+    // that rtlab's rays/s implies on the cores both peers share.
+    AccelData wide = buildAccel(scene, RenderOptions::Accel::Wide);
+    TraversalCost pc = wideTraversalCost(wide, primary, false);
+    TraversalCost sc = wideTraversalCost(wide, shadow, true);
+    std::printf("\nwide BVH, per ray (host count over %zu + %zu rays): primary %.1f nodes, %.1f "
+                "triangles, %.0f B; shadow %.1f nodes, %.1f triangles, %.0f B\n",
+                pc.rays, sc.rays, pc.nodes, pc.triangles, pc.bytes, sc.nodes, sc.triangles, sc.bytes);
+    nlohmann::json cost = {{"primary_nodes_per_ray", pc.nodes},
+                           {"primary_triangles_per_ray", pc.triangles},
+                           {"primary_bytes_per_ray", pc.bytes},
+                           {"shadow_nodes_per_ray", sc.nodes},
+                           {"shadow_triangles_per_ray", sc.triangles},
+                           {"shadow_bytes_per_ray", sc.bytes},
+                           {"rays_sampled", pc.rays + sc.rays}};
+    if (!a.out.empty()) {
+        nlohmann::json doc = bench::deviceJson(cl.device());
+        doc.update({{"bench", "trace-peer"},
+                    {"scene", scene.name},
+                    {"scene_file", a.scene},
+                    {"width", o.width},
+                    {"height", o.height},
+                    {"camera_radii", a.distance},
+                    {"camera_pitch_deg", scene.camera.pitch * 180.0 / M_PI},
+                    {"triangles", scene.triangles.size()},
+                    {"primary_rays", primary.size()},
+                    {"shadow_rays", shadow.size()},
+                    {"rounds", a.rounds},
+                    {"local_size", a.local},
+                    {"reference", peers[0].name},
+                    {"embree_version", embree ? embree->version() : "none"},
+                    {"embree_threads", embree ? a.threads : 0},
+                    {"agree", agree},
+                    {"peers", rows},
+                    {"wide_cost", cost}});
+        std::filesystem::create_directories(a.out);
+        char radii[32] = "";
+        if (a.distance > 0) std::snprintf(radii, sizeof radii, "-r%g", a.distance);
+        std::string file = a.out + "/trace-" + scene.name + "-" + std::to_string(o.width) + "x" +
+                           std::to_string(o.height) + radii + ".json";
+        std::ofstream(file) << doc.dump(2) << "\n";
+        std::printf("\nwrote %s\n", file.c_str());
+    }
+    return agree;
+}
+
+int run(const Args& a) {
+    RenderOptions o;
+    Scene scene = prepareScene(a, o);
+    float sceneSize = 0;
+    for (const dev::MeshInstance& m : scene.meshes) sceneSize = std::max(sceneSize, m.sphereRadius);
+
+    // $RTLAB_KERNEL_DIR reads the kernels from a source tree, as in rtlab (no rebuild).
+    const char* kernelDir = std::getenv("RTLAB_KERNEL_DIR");
+    ClContext cl(selectDevice(a.device), KernelSources(kernelDir ? kernelDir : ""));
+    std::unique_ptr<EmbreePeer> embree;
+    std::vector<PeerResult> peers;
+    if (EmbreePeer::available()) {
+        embree = std::make_unique<EmbreePeer>(scene, a.threads);
+        peers.push_back({"embree", embree->buildMs()});
+    }
+    const size_t off = peers.size();  // rtlab structure k is peers[off + k]
+    std::vector<std::unique_ptr<RtlabPeer>> rtlab;
+    std::string list = a.accels;
+    for (size_t p = 0; p <= list.size();) {
+        size_t q = std::min(list.find(',', p), list.size());
+        o.accel = parseAccel(list.substr(p, q - p));
+        rtlab.push_back(std::make_unique<RtlabPeer>(cl, scene, o));
+        peers.push_back({std::string("rtlab ") + accelName(o.accel), rtlab.back()->device.accelStats().buildMs});
+        p = q + 1;
+    }
+
+    // The reference hits (Embree's, else the first structure's) give the shadow rays.
+    std::vector<BatchRay> primary = primaryRays(scene, o.width, o.height);
+    cl::Buffer primaryIn = upload(cl, primary);
+    cl::Buffer tOut(cl.context(), CL_MEM_WRITE_ONLY, primary.size() * 4);
+    std::vector<float> t;
+    std::vector<dev::Float3> normal;
+    if (embree) {
+        embree->intersect(primary, t, normal);
+    } else {
+        rtlab[0]->run(cl, rtlab[0]->closest, primaryIn, tOut, primary.size(), a.local);
+        t = download<float>(cl, tOut, primary.size());
+    }
+    std::vector<BatchRay> shadow = shadowRays(scene, primary, t, normal, sceneSize);
+    cl::Buffer shadowIn = upload(cl, shadow);
+    cl::Buffer occOut(cl.context(), CL_MEM_WRITE_ONLY, std::max<size_t>(shadow.size(), 4) * 4);
+
+    std::vector<int> blocked;
+    for (int round = -1; round < a.rounds; ++round) {  // round -1 warms up and checks the hits
+        double s = 0;
+        if (embree) s = embree->intersect(primary, t, normal);
+        if (embree && round >= 0) peers[0].primaryS.push_back(s);
+        for (size_t k = 0; k < rtlab.size(); ++k) {
+            s = rtlab[k]->run(cl, rtlab[k]->closest, primaryIn, tOut, primary.size(), a.local);
+            if (round >= 0) peers[off + k].primaryS.push_back(s);
+            if (round >= 0) peers[off + k].primaryDevS.push_back(rtlab[k]->lastDeviceS);
+            if (round >= 0) continue;
+            std::vector<float> mine = download<float>(cl, tOut, primary.size());
+            for (size_t i = 0; i < primary.size(); ++i) {
+                peers[off + k].hits += mine[i] >= 0.f;
+                peers[off + k].primaryMismatch += (mine[i] >= 0.f) != (t[i] >= 0.f);
+            }
+        }
+        if (embree) s = embree->occluded(shadow, blocked);
+        if (embree && round >= 0) peers[0].shadowS.push_back(s);
+        for (size_t k = 0; k < rtlab.size(); ++k) {
+            if (shadow.empty()) break;
+            s = rtlab[k]->run(cl, rtlab[k]->occluded, shadowIn, occOut, shadow.size(), a.local);
+            if (round >= 0) peers[off + k].shadowS.push_back(s);
+            if (round >= 0) peers[off + k].shadowDevS.push_back(rtlab[k]->lastDeviceS);
+            if (round >= 0) continue;
+            std::vector<int> mine = download<int>(cl, occOut, shadow.size());
+            if (!embree && k == 0) blocked = mine;  // the reference
+            for (size_t i = 0; i < shadow.size(); ++i) {
+                peers[off + k].blocked += mine[i];
+                peers[off + k].shadowMismatch += mine[i] != blocked[i];
+            }
+        }
+        if (embree && round < 0) {
+            for (float x : t) peers[0].hits += x >= 0.f;
+            for (int b : blocked) peers[0].blocked += b;
+        }
+    }
+
+    if (!report(a, scene, o, cl, embree.get(), peers, primary, shadow)) {
+        std::fprintf(stderr, "rtlab-trace-bench: hit counts disagree beyond 0.01%% of the rays\n");
+        return 1;
+    }
+    return 0;
+}
+
+}  // namespace
+}  // namespace rt
+
+int main(int argc, char** argv) {
+    rt::Args a;
+    CLI::App app{"Embree as a peer: the same camera and shadow rays through Embree and rtlab"};
+    app.add_option("scene", a.scene, "Scene file (.json) or a bare .obj")->required();
+    app.add_option("--size", a.size, "Frame WxH [scene default]");
+    app.add_option("--accels", a.accels, "rtlab structures, comma-separated [bvh,wide]");
+    app.add_option("--device", a.device, "OpenCL device for rtlab [cpu]");
+    app.add_option("--rounds", a.rounds, "Timed rounds after one warm-up [5]")
+        ->check(CLI::Range(1, 1000));
+    app.add_option("--threads", a.threads, "Embree threads [every core]")->check(CLI::Range(1, 4096));
+    app.add_option("--distance", a.distance,
+                   "Camera distance from the mesh's centre in bounding radii [scene camera]")
+        ->check(CLI::PositiveNumber);
+    app.add_option("--pitch", a.pitch,
+                   "Camera pitch in degrees, -90 looks straight down, before --distance places it "
+                   "[scene camera]")
+        ->check(CLI::Range(-90.0, 90.0));
+    app.add_option("--local", a.local, "Work-group size of rtlab's kernels [0: the driver's]")
+        ->check(CLI::Range(0, 1024));
+    app.add_option("--out", a.out, "Folder for the JSON result [none]");
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::ParseError& e) {
+        return app.exit(e);
+    }
+    try {
+        return rt::run(a);
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "rtlab-trace-bench: %s\n", e.what());
+        return 1;
+    }
+}

@@ -1,0 +1,113 @@
+// rtlab — the work one ray does in the wide BVH, counted on the host (see trace_visits.h). The
+// box test decodes the quantised boxes as the device does; the triangle test is Moller-Trumbore
+// in double, which may differ from the device's on grazing rays only, so the counts are the
+// device's up to those few rays.
+#include "bench/trace_visits.h"
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstdint>
+
+namespace rt {
+namespace {
+
+struct V3 {
+    double x, y, z;
+};
+V3 sub(const dev::Float3& a, const dev::Float3& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+V3 cross(V3 a, V3 b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
+double dot(V3 a, V3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+
+double hitTriangle(const dev::Triangle& t, const BatchRay& r) {
+    V3 d{r.dx, r.dy, r.dz};
+    V3 e1 = sub(t.v1, t.v0), e2 = sub(t.v2, t.v0);
+    V3 p = cross(d, e2);
+    double det = dot(e1, p);
+    if (det == 0) return -1;
+    V3 s{r.ox - t.v0.x, r.oy - t.v0.y, r.oz - t.v0.z};
+    double u = dot(s, p) / det;
+    if (u < 0 || u > 1) return -1;
+    V3 q = cross(s, e1);
+    double v = dot(d, q) / det;
+    if (v < 0 || u + v > 1) return -1;
+    return dot(e2, q) / det;
+}
+
+// Entry distances of a node's four children, as Wide_Enter computes them.
+void enter(const dev::WideNode& n, const BatchRay& r, const float inv[3], float tMax, float t[4]) {
+    const float o[3] = {r.ox, r.oy, r.oz};
+    const uint8_t* lo[3] = {n.loX, n.loY, n.loZ};
+    const uint8_t* hi[3] = {n.hiX, n.hiY, n.hiZ};
+    for (int k = 0; k < 4; ++k) {
+        float near = 0.f, far = tMax;
+        for (int a = 0; a < 3; ++a) {
+            float step = std::bit_cast<float>(uint32_t(n.exponent[a]) << 23);
+            float base = ((&n.origin.x)[a] - o[a]) * inv[a], scale = step * inv[a];
+            float t0 = float(lo[a][k]) * scale + base, t1 = float(hi[a][k]) * scale + base;
+            near = std::max(near, std::min(t0, t1));
+            far = std::min(far, std::max(t0, t1));
+        }
+        t[k] = n.child[k] != -1 && near <= far ? near : INFINITY;
+    }
+}
+
+}  // namespace
+
+TraversalCost wideTraversalCost(const AccelData& data, const std::vector<BatchRay>& rays,
+                                bool anyHit, size_t maxRays) {
+    TraversalCost cost;
+    if (data.wide.empty() || rays.empty()) return cost;
+    size_t stride = std::max<size_t>(1, rays.size() / maxRays);
+    long long nodes = 0, triangles = 0;
+    for (size_t i = 0; i < rays.size(); i += stride) {
+        const BatchRay& r = rays[i];
+        ++cost.rays;
+        float inv[3];
+        const float d[3] = {r.dx, r.dy, r.dz};
+        for (int a = 0; a < 3; ++a)
+            inv[a] = 1.f / (std::fabs(d[a]) < 1e-20f ? std::copysign(1e-20f, d[a]) : d[a]);
+        float best = r.tMax;
+        int stack[64];
+        float stackT[64];
+        int top = 0, index = 0;
+        bool done = false;
+        while (!done) {
+            const dev::WideNode& n = data.wide[index];
+            ++nodes;
+            float t[4];
+            enter(n, r, inv, best, t);
+            for (int k = 0; k < 4 && !done; ++k) {
+                if (n.count[k] == 0 || !(t[k] < best) || (n.sphereMask >> k & 1)) continue;
+                for (int p = n.child[k]; p < n.child[k] + n.count[k] && !done; ++p) {
+                    ++triangles;
+                    double h = hitTriangle(data.triangles[p], r);
+                    if (h > 0 && h < best) best = float(h), done = anyHit;
+                }
+            }
+            if (done) break;
+            int near[4], m = 0;
+            float nearT[4];
+            for (int k = 0; k < 4; ++k) {
+                if (n.count[k] != 0 || !(t[k] < best)) continue;
+                int j = m++;
+                for (; j > 0 && nearT[j - 1] > t[k]; --j) near[j] = near[j - 1], nearT[j] = nearT[j - 1];
+                near[j] = n.child[k], nearT[j] = t[k];
+            }
+            if (m > 0) {
+                for (int j = m - 1; j > 0; --j) stack[top] = near[j], stackT[top++] = nearT[j];
+                index = near[0];
+                continue;
+            }
+            while (top > 0 && !(stackT[top - 1] < best)) --top;
+            if (top == 0) break;
+            index = stack[--top];
+        }
+    }
+    cost.nodes = double(nodes) / double(cost.rays);
+    cost.triangles = double(triangles) / double(cost.rays);
+    cost.bytes = 64 * cost.nodes + 36 * cost.triangles;
+    return cost;
+}
+
+}  // namespace rt

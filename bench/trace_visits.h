@@ -1,0 +1,23 @@
+// rtlab — the work one ray does in the wide BVH (issue 18), counted on the host: node visits,
+// triangles tested and bytes fetched per ray, in the traversal order of core/cl/accel_wide.cl.
+// rtlab-trace-bench prints it beside the rays/s, so that a missed figure names its bound.
+#pragma once
+
+#include <vector>
+
+#include "bench/embree_peer.h"
+#include "core/accel.h"
+
+namespace rt {
+
+struct TraversalCost {
+    double nodes = 0;      // wide nodes visited per ray
+    double triangles = 0;  // triangle tests per ray
+    double bytes = 0;      // node records (64 B) and triangle vertices (36 B) read per ray
+    size_t rays = 0;       // how many rays were followed (an even sample of the batch)
+};
+
+TraversalCost wideTraversalCost(const AccelData& wide, const std::vector<BatchRay>& rays,
+                                bool anyHit, size_t maxRays = 65536);
+
+}  // namespace rt

@@ -1,0 +1,241 @@
+// rtlab — the 4-wide BVH of --accel wide (issue 18): the binary binned-SAH tree of
+// core/accel_bvh.cpp collapsed into nodes of up to four children, each child box quantised to
+// 8 bits per bound relative to its parent (the node layout of Ylitie, Karras and Laine 2017,
+// with the greedy collapse of Wald et al. 2008 instead of their cost-optimal one: the inner
+// child of largest area is opened until four children are reached). Traversed by
+// core/cl/accel_wide.cl; the primitive order of the binary tree is kept, so leaves are ranges.
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "core/accel.h"
+#include "core/error.h"
+
+namespace rt {
+namespace {
+
+constexpr int kWidth = 4;
+constexpr int kStack = 64;  // RT_WIDE_STACK in core/cl/accel_wide.cl
+
+float area(const dev::BvhNode& n) {
+    float dx = n.hi.x - n.lo.x, dy = n.hi.y - n.lo.y, dz = n.hi.z - n.lo.z;
+    return dx * dy + dy * dz + dz * dx;
+}
+
+// 2^(e - 127), from a float's exponent bits: what the device computes with a shift.
+float stepOf(uint8_t e) { return std::bit_cast<float>(uint32_t(e) << 23); }
+
+// The smallest exponent whose 255 steps from lo reach hi, in the device's float arithmetic.
+uint8_t exponentFor(float lo, float hi) {
+    int e = 1;  // 0 would be a zero step
+    if (hi > lo) {
+        int x;
+        std::frexp((hi - lo) / 255.f, &x);
+        e = std::max(1, x + 125);  // one below the estimate; the loop climbs to the exact one
+    }
+    while (e < 254 && lo + 255.f * stepOf(uint8_t(e)) < hi) ++e;
+    return uint8_t(e);
+}
+
+// Outward rounding: the decoded bound origin + q * step never cuts into the child's box.
+uint8_t quantLo(float origin, float step, float v) {
+    int q = std::clamp(int(std::floor((v - origin) / step)), 0, 255);
+    while (q > 0 && origin + float(q) * step > v) --q;
+    return uint8_t(q);
+}
+uint8_t quantHi(float origin, float step, float v) {
+    int q = std::clamp(int(std::ceil((v - origin) / step)), 0, 255);
+    while (q < 255 && origin + float(q) * step < v) ++q;
+    return uint8_t(q);
+}
+
+class Collapser {
+  public:
+    explicit Collapser(const std::vector<dev::BvhNode>& bvh) : bvh_(bvh), height_(bvh.size()) {
+        // Children follow their parent in the depth-first numbering: one backward pass.
+        for (size_t i = bvh.size(); i-- > 0;)
+            if (bvh[i].count == 0)
+                height_[i] = 1 + std::max(height_[bvh[i].first], height_[bvh[i].first + 1]);
+    }
+
+    std::vector<dev::WideNode> run() {
+        out_.push_back({});
+        build(0, 0, 0);
+        return std::move(out_);
+    }
+
+  private:
+    // Fills out_[index] from binary node b, `pending` being how many deferred entries the
+    // device's stack may hold on the way down to it.
+    void build(int index, int b, int pending) {
+        const dev::BvhNode& n = bvh_[b];
+        std::vector<int> kids;
+        if (n.count != 0) {
+            kids = {b};  // the whole tree is one leaf
+        } else {
+            kids = {n.first, n.first + 1};
+        }
+        // A node defers at most (width - 1) children. Keeping pending + height below the stack
+        // size at every node bounds the stack whatever the tree's shape: where the budget runs
+        // out the node stays binary, which defers one child per level as the binary tree does.
+        int width = std::min(kWidth, 1 + std::max(1, kStack - 1 - pending - height_[b]));
+        while (int(kids.size()) < width) {
+            int best = -1;
+            for (int k = 0; k < int(kids.size()); ++k)
+                if (bvh_[kids[k]].count == 0 && (best < 0 || area(bvh_[kids[k]]) > area(bvh_[kids[best]])))
+                    best = k;
+            if (best < 0) break;
+            int opened = kids[best];
+            kids[best] = bvh_[opened].first;
+            kids.push_back(bvh_[opened].first + 1);
+        }
+        dev::WideNode w{};
+        w.origin = n.lo;
+        const float* lo = &n.lo.x;
+        const float* hi = &n.hi.x;
+        float step[3];
+        for (int a = 0; a < 3; ++a) {
+            w.exponent[a] = exponentFor(lo[a], hi[a]);
+            step[a] = stepOf(w.exponent[a]);
+        }
+        uint8_t* qlo[3] = {w.loX, w.loY, w.loZ};
+        uint8_t* qhi[3] = {w.hiX, w.hiY, w.hiZ};
+        int childPending = pending + int(kids.size()) - 1;
+        std::vector<std::pair<int, int>> inner;  // (slot's node index, binary node)
+        for (int k = 0; k < kWidth; ++k) {
+            if (k >= int(kids.size())) {
+                w.child[k] = -1;
+                continue;
+            }
+            const dev::BvhNode& c = bvh_[kids[k]];
+            for (int a = 0; a < 3; ++a) {
+                qlo[a][k] = quantLo(lo[a], step[a], (&c.lo.x)[a]);
+                qhi[a][k] = quantHi(lo[a], step[a], (&c.hi.x)[a]);
+            }
+            if (c.count == 0) {
+                w.child[k] = int(out_.size());
+                out_.push_back({});
+                inner.push_back({w.child[k], kids[k]});
+                continue;
+            }
+            int count = std::abs(c.count);
+            if (count > 65535)
+                throw Error("--accel wide: a leaf of " + std::to_string(count) +
+                            " primitives is over the 65535 a wide node can hold");
+            w.child[k] = c.first;
+            w.count[k] = uint16_t(count);
+            if (c.count < 0) w.sphereMask |= uint8_t(1u << k);
+        }
+        out_[index] = w;
+        for (auto [slot, child] : inner) build(slot, child, childPending);
+    }
+
+    const std::vector<dev::BvhNode>& bvh_;
+    std::vector<int> height_;
+    std::vector<dev::WideNode> out_;
+};
+
+struct Box {
+    float lo[3], hi[3];
+};
+
+// Child k's decoded box, as the device computes it.
+Box decode(const dev::WideNode& n, int k) {
+    const uint8_t* qlo[3] = {n.loX, n.loY, n.loZ};
+    const uint8_t* qhi[3] = {n.hiX, n.hiY, n.hiZ};
+    Box b;
+    for (int a = 0; a < 3; ++a) {
+        float o = (&n.origin.x)[a], s = stepOf(n.exponent[a]);
+        b.lo[a] = o + float(qlo[a][k]) * s;
+        b.hi[a] = o + float(qhi[a][k]) * s;
+    }
+    return b;
+}
+
+bool contains(const Box& b, const float* lo, const float* hi) {
+    for (int a = 0; a < 3; ++a)
+        if (lo[a] < b.lo[a] || hi[a] > b.hi[a]) return false;
+    return true;
+}
+
+Box sphereBox(const dev::Sphere& s) {
+    const float* c = &s.center.x;
+    return {{c[0] - s.radius, c[1] - s.radius, c[2] - s.radius},
+            {c[0] + s.radius, c[1] + s.radius, c[2] + s.radius}};
+}
+
+Box triangleBox(const dev::Triangle& t) {
+    Box b;
+    for (int a = 0; a < 3; ++a) {
+        float v0 = (&t.v0.x)[a], v1 = (&t.v1.x)[a], v2 = (&t.v2.x)[a];
+        b.lo[a] = std::min({v0, v1, v2});
+        b.hi[a] = std::max({v0, v1, v2});
+    }
+    return b;
+}
+
+}  // namespace
+
+void buildWide(AccelData& data) {
+    data.wide.clear();
+    if (data.bvh.empty()) return;
+    data.wide = Collapser(data.bvh).run();
+}
+
+std::string checkWide(const AccelData& data) {
+    const std::vector<dev::WideNode>& nodes = data.wide;
+    size_t prims = data.spheres.size() + data.triangles.size();
+    if (nodes.empty()) return prims ? "no nodes for " + std::to_string(prims) + " primitives" : "";
+    std::vector<int> sphereSeen(data.spheres.size()), triangleSeen(data.triangles.size()),
+        nodeSeen(nodes.size());
+    // A primitive is found only if every decoded box on its path holds it: each stack entry
+    // carries the node and the boxes above it, and the deferred entries on its path.
+    struct Item {
+        int node, pending;
+        std::vector<Box> path;
+    };
+    std::vector<Item> stack{{0, 0, {}}};
+    while (!stack.empty()) {
+        Item it = std::move(stack.back());
+        stack.pop_back();
+        std::string where = "node " + std::to_string(it.node);
+        if (it.node < 0 || size_t(it.node) >= nodes.size()) return where + " out of range";
+        if (nodeSeen[it.node]++) return where + " is reached twice";
+        if (it.pending >= kStack) return where + " needs more than the device's stack";
+        const dev::WideNode& n = nodes[it.node];
+        int slots = 0;
+        for (int k = 0; k < kWidth; ++k) slots += n.child[k] != -1;
+        for (int k = 0; k < kWidth; ++k) {
+            if (n.child[k] == -1) continue;
+            std::vector<Box> path = it.path;
+            path.push_back(decode(n, k));
+            if (n.count[k] == 0) {
+                stack.push_back({n.child[k], it.pending + slots - 1, std::move(path)});
+                continue;
+            }
+            bool sphere = n.sphereMask >> k & 1;
+            size_t end = size_t(n.child[k]) + n.count[k];
+            if (n.child[k] < 0 || end > (sphere ? data.spheres.size() : data.triangles.size()))
+                return where + ": leaf range out of bounds";
+            for (size_t p = size_t(n.child[k]); p < end; ++p) {
+                int& seen = sphere ? sphereSeen[p] : triangleSeen[p];
+                std::string what = (sphere ? "sphere " : "triangle ") + std::to_string(p);
+                if (seen++) return what + " is in two leaves";
+                Box b = sphere ? sphereBox(data.spheres[p]) : triangleBox(data.triangles[p]);
+                for (const Box& above : path)
+                    if (!contains(above, b.lo, b.hi)) return where + ": a box on the path cuts " + what;
+            }
+        }
+    }
+    for (size_t t = 0; t < triangleSeen.size(); ++t)
+        if (!triangleSeen[t]) return "triangle " + std::to_string(t) + " is in no leaf";
+    for (size_t s = 0; s < sphereSeen.size(); ++s)
+        if (!sphereSeen[s]) return "sphere " + std::to_string(s) + " is in no leaf";
+    for (size_t i = 0; i < nodeSeen.size(); ++i)
+        if (!nodeSeen[i]) return "node " + std::to_string(i) + " is unreachable";
+    return "";
+}
+
+}  // namespace rt
