@@ -6,6 +6,7 @@
 
 #include "core/accel.h"
 #include "core/error.h"
+#include "core/pipeline.h"
 
 namespace rt::cli {
 
@@ -38,8 +39,11 @@ void SceneFlags::add(CLI::App& cmd) {
                  "Use the report's quadratic sphere test instead of the robust one");
     cmd.add_flag("--moller-trumbore", mollerTrumbore,
                  "Use Moller-Trumbore (report Algorithm 3) instead of the watertight test");
-    cmd.add_flag("--fixed-offset", fixedOffset,
-                 "Offset secondary rays by a fixed 1e-4 instead of one scaled to the hit point");
+    cmd.add_option("--offset", offset,
+                   "Where secondary rays start (core/SHADING.md section 3): bound (past a bound on "
+                   "the hit point's rounding error, scale-free), scaled (1e-4 max(1, |p|)) or "
+                   "fixed (1e-4) [bound]");
+    cmd.add_flag("--fixed-offset", fixedOffset, "Same as --offset fixed");
     cmd.add_option("--max-launch-ms", maxLaunchMs,
                    "Split frames into row tiles so that no kernel launch runs longer than this "
                    "(display-driver watchdogs); 0 = one launch per frame")
@@ -86,7 +90,12 @@ RenderOptions SceneFlags::apply(RenderOptions o) const {
     if (!accel.empty()) o.accel = parseAccel(accel);
     if (plainSphere) o.robustSphere = false;
     if (mollerTrumbore) o.watertight = false;
-    if (fixedOffset) o.scaledOffset = false;
+    if (!offset.empty()) o.offset = parseOffset(offset);
+    if (fixedOffset) {
+        if (!offset.empty() && o.offset != RenderOptions::Offset::Fixed)
+            throw Error("--fixed-offset contradicts --offset " + offset);
+        o.offset = RenderOptions::Offset::Fixed;
+    }
     o.maxLaunchMs = maxLaunchMs;
     auto range = [](const char* flag, int v, int lo, int hi) {
         if (v < lo || v > hi)

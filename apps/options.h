@@ -21,6 +21,7 @@ struct SceneFlags {
     std::string layout = "tree";
     std::string memoryBudget;  // bytes, with optional K/M/G suffix
     std::string accel;
+    std::string offset;  // fixed, scaled or bound; empty = the scene's default
     bool plainSphere = false, mollerTrumbore = false, fixedOffset = false;
     std::string kernelDir;
     double maxLaunchMs = 100;

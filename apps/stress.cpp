@@ -253,6 +253,9 @@ SphereResult tinySpheres(ClContext& cl, bool robust, double distance, double rad
 }
 
 // ---- (c) self-intersection of secondary rays ----
+constexpr RenderOptions::Offset kOffsets[] = {
+    RenderOptions::Offset::Fixed, RenderOptions::Offset::Scaled, RenderOptions::Offset::Bound};
+
 struct AcneResult {
     Counts meshOut, meshIn, meshEscape, sphereOut, sphereIn, sphereEscape;
 };
@@ -262,14 +265,14 @@ struct AcneResult {
 // shadow rays: a hit on the same object is acne) and inward (refraction rays: a hit on the same
 // triangle, or the sphere right at the start, is acne; leaving without hitting it means the
 // offset pushed the origin through the object).
-AcneResult acne(ClContext& cl, double scale, bool scaledOffset, int primary, int spawn) {
+AcneResult acne(ClContext& cl, double scale, RenderOptions::Offset offset, int primary, int spawn) {
     Scene scene = emptyScene("acne");
     const dvec3 meshC = scale * dvec3(-1.2, 0.1, 4), sphereC = scale * dvec3(1.2, -0.1, 4);
     addMeshSphere(scene, meshC, scale, 24, 48);
     scene.spheres.push_back({f3(sphereC), float(scale), 0, {0, 0, 0}});
     finalizeScene(scene);
     RenderOptions o;
-    o.scaledOffset = scaledOffset;
+    o.offset = offset;
     o.accel = RenderOptions::Accel::Bvh;
     o.bounces = 1;
     std::mt19937 rng(3);
@@ -308,12 +311,12 @@ struct ReintersectResult {
     Counts rehits;
 };
 
-ReintersectResult reintersect(ClContext& cl, bool scaledOffset, double lo, double hi, bool mixed,
-                              int triangles, int spawn) {
+ReintersectResult reintersect(ClContext& cl, RenderOptions::Offset offset, double lo, double hi,
+                              bool mixed, int triangles, int spawn) {
     Scene scene = emptyScene("reintersect");  // only for the program's defines
     addMeshSphere(scene, dvec3(0, 0, 4), 1, 4, 8);
     RenderOptions o;
-    o.scaledOffset = scaledOffset;
+    o.offset = offset;
     cl::Program program = cl.program("probe.cl", featureDefines(scene, o));
     std::mt19937 rng(11);
     std::uniform_real_distribution<double> e(lo, hi), s(-1, 1), u(0, 1);
@@ -678,18 +681,20 @@ void runAll(ClContext& cl, bool quick, Report& R) {
           "`Shade_Offset`). *out*: reflection/shadow side, a hit on the same object is acne; "
           "*in*: refraction side, a hit on the same triangle (or on the sphere within 1e-3 r) is "
           "acne; *escaped*: refraction rays that never hit the object they start in, because "
-          "the offset pushed the origin through it. fixed = 1e-4, scaled = 1e-4 max(1, |p|) "
-          "(core/SHADING.md section 3). Bar: 0 acne and 0 escapes for the scaled offset at "
-          "s = 1e-3 and s = 1e5.\n\n"
+          "the offset pushed the origin through it. fixed = 1e-4, scaled = 1e-4 max(1, |p|), "
+          "bound = just past the hit point's rounding-error bound (core/SHADING.md section 3). "
+          "Bar: 0 acne and 0 escapes for the scaled offset at s = 1e-3 and s = 1e5, and for "
+          "the bound offset at every scale.\n\n"
        << "| s | offset | mesh out | mesh in | mesh escaped | sphere out | sphere in | sphere "
           "escaped | bar |\n| --- | --- | --- | --- | --- | --- | --- | --- | --- |\n";
     for (double s : {1e-8, 1e-5, 1e-3, 1.0, 1e3, 1e5, 1e8})
-        for (bool scaled : {false, true}) {
-            AcneResult a = acne(cl, s, scaled, 2000 / scaleDown, 64);
-            bool barCase = scaled && (s == 1e-3 || s == 1e5);
+        for (RenderOptions::Offset off : kOffsets) {
+            AcneResult a = acne(cl, s, off, 2000 / scaleDown, 64);
+            bool barCase = off == RenderOptions::Offset::Bound ||
+                           (off == RenderOptions::Offset::Scaled && (s == 1e-3 || s == 1e5));
             long long bad = a.meshOut.bad + a.meshIn.bad + a.meshEscape.bad + a.sphereOut.bad +
                             a.sphereIn.bad + a.sphereEscape.bad;
-            md << "| " << fmt("%g", s) << " | " << (scaled ? "scaled" : "fixed") << " | "
+            md << "| " << fmt("%g", s) << " | " << offsetName(off) << " | "
                << counts(a.meshOut) << " | " << counts(a.meshIn) << " | "
                << counts(a.meshEscape) << " | " << counts(a.sphereOut) << " | "
                << counts(a.sphereIn) << " | " << counts(a.sphereEscape) << " | "
@@ -704,9 +709,9 @@ void runAll(ClContext& cl, bool quick, Report& R) {
        << "| triangles | offset | first ray missed | triangles with re-hits | re-hits / rays |\n"
        << "| --- | --- | --- | --- | --- |\n";
     auto reRow = [&](const std::string& label, bool mixed, double lo, double hi) {
-        for (bool scaled : {false, true}) {
-            ReintersectResult r = reintersect(cl, scaled, lo, hi, mixed, 1000 / scaleDown, 1000);
-            md << "| " << label << " | " << (scaled ? "scaled" : "fixed") << " | " << r.missed
+        for (RenderOptions::Offset off : kOffsets) {
+            ReintersectResult r = reintersect(cl, off, lo, hi, mixed, 1000 / scaleDown, 1000);
+            md << "| " << label << " | " << offsetName(off) << " | " << r.missed
                << " | " << r.withRehits << " | " << counts(r.rehits) << " |\n";
         }
     };

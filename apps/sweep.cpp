@@ -70,7 +70,9 @@ void writeCsv(const nlohmann::json& rows, const fs::path& path) {
         "error",
         // Added with the limits sweep (after the old columns, so old readers keep their places).
         "end", "failure", "skip_reason", "memory_tiles", "launches", "longest_launch_ms",
-        "max_launch_ms", "frames", "image_max_diff", "image_nonfinite"};
+        "max_launch_ms", "frames", "image_max_diff", "image_nonfinite",
+        // Added with issue 17: fixed, scaled or bound.
+        "offset"};
     const char* rays[4] = {"primary", "reflection", "refraction", "shadow"};
     const char* counts[6] = {"objects", "spheres", "planes", "triangles", "meshes", "lights"};
     std::ofstream f(path);

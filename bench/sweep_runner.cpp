@@ -133,7 +133,8 @@ nlohmann::json rowJson(const SweepConfig& config, const Cell& c, const Measureme
         {"max_launch_ms", o.maxLaunchMs},
         {"robust_sphere", o.robustSphere},
         {"watertight", o.watertight},
-        {"scaled_offset", o.scaledOffset},
+        {"scaled_offset", o.offset != RenderOptions::Offset::Fixed},  // old column: not fixed
+        {"offset", offsetName(o.offset)},
         {"warmup", c.warmup},
         {"repeats", c.repeats},
         {"status", m.ok ? "ok" : skipped.empty() ? "error" : "skipped"},

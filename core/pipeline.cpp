@@ -28,6 +28,22 @@ const char* pipelineName(PipelineKind kind) {
     return "?";
 }
 
+RenderOptions::Offset parseOffset(const std::string& name) {
+    if (name == "fixed") return RenderOptions::Offset::Fixed;
+    if (name == "scaled") return RenderOptions::Offset::Scaled;
+    if (name == "bound") return RenderOptions::Offset::Bound;
+    throw Error("--offset " + name + ": must be one of fixed, scaled, bound");
+}
+
+const char* offsetName(RenderOptions::Offset offset) {
+    switch (offset) {
+        case RenderOptions::Offset::Fixed: return "fixed";
+        case RenderOptions::Offset::Scaled: return "scaled";
+        case RenderOptions::Offset::Bound: return "bound";
+    }
+    return "?";
+}
+
 void FrameStats::addKernel(const std::string& name, double ms) {
     deviceMs += ms;
     longestLaunchMs = std::max(longestLaunchMs, ms);  // both pipelines add once per launch
@@ -116,7 +132,8 @@ std::vector<std::string> featureDefines(const Scene& scene, const RenderOptions&
     if (o.countRays) d.push_back("RT_COUNT_RAYS");
     if (o.robustSphere) d.push_back("RT_ROBUST_SPHERE");
     if (o.watertight) d.push_back("RT_WATERTIGHT");
-    if (o.scaledOffset) d.push_back("RT_SCALED_OFFSET");
+    if (o.offset == RenderOptions::Offset::Scaled) d.push_back("RT_SCALED_OFFSET");
+    if (o.offset == RenderOptions::Offset::Bound) d.push_back("RT_BOUND_OFFSET");
     // The grid and the BVH hold spheres and triangles; bv bounds meshes. Without anything to
     // hold, the define is left out and the program loops over what there is.
     bool prims = !scene.spheres.empty() || !scene.triangles.empty();

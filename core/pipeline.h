@@ -20,6 +20,9 @@ namespace rt {
 enum class PipelineKind { Cpu, Mega, Wave };
 PipelineKind parsePipeline(const std::string& name);  // throws rt::Error on an unknown name
 const char* pipelineName(PipelineKind kind);
+// --offset names: fixed, scaled, bound. parseOffset throws rt::Error naming the flag.
+RenderOptions::Offset parseOffset(const std::string& name);
+const char* offsetName(RenderOptions::Offset offset);
 
 struct FrameStats {
     // Device time per kernel, summed over every launch of the frame (profiling events), in ms.

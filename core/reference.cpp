@@ -136,6 +136,8 @@ struct Hit {
 
 struct Surface {
     dvec3 p, n;
+    dvec3 ng;   // geometric normal, facing the incoming ray like n
+    dvec3 err;  // per-component bound on the rounding error of p (bound offset)
     bool inside;
     int material;
 };
@@ -229,45 +231,88 @@ class Tracer {
         return blocked;
     }
 
-    // Section 2, normals: the shading normal faces the incoming ray; inside when flipped.
+    // Section 2, normals: the shading normal faces the incoming ray; inside when flipped. Hit
+    // points and normals as the device computes them (core/cl/raytree.cl), in double.
     Surface surface(const Ray& ray, const Hit& hit) const {
         Surface s;
         s.p = ray.origin + hit.t * ray.dir;
+        s.ng = dvec3(0);
+        const bool bound = opt_.offset == RenderOptions::Offset::Bound;
         if (hit.kind == RT_KIND_TRIANGLE) {
             const dev::Triangle& tr = scene_.triangles[hit.object];
-            const dvec3 ng = glm::cross(toD(tr.v1) - toD(tr.v0), toD(tr.v2) - toD(tr.v0));
+            const dvec3 v0 = toD(tr.v0), v1 = toD(tr.v1), v2 = toD(tr.v2);
+            const dvec3 ng = glm::cross(v1 - v0, v2 - v0);
             const double w = 1 - hit.u - hit.v;
             const dvec3 ns =
                 glm::normalize(w * toD(tr.n0) + hit.u * toD(tr.n1) + hit.v * toD(tr.n2));
+            if (bound) s.p = w * v0 + hit.u * v1 + hit.v * v2;
             s.inside = glm::dot(ng, ray.dir) > 0;
             s.n = s.inside ? -ns : ns;
+            s.ng = glm::normalize(s.inside ? -ng : ng);
+            s.err = gamma(7) * (glm::abs(v0) + glm::abs(v1) + glm::abs(v2));
             s.material = tr.material;
             return s;
         }
         dvec3 n;
         if (hit.kind == RT_KIND_SPHERE) {
             const dev::Sphere& sp = scene_.spheres[hit.object];
-            n = (s.p - toD(sp.center)) / double(sp.radius);
+            const dvec3 c = toD(sp.center);
+            if (opt_.robustSphere) {
+                n = sphereNormal(ray, c, sp.radius, hit.t);
+                s.p = c + double(sp.radius) * n;
+            } else {
+                n = (s.p - c) / double(sp.radius);  // the report's normal
+                if (bound) s.p = c + double(sp.radius) * glm::normalize(n);
+            }
+            s.err = gamma(5) * (glm::abs(c) + double(sp.radius) * glm::abs(glm::normalize(n)));
             s.material = sp.material;
         } else {
             const dev::Plane& pl = scene_.planes[hit.object];
             n = toD(pl.normal);
+            if (bound) s.p += (double(pl.offset) - glm::dot(n, s.p)) * n;
+            s.err = gamma(6) * (glm::abs(s.p) + std::abs(double(pl.offset)));
             s.material = pl.material;
         }
         s.inside = glm::dot(n, ray.dir) > 0;
         s.n = s.inside ? -n : n;
+        s.ng = s.n;
         return s;
     }
 
-    // Section 3.
-    double offset(dvec3 p) const {
-        if (!opt_.scaledOffset) return 1e-4;
-        return 1e-4 * std::max({1.0, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
+    // Section 2, robust spheres: p - c = f -/+ h d with f's component along d projected out.
+    static dvec3 sphereNormal(const Ray& ray, dvec3 c, double r, double t) {
+        const dvec3 oc = ray.origin - c;
+        const double b = -glm::dot(oc, ray.dir);
+        dvec3 f = oc + b * ray.dir;
+        f -= glm::dot(f, ray.dir) * ray.dir;
+        const double h = std::sqrt(std::max(r * r - glm::dot(f, f), 0.0));
+        return glm::normalize(t < b ? f - h * ray.dir : f + h * ray.dir);
+    }
+
+    // gamma(n) of double arithmetic (u = 2^-53): the reference's error bounds are those of its
+    // own rounding, about 5e8 times below the device's, so its bound offset is the limit of a
+    // vanishing offset that the float pipelines approach (core/SHADING.md section 3).
+    static double gamma(int n) {
+        const double nu = n * std::numeric_limits<double>::epsilon() / 2;
+        return nu / (1 - nu);
+    }
+
+    // Section 3: where a secondary ray leaves s, on the normal's side (side 1) or the other.
+    dvec3 spawn(const Surface& s, double side) const {
+        if (opt_.offset == RenderOptions::Offset::Fixed) return s.p + side * 1e-4 * s.n;
+        if (opt_.offset == RenderOptions::Offset::Scaled)
+            return s.p + side * 1e-4 *
+                             std::max({1.0, std::abs(s.p.x), std::abs(s.p.y), std::abs(s.p.z)}) *
+                             s.n;
+        const dvec3 w = side * s.ng;
+        dvec3 o = s.p + glm::dot(glm::abs(s.ng), s.err) * w;
+        for (int i = 0; i < 3; ++i)
+            if (w[i] != 0) o[i] = std::nextafter(o[i], w[i] > 0 ? HUGE_VAL : -HUGE_VAL);
+        return o;
     }
 
     // Section 4: visibility of light j from p, in [1 - strength, 1].
-    double visibility(const Surface& s, const dev::Light& light, double eps) const {
-        const dvec3 o = s.p + eps * s.n;
+    double visibility(const Surface& s, const dev::Light& light, dvec3 o) const {
         const dvec3 c = toD(light.position);
         int samples = 1;
         if (light.radius > 0) samples = opt_.shadowSamples;
@@ -296,7 +341,7 @@ class Tracer {
     }
 
     // Section 5: Blinn-Phong with shadowed lights.
-    dvec3 base(const Surface& s, dvec3 d, const dev::Material& m, double eps) const {
+    dvec3 base(const Surface& s, dvec3 d, const dev::Material& m, dvec3 origin) const {
         dvec3 colour = toD(m.ambient);
         for (const dev::Light& light : scene_.lights) {
             const dvec3 l = glm::normalize(toD(light.position) - s.p);
@@ -304,7 +349,7 @@ class Tracer {
             if (!(nl > 0)) continue;
             const dvec3 h = glm::normalize(l - d);
             const double spec = std::pow(std::max(glm::dot(s.n, h), 0.0), double(m.exponent));
-            colour += visibility(s, light, eps) * toD(light.color) *
+            colour += visibility(s, light, origin) * toD(light.color) *
                       (toD(m.diffuse) * nl + toD(m.specular) * spec);
         }
         return colour;
@@ -357,8 +402,7 @@ class Tracer {
         const Surface s = surface(ray, hit);
         const dev::Material& m = scene_.materials[s.material];
         const dvec3 d = ray.dir;
-        const double eps = offset(s.p);
-        const dvec3 baseColour = base(s, d, m, eps);
+        const dvec3 baseColour = base(s, d, m, spawn(s, 1));
         const bool transparent = m.opacity < 1;
         const double n1 = s.inside ? double(m.ior) : 1.0;
         const double n2 = s.inside ? 1.0 : double(m.ior);
@@ -366,12 +410,12 @@ class Tracer {
         double f = 0, o = 1;
         dvec3 reflected(0), refracted(0);
         if (depth < opt_.bounces && (m.reflectance > 0 || transparent)) {
-            reflected = trace(Ray{s.p + eps * s.n, ref::reflect(d, s.n)}, depth + 1);
+            reflected = trace(Ray{spawn(s, 1), ref::reflect(d, s.n)}, depth + 1);
             f = transparent ? ref::fresnel(-glm::dot(d, s.n), n1, n2) : double(m.reflectance);
         }
         if (depth < opt_.bounces && transparent) {
             if (const auto t = ref::refract(d, s.n, n1 / n2)) {
-                refracted = trace(Ray{s.p - eps * s.n, *t}, depth + 1);
+                refracted = trace(Ray{spawn(s, -1), *t}, depth + 1);
                 o = m.opacity;
             }
         }

@@ -25,7 +25,10 @@ struct RenderOptions {
     // Accuracy switches (issue 3). Defaults are the robust methods.
     bool robustSphere = true;   // false: report Algorithm 2 (plain quadratic)
     bool watertight = true;     // false: report Algorithm 3 (Moller-Trumbore)
-    bool scaledOffset = true;   // false: fixed epsilon for secondary-ray origins
+    // Secondary-ray origins (core/SHADING.md section 3): a fixed 1e-4, 1e-4 max(1, |p|), or a
+    // bound on the hit point's rounding error (issue 17, the default).
+    enum class Offset { Fixed, Scaled, Bound };
+    Offset offset = Offset::Bound;
 
     // Pipeline choices; the CPU reference ignores them.
     enum class Layout { Tree, Weighted };

@@ -99,6 +99,9 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"render scenes/spheres.json --pipeline mega --bounces 15 -o /tmp/x.png",
                 "--layout weighted"},
         BadCase{"render scenes/spheres.json --accel kdtree -o /tmp/x.png", "--accel"},
+        BadCase{"render scenes/spheres.json --offset tiny -o /tmp/x.png", "--offset tiny"},
+        BadCase{"render scenes/spheres.json --offset scaled --fixed-offset -o /tmp/x.png",
+                "--fixed-offset contradicts --offset scaled"},
         BadCase{"render tests/data/bad_scenes/negative_radius.json -o /tmp/x.png",
                 "tests/data/bad_scenes/negative_radius.json: /spheres/"},
         BadCase{"render scenes/spheres.json --kernel-dir /no/such -o /tmp/x.png", "--kernel-dir"},
@@ -140,7 +143,8 @@ TEST(Cli, HelpExplainsEveryRenderFlag) {
     Result r = run("render --help");
     EXPECT_EQ(r.status, 0);
     for (const char* flag : {"--pipeline", "--device", "--size", "--bounces", "--shadow-samples",
-                             "--aa", "--stats", "--memory-budget", "--layout", "--kernel-dir"})
+                             "--aa", "--stats", "--memory-budget", "--layout", "--kernel-dir",
+                             "--offset"})
         EXPECT_NE(r.out.find(flag), std::string::npos) << flag;
 }
 

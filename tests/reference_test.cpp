@@ -341,7 +341,7 @@ TEST(Reference, AccuracySwitchesAgreeOnOrdinaryScenes) {
         return over;
     };
     RenderOptions plain = o, mt = o, fixed = o;
-    plain.robustSphere = false, mt.watertight = false, fixed.scaledOffset = false;
+    plain.robustSphere = false, mt.watertight = false, fixed.offset = RenderOptions::Offset::Fixed;
     EXPECT_LE(pixelsOff(plain), 1);
     EXPECT_LE(pixelsOff(mt), 1);
     EXPECT_LE(pixelsOff(fixed), 40 * 30 / 50);

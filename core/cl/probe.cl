@@ -103,7 +103,7 @@ kernel void Probe_Spawn(RT_SCENE_PARAMS, global const float* rays, int spawn, gl
     for (int k = 0; k < 8; ++k) o[k] = 0;
     o[0] = node.kind;
     if (node.kind == RT_KIND_MISS || node.kind == RT_KIND_PLANE) return;
-    float3 p = f3(node.point), n = f3(node.normal), ng = n;
+    float3 ng = f3(node.normal);
     float radius = 0.0f;
     int mesh = -1;
 #ifdef RT_HAS_TRIANGLES
@@ -117,13 +117,15 @@ kernel void Probe_Spawn(RT_SCENE_PARAMS, global const float* rays, int spawn, gl
 #ifdef RT_HAS_SPHERES
     if (node.kind == RT_KIND_SPHERE) radius = sc.spheres[node.object].radius;
 #endif
-    float eps = Shade_Offset(p);
+    // The origins the pipelines give reflection/shadow rays and refraction rays.
+    float3 outer = RayTree_SpawnOrigin(&sc, &node, 1.0f);
+    float3 inner = RayTree_SpawnOrigin(&sc, &node, -1.0f);
     for (int k = 0; k < spawn; ++k) {
         float3 w = Probe_Direction((uint)i, (uint)k);
         float cosG = dot(w, ng);
         if (cosG == 0.0f) continue;
         bool out_ = cosG > 0.0f;
-        Hit h = Scene_Intersect(&sc, makeRay(p + (out_ ? eps : -eps) * n, w), INFINITY);
+        Hit h = Scene_Intersect(&sc, makeRay(out_ ? outer : inner, w), INFINITY);
         bool sameObject = h.kind == node.kind &&
                           (node.kind == RT_KIND_SPHERE ? h.object == node.object : false);
 #ifdef RT_HAS_TRIANGLES
@@ -163,15 +165,22 @@ kernel void Probe_Reintersect(global const float* tris, global const float* orig
         out[i] = -1;
         return;
     }
-    float3 p = org + t * d;
     float3 n = normalize(cross(v1 - v0, v2 - v0));
     if (dot(n, d) > 0.0f) n = -n;
+#ifdef RT_BOUND_OFFSET
+    float3 p = (1.0f - uv.x - uv.y) * v0 + uv.x * v1 + uv.y * v2;  // as RayTree_TraceNode
+    float3 outer = Shade_SpawnOrigin(p, n, Shade_TriangleError(v0, v1, v2), 1.0f);
+    float3 inner = Shade_SpawnOrigin(p, n, Shade_TriangleError(v0, v1, v2), -1.0f);
+#else
+    float3 p = org + t * d;
     float eps = Shade_Offset(p);
+    float3 outer = p + eps * n, inner = p + (-eps) * n;
+#endif
     int hits = 0;
     for (int k = 0; k < spawn; ++k) {
         float3 w = Probe_Direction((uint)i, (uint)k);
-        float side = dot(w, n) >= 0.0f ? 1.0f : -1.0f;
-        if (Triangle_Intersect(makeRay(p + side * eps * n, w), v0, v1, v2, &uv) > 0.0f) ++hits;
+        bool out_ = dot(w, n) >= 0.0f;
+        if (Triangle_Intersect(makeRay(out_ ? outer : inner, w), v0, v1, v2, &uv) > 0.0f) ++hits;
     }
     out[i] = hits;
 }

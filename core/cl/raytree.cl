@@ -20,6 +20,61 @@ inline int RayTree_SlotType(int i) {
     return (i - 1) % RT_BRANCH == 0 ? RT_RAY_REFLECTION : RT_RAY_REFRACTION;
 }
 
+// Robust sphere hits (Haines et al., Ray Tracing Gems ch. 7, SHADING.md section 2): the outward
+// normal from the quantities of the stable test, not from (p - c) / r. f = oc + b d is the
+// centre-to-ray offset and the root is t = b -/+ h, so p - c = f -/+ h d; f's rounding along d
+// (from b) is projected out first. A float hit point one ulp off a tiny sphere far away no
+// longer skews the normal; the point is then put back on the sphere.
+inline float3 RayTree_SphereNormal(Ray ray, float3 center, float radius, float t) {
+    float3 oc = ray.origin - center;
+    float b = -dot(oc, ray.dir);
+    float3 f = oc + b * ray.dir;
+    f -= dot(f, ray.dir) * ray.dir;
+    float h = sqrt(fmax(radius * radius - dot(f, f), 0.0f));
+    return normalize(t < b ? f - h * ray.dir : f + h * ray.dir);
+}
+
+// Geometric normal of a traced hit, facing the incoming ray like node->normal.
+inline float3 RayTree_GeometricNormal(const SceneData* sc, const Node* node) {
+#ifdef RT_HAS_TRIANGLES
+    if (node->kind == RT_KIND_TRIANGLE) {
+        Triangle tri = sc->triangles[node->object];
+        float3 v0 = f3(tri.v0);
+        float3 g = normalize(cross(f3(tri.v1) - v0, f3(tri.v2) - v0));
+        return (node->flags & RT_NODE_INSIDE) ? -g : g;
+    }
+#endif
+    return f3(node->normal);
+}
+
+// Where a secondary ray leaves a traced hit: on the side the normal faces (side +1: reflection
+// and shadow rays) or the other (-1: refraction). Section 3: fixed or scaled distance along the
+// shading normal, or (RT_BOUND_OFFSET) just past the hit point's rounding-error bound.
+inline float3 RayTree_SpawnOrigin(const SceneData* sc, const Node* node, float side) {
+    float3 p = f3(node->point);
+#ifdef RT_BOUND_OFFSET
+    float3 err = (float3)(Shade_Offset(p) / 3.0f);  // a kind without a case below
+#ifdef RT_HAS_SPHERES
+    if (node->kind == RT_KIND_SPHERE) {
+        Sphere s = sc->spheres[node->object];
+        err = Shade_SphereError(f3(s.center), s.radius, normalize(f3(node->normal)));
+    }
+#endif
+#ifdef RT_HAS_PLANES
+    if (node->kind == RT_KIND_PLANE) err = Shade_PlaneError(p, sc->planes[node->object].offset);
+#endif
+#ifdef RT_HAS_TRIANGLES
+    if (node->kind == RT_KIND_TRIANGLE) {
+        Triangle tri = sc->triangles[node->object];
+        err = Shade_TriangleError(f3(tri.v0), f3(tri.v1), f3(tri.v2));
+    }
+#endif
+    return Shade_SpawnOrigin(p, RayTree_GeometricNormal(sc, node), err, side);
+#else
+    return p + (side * Shade_Offset(p)) * f3(node->normal);
+#endif
+}
+
 // Traces one ray of the given RT_RAY_* type: the closest hit, its facing normal, and its
 // shadow-ray occlusion counts.
 inline Node RayTree_TraceNode(const SceneData* sc, Ray ray, int type) {
@@ -44,7 +99,17 @@ inline Node RayTree_TraceNode(const SceneData* sc, Ray ray, int type) {
 #ifdef RT_HAS_SPHERES
     if (hit.kind == RT_KIND_SPHERE) {
         Sphere s = sc->spheres[hit.object];
-        normal = (p - f3(s.center)) / s.radius;
+#ifdef RT_ROBUST_SPHERE
+        normal = RayTree_SphereNormal(ray, f3(s.center), s.radius, hit.t);
+        p = f3(s.center) + s.radius * normal;
+#else
+        normal = (p - f3(s.center)) / s.radius;  // the report's normal
+#ifdef RT_BOUND_OFFSET
+        // The report's t is off by up to an ulp of |o - c| (cancellation in -b - s): put the
+        // point back on the sphere so that the sphere's error bound holds for it.
+        p = f3(s.center) + s.radius * normalize(normal);
+#endif
+#endif
         inside = dot(normal, ray.dir) > 0.0f;
         material = s.material;
     }
@@ -53,6 +118,9 @@ inline Node RayTree_TraceNode(const SceneData* sc, Ray ray, int type) {
     if (hit.kind == RT_KIND_PLANE) {
         Plane pl = sc->planes[hit.object];
         normal = f3(pl.normal);
+#ifdef RT_BOUND_OFFSET
+        p += (pl.offset - dot(normal, p)) * normal;  // onto the plane: an error bound from p alone
+#endif
         inside = dot(normal, ray.dir) > 0.0f;
         material = pl.material;
     }
@@ -64,6 +132,9 @@ inline Node RayTree_TraceNode(const SceneData* sc, Ray ray, int type) {
         float3 geometric = cross(f3(tri.v1) - v0, f3(tri.v2) - v0);
         float u = hit.uv.x, v = hit.uv.y;
         normal = normalize((1.0f - u - v) * f3(tri.n0) + u * f3(tri.n1) + v * f3(tri.n2));
+#ifdef RT_BOUND_OFFSET
+        p = (1.0f - u - v) * v0 + u * f3(tri.v1) + v * f3(tri.v2);  // error bounded by vertices
+#endif
         inside = dot(geometric, ray.dir) > 0.0f;
         material = tri.material;
     }
@@ -75,8 +146,9 @@ inline Node RayTree_TraceNode(const SceneData* sc, Ray ray, int type) {
     n.point = F3(p);
     n.normal = F3(normal);
     n.material = (ushort)material;
+    float3 origin = RayTree_SpawnOrigin(sc, &n, 1.0f);
     for (int j = 0; j < sc->settings.lightCount; ++j)
-        n.occluded[j] = (uchar)Shade_Occlusion(sc, p, normal, j);
+        n.occluded[j] = (uchar)Shade_OcclusionFrom(sc, p, normal, origin, j);
     return n;
 }
 
@@ -85,17 +157,17 @@ inline bool RayTree_ChildRay(const SceneData* sc, const Node* parent, int depth,
     if (!(parent->flags & RT_NODE_TRACED) || parent->kind == RT_KIND_MISS) return false;
     if (depth >= sc->settings.bounces) return false;
     Material m = sc->materials[parent->material];
-    float3 p = f3(parent->point), n = f3(parent->normal), d = f3(parent->dir);
+    float3 n = f3(parent->normal), d = f3(parent->dir);
     if (slot == 0) {
         if (!(m.reflectance > 0.0f || m.opacity < 1.0f)) return false;
-        *out = makeRay(p + Shade_Offset(p) * n, normalize(Shade_Reflect(d, n)));
+        *out = makeRay(RayTree_SpawnOrigin(sc, parent, 1.0f), normalize(Shade_Reflect(d, n)));
         return true;
     }
     if (!(m.opacity < 1.0f)) return false;
     float eta = (parent->flags & RT_NODE_INSIDE) ? m.ior : 1.0f / m.ior;
     float3 t;
     if (!Shade_Refract(d, n, eta, &t)) return false;
-    *out = makeRay(p - Shade_Offset(p) * n, normalize(t));
+    *out = makeRay(RayTree_SpawnOrigin(sc, parent, -1.0f), normalize(t));
     return true;
 }
 

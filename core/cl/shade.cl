@@ -1,4 +1,4 @@
-// rtlab — environment, secondary-ray geometry, shadows and Blinn-Phong
+// rtlab — environment, secondary-ray origins and directions, shadows and Blinn-Phong
 // (core/SHADING.md sections 3 to 9). Shared by both pipelines.
 #ifndef RTLAB_CL_SHADE
 #define RTLAB_CL_SHADE
@@ -56,15 +56,57 @@ inline float3 Shade_Environment(const SceneData* sc, float3 d) {
 #endif
 }
 
-// ---- secondary-ray geometry (sections 3, 6, 7) ----
+// ---- secondary-ray origins (section 3) ----
+// gamma(n) = n u / (1 - n u) with u = 2^-24: the relative error bound of n float operations
+// (Higham; pbrt-v4's error analysis uses the same).
+inline float Shade_Gamma(int n) {
+    float nu = (float)n * 5.9604645e-8f;
+    return nu / (1.0f - nu);
+}
+
+// Offset distance of the fixed and scaled rules. Under RT_BOUND_OFFSET only callers that have
+// no hit record use it (Shade_Occlusion): a bound from |p| alone, which misses the error of
+// points computed from larger coordinates (a big sphere near its top), hence Shade_PointError.
 inline float Shade_Offset(float3 p) {
-#ifdef RT_SCALED_OFFSET
+#if defined(RT_BOUND_OFFSET)
+    float3 a = fabs(p);
+    return Shade_Gamma(7) * (a.x + a.y + a.z);
+#elif defined(RT_SCALED_OFFSET)
     return 1e-4f * fmax(1.0f, fmax(fabs(p.x), fmax(fabs(p.y), fabs(p.z))));
 #else
     return 1e-4f;
 #endif
 }
 
+// Per-component bound on the rounding error of a hit point of each kind, as RayTree_TraceNode
+// computes it under RT_BOUND_OFFSET (SHADING.md section 3): reprojected onto the sphere
+// (c + r n), reprojected onto the plane, or interpolated from the triangle's vertices.
+inline float3 Shade_SphereError(float3 center, float radius, float3 n) {
+    return Shade_Gamma(5) * (fabs(center) + radius * fabs(n));
+}
+
+inline float3 Shade_PlaneError(float3 p, float offset) {
+    return Shade_Gamma(6) * (fabs(p) + fabs(offset));
+}
+
+inline float3 Shade_TriangleError(float3 v0, float3 v1, float3 v2) {
+    return Shade_Gamma(7) * (fabs(v0) + fabs(v1) + fabs(v2));
+}
+
+// pbrt-v4's OffsetRayOrigin: from p, whose components are off by at most err, move along the
+// geometric normal ng (side +1) or against it (-1) by dot(|ng|, err), which leaves the box of
+// possible true points on that side of the surface; then round each component one float away
+// from p, so that the addition cannot round the offset back into the box.
+inline float3 Shade_SpawnOrigin(float3 p, float3 ng, float3 err, float side) {
+    float3 w = side * ng;
+    float3 o = p + dot(fabs(ng), err) * w;
+    o.x = w.x > 0.0f ? nextafter(o.x, INFINITY) : (w.x < 0.0f ? nextafter(o.x, -INFINITY) : o.x);
+    o.y = w.y > 0.0f ? nextafter(o.y, INFINITY) : (w.y < 0.0f ? nextafter(o.y, -INFINITY) : o.y);
+    o.z = w.z > 0.0f ? nextafter(o.z, INFINITY) : (w.z < 0.0f ? nextafter(o.z, -INFINITY) : o.z);
+    return o;
+}
+
+// ---- secondary-ray directions (sections 6, 7) ----
 inline float3 Shade_Reflect(float3 d, float3 n) { return d - 2.0f * n * dot(d, n); }
 
 // Report Algorithm 1 with the S > 1 test; n faces the incoming ray, eta = n1/n2.
@@ -91,13 +133,13 @@ inline int Shade_LightSamples(const SceneData* sc, int j) {
     return sc->lights[j].radius > 0.0f ? sc->settings.shadowSamples : 1;
 }
 
-// Occluded shadow rays from p toward light j; 0 when the light is behind the surface.
-inline int Shade_Occlusion(const SceneData* sc, float3 p, float3 n, int j) {
+// Occluded shadow rays toward light j from `origin`, the offset start of hit point p with
+// shading normal n; 0 when the light is behind the surface.
+inline int Shade_OcclusionFrom(const SceneData* sc, float3 p, float3 n, float3 origin, int j) {
     Light light = sc->lights[j];
     float3 lp = f3(light.position);
     float3 w = normalize(lp - p);
     if (dot(n, w) <= 0.0f) return 0;
-    float3 origin = p + Shade_Offset(p) * n;
     int samples = Shade_LightSamples(sc, j);
     // Orthonormal basis around w (Duff et al. 2017).
     float sign = w.z >= 0.0f ? 1.0f : -1.0f;
@@ -119,6 +161,12 @@ inline int Shade_Occlusion(const SceneData* sc, float3 p, float3 n, int j) {
         if (Scene_Occluded(sc, makeRay(origin, v / len), len)) ++occluded;
     }
     return occluded;
+}
+
+// The same from p itself, offset by Shade_Offset(p) along n; RayTree_TraceNode uses the hit's
+// own error bound instead (RayTree_SpawnOrigin).
+inline int Shade_Occlusion(const SceneData* sc, float3 p, float3 n, int j) {
+    return Shade_OcclusionFrom(sc, p, n, p + Shade_Offset(p) * n, j);
 }
 
 // ---- Blinn-Phong (section 5) ----
