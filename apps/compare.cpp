@@ -41,10 +41,12 @@ double median(std::vector<double> v) {
 void addCompare(CLI::App& app) {
     CompareArgs& a = compareArgs;
     compareCmd = app.add_subcommand(
-        "compare", "Render one scene with cpu, mega and wave; print time and error side by side");
+        "compare",
+        "Render one scene with cpu, mega, wave and queue; print time and error side by side");
     compareCmd->add_option("scene", a.scene, "Scene file (.json) or OBJ model")->required();
     compareCmd->add_option("-o,--output-prefix", a.outputPrefix,
-                           "Also write PREFIX-cpu.png, PREFIX-mega.png, PREFIX-wave.png");
+                           "Also write PREFIX-cpu.png, PREFIX-mega.png, PREFIX-wave.png, "
+                           "PREFIX-queue.png");
     compareCmd->add_option("--repeats", a.repeats, "Timed frames per pipeline (median is shown)")
         ->check(CLI::Range(1, 1000))
         ->capture_default_str();
@@ -81,7 +83,7 @@ int runCompare() {
     std::printf("%-6s %12s %12.2f %14s %12s %12s\n", "cpu", "-", cpuMs, "reference", "-", "-");
     std::vector<Image> images;
     long long nonfinite = countNonFinite(reference);
-    for (PipelineKind kind : {PipelineKind::Mega, PipelineKind::Wave}) {
+    for (PipelineKind kind : {PipelineKind::Mega, PipelineKind::Wave, PipelineKind::Queue}) {
         if (kind == PipelineKind::Wave && o.adaptiveAa) {
             std::printf("%-6s %12s   (no adaptive anti-aliasing in the wavefront: not compared)\n",
                         pipelineName(kind), "-");
@@ -104,10 +106,12 @@ int runCompare() {
             writeImage(img, a.outputPrefix + "-" + pipelineName(kind) + ".png");
         images.push_back(std::move(img));
     }
-    if (images.size() == 2) {
+    if (images.size() == 3) {
         ImageDiff mw = compareImages(images[0], images[1], 0.0, false);
         std::printf("\nmega vs wave: max |difference| %.3g (%s)\n", mw.maxAbs,
                     mw.maxAbs == 0 ? "bit-identical" : "not bit-identical");
+        ImageDiff mq = compareImages(images[0], images[2], 0.0, false);  // queue sums like --layout weighted
+        std::printf("mega vs queue: max |difference| %.3g\n", mq.maxAbs);
     }
     // A NaN or infinite pixel is a broken frame whatever the error figures say.
     if (nonfinite) throw Error(std::to_string(nonfinite) + " non-finite (NaN or infinite) pixel(s) in the frames above");

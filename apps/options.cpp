@@ -30,6 +30,9 @@ void SceneFlags::add(CLI::App& cmd) {
     cmd.add_option("--memory-budget", memoryBudget,
                    "Wavefront: bytes the global ray tree may use (e.g. 64M); frames past it are "
                    "rendered in row tiles [device max allocation]");
+    cmd.add_option("--pool", pool,
+                   "Queue pipeline: ray slots in the pool, 1..67108864 (memory does not grow with "
+                   "--bounces) [from the device: 2M on GPUs, 64K on CPUs]");
     cmd.add_option("--accel", accel,
                    "How rays find spheres and triangles: none (per-mesh bounding sphere only), "
                    "bv (plus 7 slab pairs per mesh), grid (uniform grid) or bvh (SAH BVH) "
@@ -87,6 +90,11 @@ RenderOptions SceneFlags::apply(RenderOptions o) const {
     if (adaptive) o.adaptiveAa = true;
     o.layout = layout == "weighted" ? RenderOptions::Layout::Weighted : RenderOptions::Layout::Tree;
     if (!memoryBudget.empty()) o.memoryBudget = parseBytes(memoryBudget, "--memory-budget");
+    if (pool) {
+        if (*pool < 1 || *pool > (1ll << 26))
+            throw Error("--pool " + std::to_string(*pool) + ": must be in 1..67108864");
+        o.pool = size_t(*pool);
+    }
     if (!accel.empty()) o.accel = parseAccel(accel);
     if (plainSphere) o.robustSphere = false;
     if (mollerTrumbore) o.watertight = false;

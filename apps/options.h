@@ -20,6 +20,7 @@ struct SceneFlags {
     bool adaptive = false;
     std::string layout = "tree";
     std::string memoryBudget;  // bytes, with optional K/M/G suffix
+    std::optional<long long> pool;  // queue pipeline: ray slots
     std::string accel;
     std::string offset;  // fixed, scaled or bound; empty = the scene's default
     bool plainSphere = false, mollerTrumbore = false, fixedOffset = false;

@@ -48,6 +48,18 @@ void printAccel(const AccelStats& a, RenderOptions::Accel chosen) {
                 unit, mib(double(a.bytes)).c_str(), a.detail.c_str(), a.buildMs);
 }
 
+// The queue pipeline's pool and its queue lengths per bounce (wavefront/queue).
+void printQueue(const FrameStats& s) {
+    std::printf("  pool         %zu rays, %zu bytes (%s), %d bounce iterations, %lld paths restarted\n",
+                s.poolRays, s.poolBytes, mib(double(s.poolBytes)).c_str(), s.iterations,
+                s.restartedPaths);
+    std::printf("  queues       bounce %10s %10s %10s %10s\n", "miss", "diffuse", "mirror", "glass");
+    for (size_t d = 0; d < s.queueLengths.size(); ++d) {
+        const auto& q = s.queueLengths[d];
+        std::printf("               %6zu %10lld %10lld %10lld %10lld\n", d, q[0], q[1], q[2], q[3]);
+    }
+}
+
 int runDevices() {
     std::vector<DeviceInfo> devices = listDevices();
     if (devices.empty()) {
@@ -101,6 +113,7 @@ int runRender() {
         if (kind == PipelineKind::Wave)
             std::printf("  ray tree     %zu bytes (%s) in %d tile(s), %zu B node\n", s.treeBytes,
                         mib(double(s.treeBytes)).c_str(), s.tiles, sizeof(dev::Node));
+        if (kind == PipelineKind::Queue) printQueue(s);
         if (kind != PipelineKind::Cpu)
             std::printf("  private      %zu bytes per work-item\n", s.privateBytes);
         if (kind != PipelineKind::Cpu) printAccel(s.accel, options.accel);
@@ -119,8 +132,9 @@ void addRender(CLI::App& app) {
     renderCmd->add_option("-o,--output", a.output,
                           "Output image: .png (8-bit sRGB, clamped) or .exr (linear float) "
                           "[render.png]");
-    renderCmd->add_option("--pipeline", a.pipeline, "cpu (double-precision reference), mega or wave")
-        ->check(CLI::IsMember({"cpu", "mega", "wave"}))
+    renderCmd->add_option("--pipeline", a.pipeline,
+                          "cpu (double-precision reference), mega, wave or queue")
+        ->check(CLI::IsMember({"cpu", "mega", "wave", "queue"}))
         ->capture_default_str();
     a.flags.add(*renderCmd);
     renderCmd->add_flag("--stats", a.stats, "Print kernel times (profiling events) and memory use");

@@ -41,7 +41,7 @@ const char* kUsage = R"(rtlab-bench: megakernel versus wavefront, timed by OpenC
 Google Benchmark mode (every --benchmark_* flag works, e.g. --benchmark_filter=REGEX,
 --benchmark_out=FILE.json, --benchmark_min_time=0.1):
   --scenes=a,b,...      scene names in the scene folder [empty,spheres,shadows,cornell,mesh,envmap]
-  --pipelines=mega,wave
+  --pipelines=mega,wave,queue
   --sizes=WxH,...       [640x360,1280x720,1920x1080,3840x2160]
   --bounces=0..8        list and/or ranges [0..8]
   --accels=bvh,...      none, bv, grid, bvh [each scene's default]
@@ -73,7 +73,7 @@ cells of stop-after-failure groups may fail: that is what they measure); 130 aft
 
 struct Flags {
     std::vector<std::string> scenes{"empty", "spheres", "shadows", "cornell", "mesh", "envmap"};
-    std::vector<std::string> pipelines{"mega", "wave"};
+    std::vector<std::string> pipelines{"mega", "wave", "queue"};
     std::vector<std::string> sizes{"640x360", "1280x720", "1920x1080", "3840x2160"};
     std::string bounces = "0..8";
     std::vector<std::string> accels;  // empty: each scene's default

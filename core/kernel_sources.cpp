@@ -19,7 +19,7 @@ std::string KernelSources::file(const std::string& name) const {
             if (name == s.name) return s.text;
         throw Error("kernel source '" + name + "' is not embedded in this binary");
     }
-    for (const char* sub : {"", "core", "core/cl", "megakernel", "wavefront"}) {
+    for (const char* sub : {"", "core", "core/cl", "megakernel", "wavefront", "wavefront/queue"}) {
         std::filesystem::path p = dir_ / sub / name;
         if (std::filesystem::is_regular_file(p)) {
             std::ifstream in(p, std::ios::binary);

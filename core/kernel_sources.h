@@ -21,7 +21,7 @@ const std::vector<EmbeddedSource>& embeddedKernelSources();
 class KernelSources {
 public:
     // Empty dir: the embedded copies. Otherwise the tree is searched (core/, core/cl/,
-    // megakernel/, wavefront/ of a source checkout) for each file name.
+    // megakernel/, wavefront/, wavefront/queue/ of a source checkout) for each file name.
     explicit KernelSources(std::filesystem::path dir = {});
 
     // The text of one file, or throws rt::Error.

@@ -8,6 +8,7 @@
 #include "core/error.h"
 #include "megakernel/megakernel.h"
 #include "wavefront/wavefront.h"
+#include "wavefront/queue/queue.h"
 #include "core/reference.h"
 
 namespace rt {
@@ -16,7 +17,8 @@ PipelineKind parsePipeline(const std::string& name) {
     if (name == "cpu") return PipelineKind::Cpu;
     if (name == "mega") return PipelineKind::Mega;
     if (name == "wave") return PipelineKind::Wave;
-    throw Error("--pipeline " + name + ": must be one of cpu, mega, wave");
+    if (name == "queue") return PipelineKind::Queue;
+    throw Error("--pipeline " + name + ": must be one of cpu, mega, wave, queue");
 }
 
 const char* pipelineName(PipelineKind kind) {
@@ -24,6 +26,7 @@ const char* pipelineName(PipelineKind kind) {
         case PipelineKind::Cpu: return "cpu";
         case PipelineKind::Mega: return "mega";
         case PipelineKind::Wave: return "wave";
+        case PipelineKind::Queue: return "queue";
     }
     return "?";
 }
@@ -79,6 +82,7 @@ std::unique_ptr<Pipeline> makePipeline(PipelineKind kind, ClContext* cl) {
     if (kind == PipelineKind::Cpu) return std::make_unique<CpuPipeline>();
     if (!cl) throw Error(std::string("pipeline ") + pipelineName(kind) + " needs an OpenCL device");
     if (kind == PipelineKind::Mega) return std::make_unique<MegakernelPipeline>(*cl);
+    if (kind == PipelineKind::Queue) return std::make_unique<QueuePipeline>(*cl);
     return std::make_unique<WavefrontPipeline>(*cl);
 }
 

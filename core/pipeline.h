@@ -17,7 +17,7 @@
 
 namespace rt {
 
-enum class PipelineKind { Cpu, Mega, Wave };
+enum class PipelineKind { Cpu, Mega, Wave, Queue };
 PipelineKind parsePipeline(const std::string& name);  // throws rt::Error on an unknown name
 const char* pipelineName(PipelineKind kind);
 // --offset names: fixed, scaled, bound. parseOffset throws rt::Error naming the flag.
@@ -44,6 +44,13 @@ struct FrameStats {
     // The acceleration structure the frame traversed (DeviceScene::accelStats); its build time
     // is that of the frame that built it, since later frames reuse the device copy.
     AccelStats accel;
+    // Queue pipeline (wavefront/queue): ray slots and device bytes of the pool with its queues and
+    // staging (not the image), bounces run, paths cut for room and started again, and the rays
+    // per bounce (depth 0..B) in each class queue: miss, diffuse, mirror, glass.
+    size_t poolRays = 0, poolBytes = 0;
+    int iterations = 0;
+    long long restartedPaths = 0;
+    std::vector<std::array<long long, 4>> queueLengths;
     void addKernel(const std::string& name, double ms);
 };
 

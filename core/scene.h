@@ -39,6 +39,7 @@ struct RenderOptions {
     bool countRays = false;         // count rays by type on the device (slower; benchmarks)
     // Split frames into row tiles so no launch runs past this (display watchdogs); 0 = off.
     double maxLaunchMs = 0;
+    size_t pool = 0;  // queue pipeline: ray slots in the pool (0 = chosen from the device)
 };
 
 struct Environment {

@@ -4,8 +4,9 @@
 //   RT_LAYOUT_TREE      the report's design: all N nodes in heap order, traced top-down and
 //                       combined bottom-up with the same functions as the wavefront image kernel;
 //   RT_LAYOUT_WEIGHTED  a depth-first stack of at most B*(C-1)+1 pending rays, each carrying the
-//                       weight its parent gives it, added straight into the pixel.
-#include "raytree.cl"
+//                       weight its parent gives it, added straight into the pixel
+//                       (core/cl/pathstate.cl, shared with the queue wavefront).
+#include "pathstate.cl"  // Pending and the forward-weight step (weighted layout)
 
 #ifdef RT_LAYOUT_TREE
 inline float3 Megakernel_Sample(const SceneData* sc, int x, int y, int sample) {
@@ -26,50 +27,24 @@ inline float3 Megakernel_Sample(const SceneData* sc, int x, int y, int sample) {
 #else
 #define RT_STACK_SIZE (RT_MAX_BOUNCES * (RT_BRANCH - 1) + 1)
 
-typedef struct Pending {
-    Ray ray;
-    float3 weight;
-    int depth;
-    int type;  // RT_RAY_*
-} Pending;
-
 inline float3 Megakernel_Sample(const SceneData* sc, int x, int y, int sample) {
     Pending stack[RT_STACK_SIZE];
     int top = 0;
-    stack[top].ray = RayTree_PrimaryRay(sc, x, y, sample);
-    stack[top].weight = (float3)(1.0f, 1.0f, 1.0f);
-    stack[top].depth = 0;
-    stack[top].type = RT_RAY_PRIMARY;
-    ++top;
+    stack[top++] = PathState_Primary(sc, x, y, sample);
     float3 color = (float3)(0.0f, 0.0f, 0.0f);
     while (top > 0) {
         Pending p = stack[--top];
         Node node = RayTree_TraceNode(sc, p.ray, p.type);
         if (node.kind == RT_KIND_MISS) {
-            color += p.weight * Shade_Environment(sc, p.ray.dir);
+            color += PathState_Miss(sc, &p);
             continue;
         }
-        Ray refl, refr;
-        bool hasRefl = RayTree_ChildRay(sc, &node, p.depth, 0, &refl);
-        bool hasRefr = RT_BRANCH == 2 && RayTree_ChildRay(sc, &node, p.depth, 1, &refr);
-        float F, o;
-        RayTree_Mix(sc, &node, hasRefl, hasRefr, &F, &o);
-        color += p.weight * ((1.0f - F) * o) * Shade_Base(sc, &node);
+        Pending refl, refr;
+        bool hasRefl, hasRefr;
+        color += PathState_Step(sc, &node, &p, true, true, &refl, &hasRefl, &refr, &hasRefr);
         // Depth-first: at most one pending sibling per level, so B*(C-1)+1 entries suffice.
-        if (hasRefr) {
-            stack[top].ray = refr;
-            stack[top].weight = p.weight * ((1.0f - F) * (1.0f - o));
-            stack[top].depth = p.depth + 1;
-            stack[top].type = RT_RAY_REFRACTION;
-            ++top;
-        }
-        if (hasRefl) {
-            stack[top].ray = refl;
-            stack[top].weight = p.weight * F;
-            stack[top].depth = p.depth + 1;
-            stack[top].type = RT_RAY_REFLECTION;
-            ++top;
-        }
+        if (hasRefr) stack[top++] = refr;
+        if (hasRefl) stack[top++] = refl;
     }
     return color;
 }

@@ -102,6 +102,10 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"render scenes/spheres.json --offset tiny -o /tmp/x.png", "--offset tiny"},
         BadCase{"render scenes/spheres.json --offset scaled --fixed-offset -o /tmp/x.png",
                 "--fixed-offset contradicts --offset scaled"},
+        BadCase{"render scenes/spheres.json --pipeline queue --pool 0 -o /tmp/x.png",
+                "--pool 0: must be in 1..67108864"},
+        BadCase{"render scenes/spheres.json --pipeline queue --pool 8 --bounces 6 -o /tmp/x.png",
+                "use --pool 64 or more"},
         BadCase{"render tests/data/bad_scenes/negative_radius.json -o /tmp/x.png",
                 "tests/data/bad_scenes/negative_radius.json: /spheres/"},
         BadCase{"render scenes/spheres.json --kernel-dir /no/such -o /tmp/x.png", "--kernel-dir"},
@@ -118,7 +122,7 @@ INSTANTIATE_TEST_SUITE_P(
     caseName);
 
 TEST(Cli, RendersWithEveryPipeline) {
-    for (const char* p : {"cpu", "mega", "wave"}) {
+    for (const char* p : {"cpu", "mega", "wave", "queue"}) {
         std::string out = ::testing::TempDir() + "cli_" + std::to_string(getpid()) + "_" + p + ".exr";
         Result r = run(std::string("render scenes/shadows.json --size 32x24 --pipeline ") + p +
                        " --stats -o " + out);
@@ -127,6 +131,10 @@ TEST(Cli, RendersWithEveryPipeline) {
         if (std::string(p) == "wave") {
             EXPECT_NE(r.out.find("trace"), std::string::npos) << r.out;
             EXPECT_NE(r.out.find("ray tree"), std::string::npos) << r.out;
+        }
+        if (std::string(p) == "queue") {
+            EXPECT_NE(r.out.find("pool"), std::string::npos) << r.out;
+            EXPECT_NE(r.out.find("shade diffuse"), std::string::npos) << r.out;
         }
     }
 }

@@ -32,7 +32,7 @@ std::vector<Cell> cellsOf(const SweepConfig& c) {
 
 TEST(LimitsSweep, FileParsesIntoLimitsGroups) {
     SweepConfig c = bench::loadSweep(bench::findSweep("limits"));
-    ASSERT_EQ(c.groups.size(), 4u);
+    ASSERT_EQ(c.groups.size(), 6u);
     for (const auto& g : c.groups) {
         EXPECT_EQ(g.name, "limits");
         EXPECT_TRUE(g.stopAfterFailure);
@@ -48,10 +48,14 @@ TEST(LimitsSweep, FileParsesIntoLimitsGroups) {
     EXPECT_EQ(c.groups[2].pipelines, std::vector<PipelineKind>{PipelineKind::Wave});
     EXPECT_EQ(c.groups[3].bounces, std::vector<int>{8});
     EXPECT_EQ(c.groups[3].sizes.back(), std::make_pair(15360, 8640));
+    // The queue wavefront on both axes (its memory is flat in B).
+    EXPECT_EQ(c.groups[4].pipelines, std::vector<PipelineKind>{PipelineKind::Queue});
+    EXPECT_EQ(c.groups[4].bounces.back(), 16);
+    EXPECT_EQ(c.groups[5].pipelines, std::vector<PipelineKind>{PipelineKind::Queue});
 
     std::vector<Cell> cells = cellsOf(c);
-    // 17 x 2 + 17 + 17 + 6 x 2, less the two 640x360 B=8 cells both axes share.
-    EXPECT_EQ(cells.size(), 78u);
+    // 17 x 2 + 17 + 17 + 6 x 2 + 17 + 6, less the three 640x360 B=8 cells both axes share.
+    EXPECT_EQ(cells.size(), 100u);
     int shared = 0;
     for (const Cell& cell : cells) {
         EXPECT_TRUE(cell.stopAfterFailure);

@@ -1,0 +1,169 @@
+// rtlab — the queue wavefront (issue 14): paths live in a pool of ray records in global memory,
+// structure of arrays, and every stage is a kernel over a compacted queue of them:
+//   generate  -> camera rays into free pool slots (new pixels, or pixels cut for room)
+//   extend    -> closest hit of every queued ray; sorts rays into one queue per shading class
+//   shadow    -> any-hit shadow rays of every ray that hit a surface
+//   shade_*   -> one kernel per class: the local term, and the children into a staging area
+//   scan      -> exclusive prefix sum of the children per ray (stable: order is kept)
+//   accumulate-> each path's contributions of this bounce, added to its pixel in queue order
+//   compact   -> children from the staging area to the front of the pool, without holes
+// A ray carries its pixel and its weight (core/cl/pathstate.cl, the step the megakernel's
+// weighted layout takes), so contributions go straight to the pixel: no tree is stored.
+//
+// Order and determinism: rays of one path sit next to each other in the pool, because generate
+// appends whole paths and the prefix sum places every ray's children where its own slot was in
+// the order. A path's contributions of one bounce are therefore a contiguous run that one
+// work-item sums in a fixed order: the image is the same from run to run, without float atomics.
+// The class and shadow queues are filled with atomics and so come in any order, but every result
+// is written at the ray's own pool index, so their order changes no pixel.
+#include "pathstate.cl"
+#include "queue_layout.h"
+
+// The pool's fields, one array each (float3 fields as 3 floats, vload3/vstore3).
+typedef struct QueueRays {
+    global float* origin;
+    global float* dir;
+    global float* weight;
+    global int* pixel;  // y * width + x
+    global int* meta;   // depth << 8 | RT_RAY_* type
+} QueueRays;
+
+#define QUEUE_RAYS_PARAMS(p)                                                            \
+    global float *p##Origin, global float *p##Dir, global float *p##Weight,             \
+        global int *p##Pixel, global int *p##Meta
+#define QUEUE_RAYS_INIT(p)       \
+    QueueRays p;                 \
+    p.origin = p##Origin;        \
+    p.dir = p##Dir;              \
+    p.weight = p##Weight;        \
+    p.pixel = p##Pixel;          \
+    p.meta = p##Meta
+
+inline Pending Queue_Load(const QueueRays* r, int i) {
+    int meta = r->meta[i];
+    return PathState_Make(makeRay(vload3(i, r->origin), vload3(i, r->dir)), vload3(i, r->weight),
+                          meta >> 8, meta & 0xff);
+}
+
+inline void Queue_Store(const QueueRays* r, int i, const Pending* p, int pixel) {
+    vstore3(p->ray.origin, i, r->origin);
+    vstore3(p->ray.dir, i, r->dir);
+    vstore3(p->weight, i, r->weight);
+    r->pixel[i] = pixel;
+    r->meta[i] = p->depth << 8 | p->type;
+}
+
+// From: pixels (retry list first, then a run of new ones) / To: pool slots [first, first + count).
+kernel void Queue_Generate(RT_SCENE_PARAMS, QUEUE_RAYS_PARAMS(rays), int first, int count,
+                           global const int* retry, int retryCount, int nextPixel) {
+    int k = get_global_id(0);
+    if (k >= count) return;
+    RT_SCENE_INIT(sc);
+    QUEUE_RAYS_INIT(rays);
+    int pixel = k < retryCount ? retry[k] : nextPixel + (k - retryCount);
+    int y = pixel / settings.width, x = pixel - y * settings.width;
+    Pending p = PathState_Primary(&sc, x, y, settings.sampleIndex);
+    Queue_Store(&rays, first + k, &p, pixel);
+}
+
+inline int Queue_Class(const SceneData* sc, const Node* node) {
+    if (node->kind == RT_KIND_MISS) return RT_Q_MISS;
+    Material m = sc->materials[node->material];
+    if (m.opacity < 1.0f) return RT_Q_GLASS;
+    return m.reflectance > 0.0f ? RT_Q_MIRROR : RT_Q_DIFFUSE;
+}
+
+// From: pool [0, n) / To: nodes[i], class queues, shadow queue, per-bounce histogram.
+// Pushes are aggregated per work-group in local memory: one global atomic per queue per group.
+kernel void Queue_Extend(RT_SCENE_PARAMS, QUEUE_RAYS_PARAMS(rays), int n, global Node* nodes,
+                         global int* classQueues, int pool, global int* shadowQueue,
+                         global int* counters) {
+    local int count[RT_Q_CLASSES + 1], base[RT_Q_CLASSES + 1];
+    local int histogram[(RT_Q_MAX_DEPTH + 1) * RT_Q_CLASSES];
+    int lid = get_local_id(0), size = get_local_size(0), i = get_global_id(0);
+    for (int k = lid; k < RT_Q_CLASSES + 1; k += size) count[k] = 0;
+    for (int k = lid; k < (RT_Q_MAX_DEPTH + 1) * RT_Q_CLASSES; k += size) histogram[k] = 0;
+    barrier(CLK_LOCAL_MEM_FENCE);
+    int cls = -1, slot = 0, shadowSlot = -1;
+    if (i < n) {
+        RT_SCENE_INIT(sc);
+        QUEUE_RAYS_INIT(rays);
+        // Occlusion is the shadow stage's work: with no lights, RayTree_TraceNode casts none.
+        sc.settings.lightCount = 0;
+        Pending p = Queue_Load(&rays, i);
+        Node node = RayTree_TraceNode(&sc, p.ray, p.type);
+        nodes[i] = node;
+        cls = Queue_Class(&sc, &node);
+        slot = atomic_inc(&count[cls]);
+        atomic_inc(&histogram[p.depth * RT_Q_CLASSES + cls]);
+        if (cls != RT_Q_MISS && settings.lightCount > 0)
+            shadowSlot = atomic_inc(&count[RT_Q_CLASSES]);
+    }
+    barrier(CLK_LOCAL_MEM_FENCE);
+    for (int k = lid; k < RT_Q_CLASSES + 1; k += size)
+        base[k] = count[k] ? atomic_add(&counters[RT_Q_COUNT + k], count[k]) : 0;
+    for (int k = lid; k < (RT_Q_MAX_DEPTH + 1) * RT_Q_CLASSES; k += size)
+        if (histogram[k]) atomic_add(&counters[RT_Q_HISTOGRAM + k], histogram[k]);
+    barrier(CLK_LOCAL_MEM_FENCE);
+    if (cls >= 0) classQueues[cls * pool + base[cls] + slot] = i;
+    if (shadowSlot >= 0) shadowQueue[base[RT_Q_CLASSES] + shadowSlot] = i;
+}
+
+// From: shadow queue / To: nodes[i].occluded. The same Shade_Occlusion call, on the same point
+// and normal, that RayTree_TraceNode makes when it casts the shadow rays itself.
+kernel void Queue_Shadow(RT_SCENE_PARAMS, global Node* nodes, global const int* shadowQueue,
+                         global const int* counters) {
+    int k = get_global_id(0);
+    if (k >= counters[RT_Q_SHADOW]) return;
+    RT_SCENE_INIT(sc);
+    int i = shadowQueue[k];
+    Node node = nodes[i];
+    float3 p = f3(node.point), n = f3(node.normal);
+    for (int j = 0; j < settings.lightCount; ++j)
+        nodes[i].occluded[j] = (uchar)Shade_Occlusion(&sc, p, n, j);
+}
+
+// One ray of class `cls` (a constant in each kernel below, so each compiles to one code path):
+// its contribution to contrib[i], its children to staging slots [C i, C i + children).
+inline void Queue_Shade(const SceneData* sc, int cls, int i, const QueueRays* rays,
+                        global const Node* nodes, const QueueRays* staging,
+                        global float* contrib, global int* children) {
+    Pending p = Queue_Load(rays, i);
+    float3 term;
+    int c = 0;
+    if (cls == RT_Q_MISS) {
+        term = PathState_Miss(sc, &p);
+    } else {
+        Node node = nodes[i];
+        Pending refl, refr;
+        bool hasRefl, hasRefr;
+        term = PathState_Step(sc, &node, &p, cls != RT_Q_DIFFUSE, cls == RT_Q_GLASS, &refl,
+                               &hasRefl, &refr, &hasRefr);
+        int pixel = rays->pixel[i];
+        if (hasRefl) Queue_Store(staging, RT_BRANCH * i + c++, &refl, pixel);
+        if (hasRefr) Queue_Store(staging, RT_BRANCH * i + c++, &refr, pixel);
+    }
+    vstore3(term, i, contrib);
+    children[i] = c;
+}
+
+#define QUEUE_SHADE_KERNEL(name, cls)                                                          \
+    kernel void name(RT_SCENE_PARAMS, QUEUE_RAYS_PARAMS(rays), global const Node* nodes,       \
+                     global const int* classQueues, int pool, global const int* counters,      \
+                     QUEUE_RAYS_PARAMS(staging), global float* contrib, global int* children) { \
+        int k = get_global_id(0);                                                              \
+        if (k >= counters[RT_Q_COUNT + cls]) return;                                           \
+        RT_SCENE_INIT(sc);                                                                     \
+        QUEUE_RAYS_INIT(rays);                                                                 \
+        QUEUE_RAYS_INIT(staging);                                                              \
+        Queue_Shade(&sc, cls, classQueues[cls * pool + k], &rays, nodes, &staging, contrib,    \
+                    children);                                                                 \
+    }
+
+// From: class queue / To: contrib, children, staging.
+QUEUE_SHADE_KERNEL(Queue_ShadeMiss, RT_Q_MISS)
+QUEUE_SHADE_KERNEL(Queue_ShadeDiffuse, RT_Q_DIFFUSE)
+QUEUE_SHADE_KERNEL(Queue_ShadeMirror, RT_Q_MIRROR)
+QUEUE_SHADE_KERNEL(Queue_ShadeGlass, RT_Q_GLASS)
+
+#include "queue_scan.cl"

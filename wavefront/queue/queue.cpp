@@ -1,0 +1,363 @@
+// rtlab — the queue wavefront's frame loop: per AA sample, bounce after bounce over the pool until
+// every pixel's path has ended. Launches are sized by one read-back per bounce: the host reads the
+// counters after the prefix sum (children spawned, class-queue lengths) and sizes the next bounce
+// with them; the stage kernels within a bounce are launched over the queue's upper bound and read
+// their exact length from the device, so a bounce costs one host round trip, not one per queue.
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <chrono>
+#include <deque>
+#include <map>
+
+#include "core/error.h"
+#include "wavefront/queue/queue.h"
+#include "wavefront/queue/queue_layout.h"
+
+namespace rt {
+
+namespace {
+
+// "Queue_ShadeGlass" -> "shade glass": the stage names --stats prints.
+std::string stageName(const std::string& kernel) {
+    std::string out;
+    for (char ch : kernel.substr(kernel.find('_') + 1)) {
+        if (std::isupper(static_cast<unsigned char>(ch)) && !out.empty()) out += ' ';
+        out += char(std::tolower(static_cast<unsigned char>(ch)));
+    }
+    return out;
+}
+
+// The scene's feature defines, but one program for every bounce limit: B travels in the
+// settings, and the histogram is sized for the most bounces there can be (RT_Q_MAX_DEPTH), so
+// changing B (the viewer's +/-, a sweep over B) builds nothing. No tree is kept: N is 1.
+std::vector<std::string> programDefines(const Scene& scene, const RenderOptions& o, int group) {
+    std::vector<std::string> d;
+    for (const std::string& x : featureDefines(scene, o))
+        if (x.rfind("RT_MAX_BOUNCES=", 0) != 0 && x.rfind("RT_TREE_NODES=", 0) != 0) d.push_back(x);
+    d.push_back("RT_MAX_BOUNCES=" + std::to_string(RT_Q_MAX_DEPTH));
+    d.push_back("RT_TREE_NODES=1");
+    d.push_back("RT_QUEUE_GROUP=" + std::to_string(group));
+    return d;
+}
+
+// The shading classes a scene's materials can produce: the others' kernels are not launched.
+std::array<bool, RT_Q_CLASSES> sceneClasses(const Scene& scene) {
+    std::array<bool, RT_Q_CLASSES> c{};
+    c[RT_Q_MISS] = true;
+    for (const dev::Material& m : scene.materials) {
+        if (m.opacity < 1.0f) c[RT_Q_GLASS] = true;
+        else if (m.reflectance > 0.0f) c[RT_Q_MIRROR] = true;
+        else c[RT_Q_DIFFUSE] = true;
+    }
+    return c;
+}
+
+// One frame's launches, named for --stats: kernels, their local sizes, the events to time.
+class QueueFrame {
+public:
+    QueueFrame(ClContext& cl, cl::Program& program, const DeviceScene& scene,
+               const QueueBuffers& buf, int group)
+        : cl_(cl), program_(program), scene_(scene), b_(buf), group_(group) {}
+
+    cl::Kernel& kernel(const std::string& name) {
+        auto it = kernels_.find(name);
+        if (it != kernels_.end()) return it->second;
+        cl::Kernel k(program_, name.c_str());
+        size_t most = k.getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(cl_.device().device);
+        size_t local = size_t(group_);
+        bool scan = name.rfind("Queue_Scan", 0) == 0;  // their local arrays need the full group
+        if (scan && most < local)
+            throw Error("queue pipeline: " + name + " runs at most " + std::to_string(most) +
+                        " work-items per group on " + cl_.device().name + ", needs " +
+                        std::to_string(local));
+        while (local > most) local /= 2;
+        locals_[name] = local;
+        return kernels_.emplace(name, k).first->second;
+    }
+    // Scene arguments (0..11) of a kernel that takes them, with this frame's settings.
+    cl::Kernel& sceneKernel(const std::string& name, const dev::RenderSettings& s) {
+        cl::Kernel& k = kernel(name);
+        scene_.setArgs(k, s);
+        return k;
+    }
+    static int setRays(cl::Kernel& k, int at, const QueueBuffers::Rays& r) {
+        for (const cl::Buffer* field : {&r.origin, &r.dir, &r.weight, &r.pixel, &r.meta})
+            k.setArg(at++, *field);
+        return at;
+    }
+    // A 1D launch over `items` work-items (none when zero), timed under the kernel's name.
+    void launch(const std::string& name, size_t items) {
+        if (items == 0) return;
+        size_t local = locals_.at(name), global = (items + local - 1) / local * local;
+        cl::Event e;
+        cl_.queue().enqueueNDRangeKernel(kernels_.at(name), cl::NullRange, cl::NDRange(global),
+                                         cl::NDRange(local), nullptr, &e);
+        events_.emplace_back(stageName(name), e);
+    }
+    std::vector<std::pair<std::string, cl::Event>>& events() { return events_; }
+
+private:
+    ClContext& cl_;
+    cl::Program& program_;
+    const DeviceScene& scene_;
+    const QueueBuffers& b_;
+    int group_;
+    std::map<std::string, cl::Kernel> kernels_;
+    std::map<std::string, size_t> locals_;
+    std::vector<std::pair<std::string, cl::Event>> events_;
+};
+
+const char* const kShadeKernels[RT_Q_CLASSES] = {"Queue_ShadeMiss", "Queue_ShadeDiffuse",
+                                                 "Queue_ShadeMirror", "Queue_ShadeGlass"};
+
+// The bounces of one AA sample: which pixels are still to start, and the pool's live rays.
+class QueuePass {
+public:
+    QueuePass(ClContext& cl, QueueFrame& f, const QueueBuffers& b, const RenderOptions& o,
+              FrameStats& stats)
+        : cl_(cl), f_(f), b_(b), o_(o), stats_(stats),
+          // --max-launch-ms: start with a probe and learn what a ray costs (see adaptLimit).
+          limit_(o.maxLaunchMs > 0 ? std::min(b.pool, kProbeRays) : b.pool) {}
+
+    // classes: which shade kernels the scene can need (a class without a material never runs).
+    void run(const dev::RenderSettings& settings, const std::array<bool, RT_Q_CLASSES>& classes) {
+        lights_ = settings.lightCount;
+        classes_ = classes;
+        bindKernels(settings);
+        next_ = 0;
+        retry_.clear();
+        size_t n = admit(0);
+        while (n > 0) n = bounce(n);
+    }
+
+private:
+    // Arguments that stay the same through the pass (the settings carry the sample index).
+    void bindKernels(const dev::RenderSettings& s) {
+        const int a = DeviceScene::kFirstKernelArg;
+        cl::Kernel& gen = f_.sceneKernel("Queue_Generate", s);
+        QueueFrame::setRays(gen, a, b_.rays);
+        gen.setArg(a + 7, b_.retry);
+        cl::Kernel& ext = f_.sceneKernel("Queue_Extend", s);
+        int at = QueueFrame::setRays(ext, a, b_.rays);
+        ext.setArg(at + 1, b_.nodes);
+        ext.setArg(at + 2, b_.classQueues);
+        ext.setArg(at + 3, cl_int(b_.pool));
+        ext.setArg(at + 4, b_.shadowQueue);
+        ext.setArg(at + 5, b_.counters);
+        cl::Kernel& sh = f_.sceneKernel("Queue_Shadow", s);
+        sh.setArg(a, b_.nodes);
+        sh.setArg(a + 1, b_.shadowQueue);
+        sh.setArg(a + 2, b_.counters);
+        for (const char* name : kShadeKernels) {
+            cl::Kernel& k = f_.sceneKernel(name, s);
+            at = QueueFrame::setRays(k, a, b_.rays);
+            k.setArg(at, b_.nodes);
+            k.setArg(at + 1, b_.classQueues);
+            k.setArg(at + 2, cl_int(b_.pool));
+            k.setArg(at + 3, b_.counters);
+            at = QueueFrame::setRays(k, at + 4, b_.staging);
+            k.setArg(at, b_.contrib);
+            k.setArg(at + 1, b_.children);
+        }
+        cl::Kernel& scan = f_.kernel("Queue_ScanBlocks");
+        scan.setArg(0, b_.children);
+        scan.setArg(2, b_.offsets);
+        scan.setArg(3, b_.blockSums);
+        cl::Kernel& sums = f_.kernel("Queue_ScanSums");
+        sums.setArg(0, b_.blockSums);
+        sums.setArg(2, b_.counters);
+        cl::Kernel& cut = f_.kernel("Queue_FindCut");
+        cut.setArg(0, b_.children);
+        cut.setArg(1, b_.offsets);
+        cut.setArg(2, b_.blockSums);
+        cut.setArg(3, b_.rays.pixel);
+        cut.setArg(5, cl_int(b_.pool));
+        cut.setArg(6, b_.counters);
+        cl::Kernel& acc = f_.kernel("Queue_Accumulate");
+        acc.setArg(0, b_.rays.pixel);
+        acc.setArg(1, b_.rays.meta);
+        acc.setArg(2, b_.contrib);
+        acc.setArg(4, b_.sums);
+        cl::Kernel& comp = f_.kernel("Queue_Compact");
+        at = QueueFrame::setRays(comp, 0, b_.staging);
+        comp.setArg(at, b_.children);
+        comp.setArg(at + 1, b_.offsets);
+        comp.setArg(at + 2, b_.blockSums);
+        QueueFrame::setRays(comp, at + 4, b_.rays);
+    }
+
+    // Camera rays into slots [first, ...): pixels cut earlier first, then new ones, as many as
+    // the pool (or the launch-time limit) has room for. Returns the live rays after it.
+    size_t admit(size_t first) {
+        size_t total = size_t(o_.width) * size_t(o_.height);
+        size_t room = limit_ > first ? limit_ - first : 0;
+        size_t count = std::min(room, retry_.size() + (total - next_));
+        size_t fromRetry = std::min(count, retry_.size());
+        if (fromRetry) {
+            std::vector<cl_int> ids(retry_.begin(), retry_.begin() + long(fromRetry));
+            retry_.erase(retry_.begin(), retry_.begin() + long(fromRetry));
+            cl_.queue().enqueueWriteBuffer(b_.retry, CL_TRUE, 0, ids.size() * 4, ids.data());
+        }
+        if (count == 0) return first;
+        cl::Kernel& gen = f_.kernel("Queue_Generate");
+        const int a = DeviceScene::kFirstKernelArg + 5;
+        gen.setArg(a, cl_int(first));
+        gen.setArg(a + 1, cl_int(count));
+        gen.setArg(a + 3, cl_int(fromRetry));
+        gen.setArg(a + 4, cl_int(next_));
+        f_.launch("Queue_Generate", count);
+        next_ += count - fromRetry;
+        return first + count;
+    }
+
+    // One bounce of the n live rays; returns the live rays of the next one.
+    size_t bounce(size_t n) {
+        cl::CommandQueue& q = cl_.queue();
+        q.enqueueFillBuffer(b_.counters, cl_int(0), 0, RT_Q_PER_ITERATION * 4);
+        f_.kernel("Queue_Extend").setArg(DeviceScene::kFirstKernelArg + 5, cl_int(n));
+        size_t firstEvent = f_.events().size();
+        f_.launch("Queue_Extend", n);
+        if (lights_ > 0) f_.launch("Queue_Shadow", n);
+        for (int c = 0; c < RT_Q_CLASSES; ++c)
+            if (classes_[c]) f_.launch(kShadeKernels[c], n);
+        size_t group = size_t(QueuePipeline::groupSize(cl_.device()));
+        size_t blocks = (n + group - 1) / group;
+        f_.kernel("Queue_ScanBlocks").setArg(1, cl_int(n));
+        f_.launch("Queue_ScanBlocks", n);
+        f_.kernel("Queue_ScanSums").setArg(1, cl_int(blocks));
+        f_.launch("Queue_ScanSums", 1);
+        cl_int c[RT_Q_PER_ITERATION];
+        q.enqueueReadBuffer(b_.counters, CL_TRUE, 0, sizeof c, c);
+        size_t doneEvents = f_.events().size();  // complete now: their times can be read
+        ++stats_.iterations;
+        size_t cut = n, kept = size_t(c[RT_Q_CHILDREN]);
+        if (kept > b_.pool) {
+            f_.kernel("Queue_FindCut").setArg(4, cl_int(n));
+            f_.launch("Queue_FindCut", 1);
+            q.enqueueReadBuffer(b_.counters, CL_TRUE, 0, sizeof c, c);
+            cut = size_t(c[RT_Q_CUT]);
+            kept = size_t(c[RT_Q_KEPT]);
+            if (cut == 0) throw Error("queue pipeline: one path outgrew the pool (internal error)");
+            reissue(cut, n);
+        }
+        f_.kernel("Queue_Accumulate").setArg(3, cl_int(cut));
+        f_.launch("Queue_Accumulate", cut);
+        f_.kernel("Queue_Compact").setArg(8, cl_int(cut));
+        f_.launch("Queue_Compact", cut);
+        if (o_.maxLaunchMs > 0) adaptLimit(n, firstEvent, doneEvents);
+        return admit(kept);
+    }
+
+    // The paths of rays [cut, n) lost their children: their pixels start again later, in order.
+    void reissue(size_t cut, size_t n) {
+        std::vector<cl_int> pixels(n - cut);
+        cl_.queue().enqueueReadBuffer(b_.rays.pixel, CL_TRUE, cut * 4, pixels.size() * 4,
+                                      pixels.data());
+        for (size_t i = 0; i < pixels.size(); ++i)
+            if (i == 0 || pixels[i] != pixels[i - 1]) {
+                retry_.push_back(pixels[i]);
+                ++stats_.restartedPaths;
+            }
+    }
+
+    // --max-launch-ms: admit no more rays than the slowest stage of this bounce (extend or
+    // shadow, as a rule) handles in that time.
+    void adaptLimit(size_t n, size_t firstEvent, size_t endEvent) {
+        double ms = 0;
+        for (size_t e = firstEvent; e < endEvent; ++e)
+            ms = std::max(ms, eventMs(f_.events()[e].second));
+        if (ms <= 0) return;
+        // 0.8: aim below the target, bounces differ in cost; grow at most twofold per bounce,
+        // as core/launch_planner.h does with rows it has not seen.
+        double fit = double(n) * 0.8 * o_.maxLaunchMs / ms;
+        size_t grown = std::min(size_t(fit), 2 * std::max(n, limit_));
+        limit_ = std::clamp(grown, std::min(b_.pool, kProbeRays / 4), b_.pool);
+    }
+
+    static constexpr size_t kProbeRays = 4096;
+    ClContext& cl_;
+    QueueFrame& f_;
+    const QueueBuffers& b_;
+    const RenderOptions& o_;
+    FrameStats& stats_;
+    size_t limit_, next_ = 0;
+    int lights_ = 0;
+    std::array<bool, RT_Q_CLASSES> classes_{};
+    std::deque<cl_int> retry_;
+};
+
+}  // namespace
+
+Image QueuePipeline::render(const Scene& scene, const RenderOptions& o) {
+    auto t0 = std::chrono::steady_clock::now();
+    checkOptions(scene, o);
+    if (o.adaptiveAa && o.aa > 1)
+        throw Error("--adaptive is not supported by the queue pipeline (use --pipeline mega)");
+    stats_ = {};
+    const int C = scene.branching();
+    stats_.branching = C;
+    stats_.treeNodes = treeNodeCount(C, o.bounces);
+    const DeviceInfo& dev = cl_.device();
+    size_t pool = poolSize(dev, C, o.bounces, o);
+    int group = groupSize(dev);
+    cl::Program program = cl_.program("queue.cl", programDefines(scene, o, group));
+    stats_.program = cl_.lastProgramSource();
+    if (!scene_ || !scene_->matches(scene, o.accel))
+        scene_ = std::make_unique<DeviceScene>(cl_, scene, o.accel);
+    stats_.accel = scene_->accelStats();
+    size_t pixels = size_t(o.width) * size_t(o.height);
+    auto hint = [&] {
+        return "the queue pipeline's pool of " + std::to_string(pool) + " rays takes " +
+               std::to_string(pool * bytesPerRay(C) >> 20) + " MiB; lower it with --pool";
+    };
+    try {
+        prepareBuffers(pool, C, pixels);
+    } catch (const cl::Error& e) {
+        throwClError(e, "preparing queue-pipeline buffers", hint());
+    }
+    stats_.poolRays = pool;
+    stats_.poolBytes = buf_.poolBytes;
+    stats_.privateBytes = 0;  // a work-item keeps one ray; the state lives in the pool
+
+    dev::RenderSettings settings = makeSettings(scene, o);
+    Image out(o.width, o.height);
+    QueueFrame frame(cl_, program, *scene_, buf_, group);
+    try {
+        if (o.countRays) scene_->resetRayCounts(cl_.queue());
+        cl_.queue().enqueueFillBuffer(buf_.counters, cl_int(0), 0, RT_Q_WORDS * 4);
+        cl::Kernel& resolve = frame.kernel("Queue_Resolve");
+        resolve.setArg(0, buf_.sums);
+        resolve.setArg(1, buf_.image);
+        resolve.setArg(2, cl_int(pixels));
+        resolve.setArg(4, cl_int(o.aa * o.aa));
+        QueuePass pass(cl_, frame, buf_, o, stats_);
+        for (int s = 0; s < o.aa * o.aa; ++s) {
+            settings.sampleIndex = s;
+            pass.run(settings, sceneClasses(scene));
+            resolve.setArg(3, cl_int(s));
+            frame.launch("Queue_Resolve", pixels);
+        }
+        cl_.queue().enqueueReadBuffer(buf_.image, CL_TRUE, 0, pixels * 12, out.rgb.data());
+        std::vector<cl_int> words(RT_Q_WORDS);
+        cl_.queue().enqueueReadBuffer(buf_.counters, CL_TRUE, 0, words.size() * 4, words.data());
+        for (int d = 0; d <= o.bounces; ++d) {
+            std::array<long long, RT_Q_CLASSES> row{};
+            for (int c = 0; c < RT_Q_CLASSES; ++c) row[c] = words[RT_Q_HISTOGRAM + d * RT_Q_CLASSES + c];
+            stats_.queueLengths.push_back(row);
+        }
+        if (o.countRays) {
+            stats_.rays = scene_->readRayCounts(cl_.queue());
+            stats_.raysCounted = true;
+        }
+        for (auto& [name, event] : frame.events()) stats_.addKernel(name, eventMs(event));
+        stats_.launches = int(frame.events().size());
+    } catch (const cl::Error& e) {
+        throwClError(e, "queue-pipeline frame on " + dev.name, hint());
+    }
+    stats_.hostMs =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    return out;
+}
+
+}  // namespace rt

@@ -1,0 +1,112 @@
+// rtlab — the queue wavefront's memory: how many ray slots the pool gets on a device, and the
+// pool's buffers. Everything here scales with the pool (and the image), never with the bounce
+// limit: a deeper tree only means more bounces through the same slots.
+#include <algorithm>
+#include <string>
+
+#include "core/error.h"
+#include "wavefront/queue/queue.h"
+#include "wavefront/queue/queue_layout.h"
+
+namespace rt {
+
+namespace {
+constexpr size_t kRayFieldBytes = 3 * 12 + 2 * 4;  // origin, dir, weight; pixel, meta
+constexpr size_t kMaxPool = size_t(1) << 26;      // keeps every index of C * pool in an int
+}  // namespace
+
+size_t QueuePipeline::bytesPerRay(int branching) {
+    return kRayFieldBytes * size_t(1 + branching)  // the queue and its C staging slots
+           + sizeof(dev::Node)                      // extend's hit record, read by shade
+           + 12                                     // contribution
+           + 4 * 4                                  // children, offsets, block sums, retry
+           + 4 * (RT_Q_CLASSES + 1);                // class queues and shadow queue
+}
+
+int QueuePipeline::groupSize(const DeviceInfo& device) {
+    // 256 on GPUs (8 warps); 64 on CPUs, where PoCL runs a group's items in one thread's loop.
+    size_t want = device.isGpu() ? 256 : 64, g = 1;
+    while (g * 2 <= want && g * 2 <= device.maxWorkGroup) g *= 2;
+    return int(g);
+}
+
+size_t QueuePipeline::poolSize(const DeviceInfo& device, int branching, int bounces,
+                               const RenderOptions& o) {
+    size_t widest = 1;  // C^B: a path's widest bounce (every ray spawns C children)
+    for (int b = 0; b < bounces; ++b) widest *= size_t(branching);
+    if (o.pool) {
+        if (o.pool > kMaxPool)
+            throw Error("--pool " + std::to_string(o.pool) + ": must be in 1.." +
+                        std::to_string(kMaxPool));
+        if (o.pool < widest)
+            throw Error("--pool " + std::to_string(o.pool) + ": one path of this scene (C = " +
+                        std::to_string(branching) + ") can hold " + std::to_string(widest) +
+                        " rays at once at --bounces " + std::to_string(bounces) +
+                        "; use --pool " + std::to_string(widest) + " or more");
+        return o.pool;
+    }
+    // About 2 M rays on a GPU (a 1080p frame's camera rays in one launch), 64 K on a CPU; then
+    // halved until the pool fits a quarter of global memory, --memory-budget and the largest
+    // single allocation (the staging origins, C x 12 B per slot).
+    size_t pool = device.isGpu() ? size_t(1) << 21 : size_t(1) << 16;
+    size_t budget = size_t(device.globalMem / 4);
+    if (o.memoryBudget) budget = std::min(budget, o.memoryBudget);
+    while (pool > 1024 && (pool * bytesPerRay(branching) > budget ||
+                           pool * size_t(branching) * 12 > device.maxAlloc))
+        pool /= 2;
+    return std::max(pool, widest);
+}
+
+void QueuePipeline::releaseBuffers() {
+    cl_.release(buf_.poolBytes + buf_.imageBytes);
+    buf_ = QueueBuffers();
+}
+
+QueuePipeline::~QueuePipeline() { cl_.release(buf_.poolBytes + buf_.imageBytes); }
+
+void QueuePipeline::prepareBuffers(size_t pool, int branching, size_t pixels) {
+    if (buf_.pool == pool && buf_.branching == branching && buf_.pixels == pixels) return;
+    // Drop everything first: after a failed allocation no stale size names a buffer that is gone.
+    releaseBuffers();
+    QueueBuffers b;
+    size_t tally = 0;
+    auto make = [&](size_t bytes, const char* what) {
+        cl::Buffer buffer = cl_.allocate(bytes, CL_MEM_READ_WRITE, what);
+        tally += bytes;
+        return buffer;
+    };
+    auto rays = [&](QueueBuffers::Rays& r, size_t n, const char* what) {
+        r.origin = make(n * 12, what);
+        r.dir = make(n * 12, what);
+        r.weight = make(n * 12, what);
+        r.pixel = make(n * 4, what);
+        r.meta = make(n * 4, what);
+    };
+    try {
+        rays(b.rays, pool, "the queue pipeline's ray pool");
+        rays(b.staging, pool * size_t(branching), "the queue pipeline's child staging area");
+        b.nodes = make(pool * sizeof(dev::Node), "the queue pipeline's hit records");
+        b.contrib = make(pool * 12, "the queue pipeline's contributions");
+        b.children = make(pool * 4, "the queue pipeline's child counts");
+        b.offsets = make(pool * 4, "the queue pipeline's prefix sums");
+        b.retry = make(pool * 4, "the queue pipeline's retry list");
+        b.classQueues = make(pool * 4 * RT_Q_CLASSES, "the queue pipeline's class queues");
+        b.shadowQueue = make(pool * 4, "the queue pipeline's shadow queue");
+        b.blockSums = make((pool + 1) * 4, "the queue pipeline's block sums");
+        b.counters = make(RT_Q_WORDS * 4, "the queue pipeline's counters");
+        b.poolBytes = tally;
+        tally = 0;
+        b.sums = make(pixels * 12, "the queue pipeline's per-sample sums");
+        b.image = make(pixels * 12, "the image buffer");
+        b.imageBytes = tally;
+    } catch (...) {
+        cl_.release(b.poolBytes + tally);
+        throw;
+    }
+    b.pool = pool;
+    b.branching = branching;
+    b.pixels = pixels;
+    buf_ = std::move(b);
+}
+
+}  // namespace rt

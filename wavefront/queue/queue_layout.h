@@ -1,0 +1,26 @@
+// rtlab — the queue wavefront's shading classes and the layout of its counter buffer, shared by
+// the host (wavefront/queue/*.cpp) and the kernels (queue.cl): plain #defines, valid C++ and
+// OpenCL C alike, so both sides index the same words.
+#ifndef RTLAB_QUEUE_LAYOUT_H
+#define RTLAB_QUEUE_LAYOUT_H
+
+// Shading classes: one queue and one shade kernel each, so that a launch runs one code path.
+#define RT_Q_MISS 0     // escaped: environment only
+#define RT_Q_DIFFUSE 1  // opaque, reflectance 0: local Blinn-Phong term, no child
+#define RT_Q_MIRROR 2   // opaque, reflectance > 0: local term and a reflection child
+#define RT_Q_GLASS 3    // opacity < 1: Fresnel, reflection and refraction children
+#define RT_Q_CLASSES 4
+
+// Words of the counter buffer. The first RT_Q_PER_ITERATION are cleared before every extend.
+#define RT_Q_COUNT 0                            // RT_Q_CLASSES class-queue lengths
+#define RT_Q_SHADOW (RT_Q_COUNT + RT_Q_CLASSES)  // hit rays queued for the shadow stage
+#define RT_Q_CHILDREN (RT_Q_SHADOW + 1)          // children the shade stage spawned in all
+#define RT_Q_CUT (RT_Q_CHILDREN + 1)             // rays before the first path cut for room
+#define RT_Q_KEPT (RT_Q_CUT + 1)                 // children of the rays before the cut
+#define RT_Q_PER_ITERATION (RT_Q_KEPT + 1)
+// Then, for the whole frame, rays per bounce (depth 0..16) and class: [depth * CLASSES + class].
+#define RT_Q_HISTOGRAM RT_Q_PER_ITERATION
+#define RT_Q_MAX_DEPTH 16
+#define RT_Q_WORDS (RT_Q_HISTOGRAM + (RT_Q_MAX_DEPTH + 1) * RT_Q_CLASSES)
+
+#endif

@@ -1,0 +1,112 @@
+// rtlab — the queue wavefront's bookkeeping kernels (included by queue.cl): the prefix sum that
+// compacts the children into the next queue in a stable order, the cut that keeps that queue
+// within the pool, and the per-pixel sums. RT_QUEUE_GROUP is the work-group size of the scan,
+// a power of two the host picks for the device.
+
+// Inclusive scan of one work-group's values in local memory (Hillis-Steele: log2(size) steps).
+inline int Queue_ScanLocal(local int* tmp, int lid, int size, int v) {
+    tmp[lid] = v;
+    barrier(CLK_LOCAL_MEM_FENCE);
+    for (int off = 1; off < size; off <<= 1) {
+        int t = lid >= off ? tmp[lid - off] : 0;
+        barrier(CLK_LOCAL_MEM_FENCE);
+        tmp[lid] += t;
+        barrier(CLK_LOCAL_MEM_FENCE);
+    }
+    return tmp[lid];
+}
+
+// From: children per ray / To: offsets within the work-group's block, and each block's total.
+kernel void Queue_ScanBlocks(global const int* children, int n, global int* offsets,
+                             global int* blockSums) {
+    local int tmp[RT_QUEUE_GROUP];
+    int i = get_global_id(0), lid = get_local_id(0);
+    int v = i < n ? children[i] : 0;
+    int inclusive = Queue_ScanLocal(tmp, lid, RT_QUEUE_GROUP, v);
+    if (i < n) offsets[i] = inclusive - v;
+    if (lid == RT_QUEUE_GROUP - 1) blockSums[get_group_id(0)] = inclusive;
+}
+
+// One work-group: block totals to exclusive block offsets, and the grand total to the counters.
+kernel void Queue_ScanSums(global int* blockSums, int blocks, global int* counters) {
+    local int tmp[RT_QUEUE_GROUP];
+    int lid = get_local_id(0), carry = 0;
+    for (int b0 = 0; b0 < blocks; b0 += RT_QUEUE_GROUP) {
+        int b = b0 + lid;
+        int v = b < blocks ? blockSums[b] : 0;
+        int inclusive = Queue_ScanLocal(tmp, lid, RT_QUEUE_GROUP, v);
+        if (b < blocks) blockSums[b] = carry + inclusive - v;
+        carry += tmp[RT_QUEUE_GROUP - 1];
+        barrier(CLK_LOCAL_MEM_FENCE);  // tmp is rewritten by the next chunk
+    }
+    if (lid == 0) counters[RT_Q_CHILDREN] = carry;
+}
+
+inline int Queue_Offset(global const int* offsets, global const int* blockSums, int i) {
+    return offsets[i] + blockSums[i / RT_QUEUE_GROUP];
+}
+
+// One work-item, only when the children outgrow the pool: the last whole paths whose children
+// do not fit are cut (the host issues their pixels again later). Children end at inclusive
+// offsets that never decrease, so the first ray past the pool is found by bisection, then the
+// cut moves back to the first ray of its path.
+kernel void Queue_FindCut(global const int* children, global const int* offsets,
+                          global const int* blockSums, global const int* pixels, int n, int pool,
+                          global int* counters) {
+    if (get_global_id(0) != 0) return;
+    int lo = 0, hi = n - 1;  // the answer is in [lo, hi]: the total is over the pool
+    while (lo < hi) {
+        int mid = (lo + hi) / 2;
+        if (Queue_Offset(offsets, blockSums, mid) + children[mid] > pool) hi = mid;
+        else lo = mid + 1;
+    }
+    int cut = lo;
+    while (cut > 0 && pixels[cut - 1] == pixels[lo]) --cut;
+    counters[RT_Q_CUT] = cut;
+    counters[RT_Q_KEPT] = cut > 0 ? Queue_Offset(offsets, blockSums, cut) : 0;
+}
+
+// From: contrib of rays [0, cut) / To: the pixel's running sum of this AA sample. The first ray
+// of each path's run adds the run in pool order; a path's first bounce starts the sum from zero,
+// as the megakernel's colour does.
+kernel void Queue_Accumulate(global const int* pixels, global const int* meta,
+                             global const float* contrib, int cut, global float* sums) {
+    int i = get_global_id(0);
+    if (i >= cut) return;
+    int pixel = pixels[i];
+    if (i > 0 && pixels[i - 1] == pixel) return;
+    float3 s = (meta[i] >> 8) == 0 ? (float3)(0.0f, 0.0f, 0.0f) : vload3(pixel, sums);
+    for (int j = i; j < cut && pixels[j] == pixel; ++j) s += vload3(j, contrib);
+    vstore3(s, pixel, sums);
+}
+
+// From: staging slots of rays [0, cut) / To: the pool's front, at the prefix-sum offsets.
+kernel void Queue_Compact(QUEUE_RAYS_PARAMS(staging), global const int* children,
+                          global const int* offsets, global const int* blockSums, int cut,
+                          QUEUE_RAYS_PARAMS(rays)) {
+    int i = get_global_id(0);
+    if (i >= cut || children[i] == 0) return;
+    QUEUE_RAYS_INIT(staging);
+    QUEUE_RAYS_INIT(rays);
+    int o = Queue_Offset(offsets, blockSums, i);
+    for (int k = 0; k < children[i]; ++k) {
+        int s = RT_BRANCH * i + k;
+        vstore3(vload3(s, staging.origin), o + k, rays.origin);
+        vstore3(vload3(s, staging.dir), o + k, rays.dir);
+        vstore3(vload3(s, staging.weight), o + k, rays.weight);
+        rays.pixel[o + k] = staging.pixel[s];
+        rays.meta[o + k] = staging.meta[s];
+    }
+}
+
+// From: the finished sums of AA sample `sample` / To: the image. The first sample stores, later
+// ones add, the last divides: the megakernel's sum over samples, in the same order.
+kernel void Queue_Resolve(global const float* sums, global float* image, int pixels, int sample,
+                          int samples) {
+    int i = get_global_id(0);
+    if (i >= pixels) return;
+    float3 c = vload3(i, sums);
+    if (sample > 0) c += vload3(i, image);
+    if (sample == samples - 1) c = c / (float)samples;
+    vstore3(c, i, image);
+}
