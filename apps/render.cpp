@@ -53,10 +53,12 @@ void printQueue(const FrameStats& s) {
     std::printf("  pool         %zu rays, %zu bytes (%s), %d bounce iterations, %lld paths restarted\n",
                 s.poolRays, s.poolBytes, mib(double(s.poolBytes)).c_str(), s.iterations,
                 s.restartedPaths);
-    std::printf("  queues       bounce %10s %10s %10s %10s\n", "miss", "diffuse", "mirror", "glass");
+    std::printf("  queues       bounce %10s %10s %10s %10s %10s\n", "miss", "diffuse", "mirror", "glass",
+                "procedural");
     for (size_t d = 0; d < s.queueLengths.size(); ++d) {
         const auto& q = s.queueLengths[d];
-        std::printf("               %6zu %10lld %10lld %10lld %10lld\n", d, q[0], q[1], q[2], q[3]);
+        std::printf("               %6zu %10lld %10lld %10lld %10lld %10lld\n", d, q[0], q[1], q[2], q[3],
+                    q[4]);
     }
 }
 

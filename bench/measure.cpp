@@ -121,6 +121,7 @@ std::vector<Measurement> measureCells(ClContext& cl, const Scene& scene,
         const FrameStats& s = pipelines[k]->stats();
         m.treeBytes = s.treeBytes;
         m.privateBytes = s.privateBytes;
+        m.kernelResources = s.kernelResources;
         m.treeNodes = s.treeNodes;
         m.branching = s.branching;
         m.tiles = s.tiles;

@@ -30,6 +30,7 @@ struct Measurement {
     std::vector<std::pair<std::string, double>> kernelMs;  // median per kernel name
     size_t deviceBytes = 0;     // global memory the pipeline allocated for this frame
     size_t treeBytes = 0, privateBytes = 0;
+    std::map<std::string, double> kernelResources;  // FrameStats::kernelResources (issue 15)
     long long treeNodes = 0;
     int branching = 1, tiles = 1, launches = 0;
     double longestLaunchMs = 0; // the longest single kernel launch of any timed frame

@@ -156,6 +156,7 @@ nlohmann::json rowJson(const SweepConfig& config, const Cell& c, const Measureme
                     {"device_bytes", m.deviceBytes},
                     {"tree_bytes", m.treeBytes},
                     {"private_bytes", m.privateBytes},
+                    {"kernel_resources", m.kernelResources},
                     {"tree_nodes", m.treeNodes},
                     {"branching", m.branching},
                     {"tiles", m.tiles},

@@ -5,6 +5,7 @@
 
 #include <array>
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <string>
 #include <utility>
@@ -50,7 +51,9 @@ struct FrameStats {
     size_t poolRays = 0, poolBytes = 0;
     int iterations = 0;
     long long restartedPaths = 0;
-    std::vector<std::array<long long, 4>> queueLengths;
+    std::vector<std::array<long long, 5>> queueLengths;  // + procedural (issue 15)
+    // Per kernel of the program: registers and spills (NVIDIA), private bytes (core/kernel_resources.h).
+    std::map<std::string, double> kernelResources;
     void addKernel(const std::string& name, double ms);
 };
 

@@ -5,6 +5,7 @@
 #include <cstdio>
 
 #include "core/error.h"
+#include "core/kernel_resources.h"
 
 namespace rt {
 
@@ -69,6 +70,7 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
     };
 
     cl::Program program = cl_.program("wavefront.cl", featureDefines(scene, o));
+    stats_.kernelResources = kernelResources(program, cl_.device().device);
     stats_.program = cl_.lastProgramSource();
     if (!scene_ || !scene_->matches(scene, o.accel))
         scene_ = std::make_unique<DeviceScene>(cl_, scene, o.accel);
