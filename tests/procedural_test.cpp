@@ -123,7 +123,8 @@ Scene loadText(const std::string& materials) {
     const std::filesystem::path path =
         std::filesystem::temp_directory_path() /
         ("rtlab_procedural_" + std::string(info->name()) + "_" + std::to_string(getpid()) + ".json");
-    std::ofstream(path) << "{\"materials\": {" << materials << "}}";
+    std::ofstream(path) << "{\"camera\": {\"position\": [0, 1, -3]}, \"materials\": {" << materials
+                        << "}}";
     struct Remove {
         std::filesystem::path p;
         ~Remove() { std::filesystem::remove(p); }
