@@ -51,6 +51,7 @@ double fbm(glm::dvec3 p, int octaves, bool turbulence) {
         const double n = noise(p);
         sum += amp * (turbulence ? std::fabs(n) : n);
         p *= 2.0;
+        p -= 65536.0 * glm::round(p / 65536.0);  // as procedural.cl: no int overflow at 64 octaves
         amp *= 0.5;
     }
     return sum;

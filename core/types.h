@@ -61,7 +61,7 @@ typedef struct Material {
 #define RT_PATTERN_WOOD 3
 #define RT_PATTERN_GRANITE 4
 #define RT_PATTERN_BUMP 5
-#define RT_MAX_OCTAVES 16
+#define RT_MAX_OCTAVES 64
 
 typedef struct Sphere {
     Float3 center;

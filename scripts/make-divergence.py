@@ -4,7 +4,7 @@
 A 8 x 4 grid of spheres and upright quads (two triangles each) over a ground plane, the objects
 taking materials in an interleaved order so that neighbouring pixels, and the reflection and
 refraction rays of neighbours, run different shading paths. Two knobs make the sweep axes:
-  octaves    the noise octaves of every procedural material (the cost knob, 0..16)
+  octaves    the noise octaves of every procedural material (the cost knob, 0..64)
   materials  how many distinct materials the objects cycle through (1..16)
 
   scripts/make-divergence.py                 scenes/divergence.json (4 octaves, 16 materials)
@@ -93,7 +93,7 @@ def main():
     write(a.root / "divergence.json", 4, 16)
     if a.variants:
         (a.root / "divergence").mkdir(exist_ok=True)
-        for o in (0, 1, 2, 4, 8, 16):
+        for o in (0, 2, 4, 8, 16, 32, 64):
             for m in (1, 2, 4, 8, 16):
                 write(a.root / "divergence" / f"divergence-o{o}-m{m}.json", o, m)
 

@@ -53,13 +53,16 @@ inline float Procedural_Noise(float3 p) {
 }
 
 // Sum of `octaves` noise layers, each at twice the frequency and half the amplitude; turbulence
-// sums their absolute values (the creases marble needs). 0 octaves: 0, no work.
+// sums their absolute values (the creases marble needs). 0 octaves: 0, no work. Past 2^15 a
+// coordinate wraps by 2^16 (identity below), so that 64 octaves never overflow the lattice's int;
+// those octaves weigh 2^-12 or less, so float and double may round the wrap differently unseen.
 inline float Procedural_Fbm(float3 p, int octaves, bool turbulence) {
     float sum = 0.0f, amp = 1.0f;
     for (int i = 0; i < octaves; ++i) {
         float n = Procedural_Noise(p);
         sum += amp * (turbulence ? fabs(n) : n);
         p = p * 2.0f;
+        p = p - 65536.0f * round(p / 65536.0f);
         amp *= 0.5f;
     }
     return sum;
