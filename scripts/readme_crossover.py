@@ -130,6 +130,18 @@ def mega_cost_line(rows):
             f"{100 * (1 - 1 / geo(q)):.0f}% of its time at K={kmax} is the noise.")
 
 
+def noise_line(rows):
+    """How far one cell's timed frames spread: ratios closer to 1 than this are a draw."""
+    spreads = sorted((r["device_ms_max"] - r["device_ms_min"]) / r["device_ms"] for r in rows
+                     if r.get("device_ms_max") is not None and r.get("device_ms"))
+    if not spreads:
+        return ""
+    mid = spreads[len(spreads) // 2]
+    return (f"Noise: the timed frames of one cell spread by {100 * mid:.0f}% of its median "
+            f"(median over the cells; max − min), so a ratio within about that of 1 is a draw, "
+            "not a win.")
+
+
 def crossover_section(data, json_rel, chart_exists):
     meta, all_rows = data["meta"], data["rows"]
     rows = crossover_rows(all_rows)
@@ -147,15 +159,22 @@ def crossover_section(data, json_rel, chart_exists):
     if chart_exists:
         doc += ["![Time over the best megakernel against material cost](crossover.png)", ""]
     doc += crossing_lines(series, ratio) + [""]
+    spread = noise_line(rows)
+    if spread:
+        doc += [spread, ""]
     line = mega_cost_line(rows)
     if line:
         doc += [line, ""]
     doc += ["### Ratio by material count and cost", "", ratio_table(series, ratio), ""]
     res = resource_table(rows)
     if res:
+        priv = {v for r in rows for k, v in (r.get("kernel_resources") or {}).items()
+                if k.endswith(".private_bytes")}
+        same = (f" This device answers {next(iter(priv)):g} for every kernel, so here the "
+                "column measures nothing." if len(priv) == 1 else "")
         doc += ["### Why, measured: per-work-item resources", "",
                 "Registers and spill bytes from the NVIDIA build log (`-cl-nv-verbose`, NVIDIA "
-                "only); private bytes from `CL_KERNEL_PRIVATE_MEM_SIZE`.", "", res, ""]
+                "only); private bytes from `CL_KERNEL_PRIVATE_MEM_SIZE`." + same, "", res, ""]
     st = stage_table(rows)
     if st:
         doc += ["### Why, measured: where the wavefront's time goes", "", st, ""]
