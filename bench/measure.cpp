@@ -133,6 +133,7 @@ std::vector<Measurement> measureCells(ClContext& cl, const Scene& scene,
         m.buffers = s.buffers;
         m.privateBytes = s.privateBytes;
         m.extras = s.extras;
+        m.kernelResources = s.kernelResources;
         m.tiles = s.tiles;
         m.launches = s.launches;
         m.accelBuildMs = s.accel.buildMs;

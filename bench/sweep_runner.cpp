@@ -166,6 +166,7 @@ nlohmann::json rowJson(const SweepConfig& config, const Cell& c, const Measureme
                     {"device_bytes", m.deviceBytes},
                     {"tree_bytes", m.extras.value("tree_bytes", size_t(0))},
                     {"private_bytes", m.privateBytes},
+                    {"kernel_resources", m.kernelResources},
                     {"tree_nodes", treeNodeCount(c.branching, o.bounces)},
                     {"branching", c.branching},
                     {"tiles", m.tiles},

@@ -249,6 +249,8 @@ cl::Program ClContext::program(const std::string& mainFile, const std::vector<st
     // measurable cost.
     if (device_.correctlyRoundedDivSqrt) options += " -cl-fp32-correctly-rounded-divide-sqrt";
     for (const std::string& d : defines) options += " -D" + d;
+    // Registers and spills per kernel in the build log (core/kernel_resources.h, issue 15).
+    if (device_.vendor.find("NVIDIA") != std::string::npos) options += " -cl-nv-verbose";
     // Extra compiler options for experiments (e.g. -cl-fast-relaxed-math); part of the cache key.
     if (const char* extra = std::getenv("RTLAB_CL_OPTIONS"); extra && *extra)
         options += std::string(" ") + extra;

@@ -100,6 +100,7 @@ std::vector<std::string> featureDefines(const Scene& scene, const RenderOptions&
     if (!scene.planes.empty()) d.push_back("RT_HAS_PLANES");
     if (!scene.triangles.empty()) d.push_back("RT_HAS_TRIANGLES");
     if (scene.environment.cubemapSize > 0) d.push_back("RT_HAS_CUBEMAP");
+    if (scene.hasProcedural()) d.push_back("RT_HAS_PROCEDURAL");
     int c = scene.branching();
     d.push_back("RT_BRANCH=" + std::to_string(c));
     d.push_back("RT_MAX_BOUNCES=" + std::to_string(o.bounces));

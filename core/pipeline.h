@@ -5,6 +5,7 @@
 
 #include <array>
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <string>
 #include <utility>
@@ -48,6 +49,9 @@ struct FrameStats {
     AccelStats accel;
     // Pipeline-specific values (numbers or strings), carried as they are into sweep rows.
     nlohmann::json extras = nlohmann::json::object();
+    // Per kernel of the program: registers and spills (NVIDIA), private bytes
+    // (core/kernel_resources.h), carried into sweep rows as kernel_resources.
+    std::map<std::string, double> kernelResources;
     void addKernel(const std::string& name, double ms);
     void addBuffer(const std::string& name, size_t bytes);
 };

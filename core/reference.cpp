@@ -12,6 +12,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/procedural.h"
 #include "core/reference_bvh.h"
 
 namespace rt {
@@ -341,16 +342,20 @@ class Tracer {
     }
 
     // Section 5: Blinn-Phong with shadowed lights.
+    // Procedural materials (issue 15) change D and the shading normal only; shadow rays keep s.n.
     dvec3 base(const Surface& s, dvec3 d, const dev::Material& m, dvec3 origin) const {
-        dvec3 colour = toD(m.ambient);
+        dvec3 colour = toD(m.ambient), diffuse = toD(m.diffuse), n = s.n;
+        if (m.pattern != RT_PATTERN_NONE) proc::apply(m, s.p, diffuse, n);
         for (const dev::Light& light : scene_.lights) {
             const dvec3 l = glm::normalize(toD(light.position) - s.p);
-            const double nl = glm::dot(s.n, l);
+            const double nl = glm::dot(n, l);
             if (!(nl > 0)) continue;
             const dvec3 h = glm::normalize(l - d);
-            const double spec = std::pow(std::max(glm::dot(s.n, h), 0.0), double(m.exponent));
-            colour += visibility(s, light, origin) * toD(light.color) *
-                      (toD(m.diffuse) * nl + toD(m.specular) * spec);
+            const double spec = std::pow(std::max(glm::dot(n, h), 0.0), double(m.exponent));
+            // The device counts no shadow rays toward a light behind the geometric normal.
+            const double vis = glm::dot(s.n, l) > 0 ? visibility(s, light, origin) : 1.0;
+            colour += vis * toD(light.color) *
+                      (diffuse * nl + toD(m.specular) * spec);
         }
         return colour;
     }

@@ -8,6 +8,12 @@ int Scene::branching() const {
     return 1;
 }
 
+bool Scene::hasProcedural() const {
+    for (const dev::Material& m : materials)
+        if (m.pattern != RT_PATTERN_NONE) return true;
+    return false;
+}
+
 long long treeNodeCount(int branching, int bounces) {
     if (branching == 1) return bounces + 1;
     long long n = 0, level = 1;

@@ -72,6 +72,8 @@ struct Scene {
     // Branching factor C of the ray tree: 2 when any material is transparent, else 1.
     int branching() const;
     bool hasTransparency() const { return branching() == 2; }
+    // Any material with a procedural pattern: only then is core/cl/procedural.cl compiled.
+    bool hasProcedural() const;
 };
 
 // Nodes per pixel tree: N = (C^(B+1) - 1) / (C - 1), or B + 1 when C = 1.

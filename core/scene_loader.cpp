@@ -392,8 +392,8 @@ class Loader {
         for (const std::string& name : materialOrder_) {
             Node m(n.json().at(name), n.pointer() + "/" + escapeKey(name), file_);
             if (name.empty()) m.fail("material name must not be empty");
-            m.object(
-                {"ambient", "diffuse", "specular", "exponent", "reflectance", "opacity", "ior"});
+            m.object({"ambient", "diffuse", "specular", "exponent", "reflectance", "opacity", "ior",
+                      "pattern", "octaves", "scale", "diffuse2", "bump"});
             dev::Material mat{};
             mat.ambient = m.opt("ambient", dev::Float3{0, 0, 0}, readColor);
             mat.diffuse = m.opt("diffuse", dev::Float3{0.8f, 0.8f, 0.8f}, readColor);
@@ -402,10 +402,27 @@ class Loader {
             mat.reflectance = m.opt("reflectance", 0.f, readUnit);
             mat.opacity = m.opt("opacity", 1.f, readUnit);
             mat.ior = m.opt("ior", 1.f, readPositive);
+            procedural(m, mat);
             scene_.materials.push_back(mat);
             materialIndex_[name] = int(scene_.materialNames.size());
             scene_.materialNames.push_back(name);
         }
+    }
+
+    // Issue 15's procedural keys (scenes/README.md, "Procedural materials").
+    static void procedural(const Node& m, dev::Material& mat) {
+        static const char* const names[] = {"none", "checker", "marble", "wood", "granite", "bump"};
+        mat.pattern = m.opt("pattern", RT_PATTERN_NONE, [](const Node& p) {
+            const std::string s = p.string();
+            for (int k = 0; k < 6; ++k)
+                if (s == names[k]) return k;
+            p.fail("unknown pattern '" + printable(s) +
+                   "' (none, checker, marble, wood, granite or bump)");
+        });
+        mat.octaves = m.opt("octaves", 4, [](const Node& o) { return o.integer(0, RT_MAX_OCTAVES); });
+        mat.patternScale = m.opt("scale", 1.f, readPositive);
+        mat.diffuse2 = m.opt("diffuse2", dev::Float3{0.1f, 0.1f, 0.1f}, readColor);
+        mat.bump = m.opt("bump", 0.5f, readNonNegative);
     }
 
     int material(const Node& obj) {

@@ -56,8 +56,22 @@ typedef struct Material {
     float reflectance;  // r in [0,1]: mirror weight for opaque materials
     float opacity;      // o in [0,1]: 1 = opaque, < 1 spawns a refraction ray
     float ior;          // refractive index of the inside of the object
-    float pad[3];
+    // Procedural diffuse colour (issue 15, core/cl/procedural.cl); pattern 0 leaves D as it is.
+    int32_t pattern;     // RT_PATTERN_*
+    int32_t octaves;     // noise octaves (fBm, turbulence): the cost knob, 0..RT_MAX_OCTAVES
+    float patternScale;  // noise lattice cells (checker squares) per unit length
+    Float3 diffuse2;     // the pattern's second colour: D mixes toward it by the pattern value
+    float bump;          // RT_PATTERN_BUMP: strength of the normal perturbation
 } Material;
+
+// Procedural patterns. Only scenes that use one compile them (RT_HAS_PROCEDURAL).
+#define RT_PATTERN_NONE 0
+#define RT_PATTERN_CHECKER 1
+#define RT_PATTERN_MARBLE 2
+#define RT_PATTERN_WOOD 3
+#define RT_PATTERN_GRANITE 4
+#define RT_PATTERN_BUMP 5
+#define RT_MAX_OCTAVES 64
 
 typedef struct Sphere {
     Float3 center;
@@ -217,7 +231,8 @@ RT_DEV_END
 #ifndef __OPENCL_C_VERSION__
 namespace rt::dev {
 static_assert(sizeof(Float3) == 12 && alignof(Float3) == 4);
-static_assert(sizeof(Material) == 64);
+static_assert(sizeof(Material) == 80);
+static_assert(offsetof(Material, diffuse2) == 64);
 static_assert(sizeof(Sphere) == 32);
 static_assert(sizeof(Plane) == 32);
 static_assert(sizeof(Triangle) == 80);

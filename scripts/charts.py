@@ -11,6 +11,8 @@ Writes, next to the JSON unless --out says otherwise, each chart whose group the
   speed-vs-accuracy.png    device ms against RMSE from the converged reference, with the
                            Pareto front marked ([accuracy], scored cells only)
   limits.png               how far each pipeline goes (charts_limits.py, [limits])
+  crossover.png            time over the best megakernel against material cost, a panel per
+                           number of materials (charts_crossover.py, [crossover], issue 15)
 A chart whose group the sweep lacks is not written (and one already in the folder, from another
 sweep of the same device, is left alone). The pipelines, their titles, colours and layouts come
 from the rows (sweep_rows.py). Every chart's footer names the device, driver, commit and timing.
@@ -364,10 +366,12 @@ CHARTS = {"time-vs-resolution.png": time_vs_resolution, "time-vs-bounces.png": t
 
 def draw_all(meta, all_rows):
     """{file name: figure} for every chart the rows have data for."""
+    import charts_crossover
     import charts_limits
     rows = [r for r in all_rows if failure(r) == ""]
     figs = {name: chart(meta, rows) for name, chart in CHARTS.items()}
     figs["limits.png"] = charts_limits.limits_chart(meta, all_rows)
+    figs["crossover.png"] = charts_crossover.crossover_chart(meta, all_rows)
     return figs
 
 

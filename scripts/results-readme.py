@@ -29,6 +29,7 @@ import sys
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from readme_format import (accel_label, clean_meta, geomean, ms, size_label,  # noqa: E402
                            table, tree_text)
+from readme_crossover import crossover_section  # noqa: E402
 from readme_limits import limits_section, limits_summary  # noqa: E402
 from sweep_rows import Series, by_setting, failure, fastest, in_group  # noqa: E402
 
@@ -359,9 +360,14 @@ def main():
     sweeps = [(p, d) for p, d in sweeps if p != os.path.abspath(args.json)]
     sweeps.insert(0, (os.path.abspath(args.json), given))
     limits = [(p, d) for p, d in sweeps if in_group(d["rows"], "limits")]
+    # Crossover sweeps (issue 15) get their own section, like limits, after the main tables.
+    cross = [(p, d) for p, d in sweeps if in_group(d["rows"], "crossover")]
     others = [(p, d) for p, d in sweeps
-              if any(set(r.get("groups", [])) - {"limits"} for r in d["rows"])]
+              if any(set(r.get("groups", [])) - {"limits", "crossover"} for r in d["rows"])]
     limit_docs = []
+    for path, d in cross:
+        limit_docs += crossover_section(d, os.path.relpath(path, here),
+                                        os.path.exists(os.path.join(here, "crossover.png")))
     for path, d in limits:
         limit_docs += limits_section(d, os.path.relpath(path, here),
                                      os.path.exists(os.path.join(here, "limits.png")))

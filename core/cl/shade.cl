@@ -3,6 +3,9 @@
 #ifndef RTLAB_CL_SHADE
 #define RTLAB_CL_SHADE
 #include "scene.cl"
+#ifdef RT_HAS_PROCEDURAL
+#include "procedural.cl"
+#endif
 
 // ---- environment (section 9) ----
 #ifdef RT_HAS_CUBEMAP
@@ -173,6 +176,10 @@ inline int Shade_Occlusion(const SceneData* sc, float3 p, float3 n, int j) {
 inline float3 Shade_Base(const SceneData* sc, const Node* node) {
     Material m = sc->materials[node->material];
     float3 p = f3(node->point), n = f3(node->normal), d = f3(node->dir);
+    float3 diffuse = f3(m.diffuse);
+#ifdef RT_HAS_PROCEDURAL
+    if (m.pattern != RT_PATTERN_NONE) Procedural_Apply(&m, p, &diffuse, &n);
+#endif
     float3 c = f3(m.ambient);
     for (int j = 0; j < sc->settings.lightCount; ++j) {
         Light light = sc->lights[j];
@@ -183,7 +190,7 @@ inline float3 Shade_Base(const SceneData* sc, const Node* node) {
                                (float)Shade_LightSamples(sc, j);
         float3 h = normalize(l - d);
         float spec = pow(fmax(dot(n, h), 0.0f), m.exponent);
-        c += vis * f3(light.color) * (f3(m.diffuse) * ndl + f3(m.specular) * spec);
+        c += vis * f3(light.color) * (diffuse * ndl + f3(m.specular) * spec);
     }
     return c;
 }

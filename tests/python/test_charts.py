@@ -65,6 +65,47 @@ def load_script(name):
     return mod
 
 
+def crossover_fixture():
+    """Rows of a tiny crossover sweep: the queue's ratio falls with the octaves and crosses 1
+    between K = 2 and K = 4 (1.5, 1.2, 0.8 by construction); the tree wavefront never does."""
+    rows = []
+    for m in (1, 4):
+        for k, q in ((0, 1.5), (2, 1.2), (4, 0.8)):
+            scene = f"divergence-o{k}-m{m}"
+            for pipe, layout, ms in (("mega", "tree", 10.0), ("mega", "weighted", 12.0),
+                                     ("wave", "tree", 30.0), ("queue", "weighted", 10.0 * q)):
+                rows.append(row(pipe, pipe, layout, scene, 4, group="crossover", device_ms=ms,
+                                kernel_resources={"Megakernel_Render.registers": 122,
+                                                  "Megakernel_Render.private_bytes": 0}))
+    return rows
+
+
+class CrossoverTest(unittest.TestCase):
+    def test_crossing_is_interpolated_and_absent_when_never_under_one(self):
+        import charts_crossover as cc
+        pts = [(0, 1.5, None, None), (2, 1.2, None, None), (4, 0.8, None, None)]
+        self.assertAlmostEqual(cc.crossing(pts), 3.0)
+        self.assertEqual(cc.crossing([(0, 0.9, None, None)]), 0.0)
+        self.assertIsNone(cc.crossing([(0, 2.0, None, None), (8, 1.1, None, None)]))
+
+    def test_section_states_the_crossover_and_the_registers(self):
+        import readme_crossover
+        doc = "\n".join(readme_crossover.crossover_section(
+            {"meta": META, "rows": crossover_fixture()}, "x.json", False))
+        self.assertIn("K≈3.0", doc)
+        self.assertIn("No crossover found up to the largest cost tried (K = 4", doc)
+        self.assertIn("| 122 |", doc)
+
+    @unittest.skipUnless(HAVE_MPL, "needs matplotlib")
+    def test_chart_has_a_panel_per_material_count(self):
+        import charts_crossover
+        fig = charts_crossover.crossover_chart(META, crossover_fixture())
+        titles = [ax.get_title() for ax in fig.axes if ax.get_title()]
+        self.assertEqual(titles, ["1 distinct material", "4 distinct materials"])
+        self.assertIsNone(charts_crossover.crossover_chart(META, sweep_rows_fixture()))
+        chart_style.plt.close("all")
+
+
 class RowsTest(unittest.TestCase):
     def test_series_come_from_the_rows_with_distinct_colours(self):
         series = sweep_rows.Series(sweep_rows_fixture())
@@ -174,6 +215,7 @@ class ChartsTest(unittest.TestCase):
             limits = [row(pipe, title, layout, "spheres", b, group="limits") for b in range(4)]
             limits[-1].update(status="error", failure="out_of_memory", device_ms=None)
             rows += limits
+        rows += crossover_fixture()
         figs = charts.draw_all(META, rows)
         self.assertTrue(all(figs.values()), [k for k, v in figs.items() if not v])
         self.assertEqual(texts_overlap(figs["limits.png"]), [])

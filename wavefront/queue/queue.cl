@@ -70,7 +70,8 @@ inline int Queue_Class(const SceneData* sc, const Node* node) {
     if (node->kind == RT_KIND_MISS) return RT_Q_MISS;
     Material m = sc->materials[node->material];
     if (m.opacity < 1.0f) return RT_Q_GLASS;
-    return m.reflectance > 0.0f ? RT_Q_MIRROR : RT_Q_DIFFUSE;
+    if (m.reflectance > 0.0f) return RT_Q_MIRROR;
+    return m.pattern != RT_PATTERN_NONE ? RT_Q_PROCEDURAL : RT_Q_DIFFUSE;
 }
 
 // From: pool [0, n) / To: nodes[i], class queues, shadow queue, per-bounce histogram.
@@ -138,8 +139,9 @@ inline void Queue_Shade(const SceneData* sc, int cls, int i, const QueueRays* ra
         Node node = nodes[i];
         Pending refl, refr;
         bool hasRefl, hasRefr;
-        term = PathState_Step(sc, &node, &p, cls != RT_Q_DIFFUSE, cls == RT_Q_GLASS, &refl,
-                               &hasRefl, &refr, &hasRefr);
+        bool reflects = cls == RT_Q_MIRROR || cls == RT_Q_GLASS;
+        term = PathState_Step(sc, &node, &p, reflects, cls == RT_Q_GLASS, &refl, &hasRefl, &refr,
+                              &hasRefr);
         int pixel = rays->pixel[i];
         if (hasRefl) Queue_Store(staging, RT_BRANCH * i + c++, &refl, pixel);
         if (hasRefr) Queue_Store(staging, RT_BRANCH * i + c++, &refr, pixel);
@@ -166,5 +168,6 @@ QUEUE_SHADE_KERNEL(Queue_ShadeMiss, RT_Q_MISS)
 QUEUE_SHADE_KERNEL(Queue_ShadeDiffuse, RT_Q_DIFFUSE)
 QUEUE_SHADE_KERNEL(Queue_ShadeMirror, RT_Q_MIRROR)
 QUEUE_SHADE_KERNEL(Queue_ShadeGlass, RT_Q_GLASS)
+QUEUE_SHADE_KERNEL(Queue_ShadeProcedural, RT_Q_PROCEDURAL)
 
 #include "queue_scan.cl"

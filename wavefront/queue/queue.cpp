@@ -12,6 +12,7 @@
 
 #include "core/error.h"
 #include "core/pipeline_registry.h"
+#include "core/kernel_resources.h"
 #include "wavefront/queue/queue.h"
 #include "wavefront/queue/queue_layout.h"
 
@@ -49,6 +50,7 @@ std::array<bool, RT_Q_CLASSES> sceneClasses(const Scene& scene) {
     for (const dev::Material& m : scene.materials) {
         if (m.opacity < 1.0f) c[RT_Q_GLASS] = true;
         else if (m.reflectance > 0.0f) c[RT_Q_MIRROR] = true;
+        else if (m.pattern != RT_PATTERN_NONE) c[RT_Q_PROCEDURAL] = true;
         else c[RT_Q_DIFFUSE] = true;
     }
     return c;
@@ -110,7 +112,8 @@ private:
 };
 
 const char* const kShadeKernels[RT_Q_CLASSES] = {"Queue_ShadeMiss", "Queue_ShadeDiffuse",
-                                                 "Queue_ShadeMirror", "Queue_ShadeGlass"};
+                                                 "Queue_ShadeMirror", "Queue_ShadeGlass",
+                                                 "Queue_ShadeProcedural"};
 
 // The bounces of one AA sample: which pixels are still to start, and the pool's live rays.
 class QueuePass {
@@ -312,6 +315,7 @@ Image QueuePipeline::render(const Scene& scene, const RenderOptions& o) {
     size_t pool = poolSize(dev, C, o.bounces, o);
     int group = groupSize(dev);
     cl::Program program = cl_.program("queue.cl", programDefines(scene, o, group));
+    stats_.kernelResources = kernelResources(program, cl_.device().device);
     stats_.program = cl_.lastProgramSource();
     if (!scene_ || !scene_->matches(scene, o.accel))
         scene_ = std::make_unique<DeviceScene>(cl_, scene, o.accel);

@@ -40,12 +40,12 @@ struct QueueKernels {
 // What a queue frame did beyond the generic FrameStats (also written to its extras): ray slots and
 // device bytes of the pool with its queues and staging (not the image), bounces run, paths cut
 // for room and started again, and the rays per bounce (depth 0..B) in each class queue: miss,
-// diffuse, mirror, glass.
+// diffuse, mirror, glass, procedural.
 struct QueueStats {
     size_t poolRays = 0, poolBytes = 0;
     int iterations = 0;
     long long restartedPaths = 0;
-    std::vector<std::array<long long, 4>> queueLengths;
+    std::vector<std::array<long long, 5>> queueLengths;  // RT_Q_CLASSES (queue_layout.h)
 };
 
 class QueuePipeline : public Pipeline {

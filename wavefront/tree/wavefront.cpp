@@ -6,6 +6,7 @@
 
 #include "core/error.h"
 #include "core/pipeline_registry.h"
+#include "core/kernel_resources.h"
 
 namespace rt {
 
@@ -70,6 +71,7 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
     };
 
     cl::Program program = cl_.program("wavefront.cl", featureDefines(scene, o));
+    stats_.kernelResources = kernelResources(program, cl_.device().device);
     stats_.program = cl_.lastProgramSource();
     if (!scene_ || !scene_->matches(scene, o.accel))
         scene_ = std::make_unique<DeviceScene>(cl_, scene, o.accel);
