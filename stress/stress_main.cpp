@@ -332,7 +332,7 @@ int main(int argc, char** argv) {
         std::filesystem::create_directories(out);
         std::ofstream f(std::filesystem::path(out) / "stability.md");
         f << "# Numerical stress suite: " << d.name << "\n\n"
-          << "Written by `rtlab-stress" << (quick ? " --quick" : "") << "` (apps/stress.cpp, "
+          << "Written by `rtlab-stress" << (quick ? " --quick" : "") << "` (stress/, "
           << "issue 8) on " << d.label() << ", commit " << RTLAB_COMMIT << ", " << date
           << ", in " << fmt("%.0f", seconds(t0)) << " s. Counts are *errors / cases (rate)*. "
           << "Each case asserts the robust method's figure (column *bar*; the same checks run "
