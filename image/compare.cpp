@@ -36,7 +36,10 @@ long long countNonFinite(const Image& image) {
     const OIIO::ImageBuf raw = toBuffer(image, false);
     // Sum the channels: a pixel with a NaN or infinite channel has a non-finite sum (Inf - Inf is
     // NaN), so OIIO's NaN and Inf counts of the sum count such pixels once each.
-    OIIO::ImageBuf sum = OIIO::ImageBufAlgo::channel_sum(raw);
+    // One weight per channel: the default is a single weight, and OIIO then reads the other
+    // channels' weights from past its end (seen as every pixel counted, now and then).
+    const float weights[3] = {1.f, 1.f, 1.f};
+    OIIO::ImageBuf sum = OIIO::ImageBufAlgo::channel_sum(raw, OIIO::cspan<float>(weights, 3));
     const OIIO::ImageBufAlgo::PixelStats stats = OIIO::ImageBufAlgo::computePixelStats(sum);
     if (sum.has_error() || stats.nancount.empty())
         throw Error("countNonFinite: " + sum.geterror());
