@@ -178,7 +178,9 @@ int main(int argc, char** argv) {
     app.add_option("--speed", a.speed, "Camera speed in scene units per second")->capture_default_str();
     app.add_flag("--no-ray-count", a.noRayCount,
                  "Do not count rays on the device (no Mrays/s, slightly faster kernels)");
-    app.add_option("--frames", a.frames, "Render this many frames, then exit (automation)");
+    app.add_option("--frames", a.frames,
+                   "Render this many frames, then exit (automation); 0, the default, runs until "
+                   "the window is closed");
     app.add_option("--screenshot", a.screenshot,
                    "After the last frame, save the window to this image (implies --frames 1)");
     app.add_option("--keys", a.keys,

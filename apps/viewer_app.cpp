@@ -54,7 +54,11 @@ std::vector<std::pair<long long, int>> parseKeyScript(const std::string& script)
                       : u == '+'           ? GLFW_KEY_EQUAL
                       : u == '-'           ? GLFW_KEY_MINUS
                                            : -1;
-            if (key < 0) throw Error(std::string("--keys ") + item + ": no key '" + c + "'");
+            // Only keys with a press action can be scripted (W A S D Q E move while held).
+            static const std::string kScriptable = "MVBRPHO+-";
+            if (key < 0 || kScriptable.find(u) == std::string::npos)
+                throw Error(std::string("--keys ") + item + ": no control on '" + c +
+                            "' (scriptable keys: M V B R P H O + -)");
             keys.emplace_back(frame, key);
         }
         item.clear();

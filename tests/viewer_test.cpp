@@ -232,6 +232,14 @@ TEST(ViewerErrors, SplitPairOutsideTheRegistryEndsInOneLine) {
     }
 }
 
+TEST(ViewerErrors, UnknownScriptedKeyEndsInOneLine) {
+    if (!fs::exists(kBin + "/rtlab-view")) GTEST_SKIP() << "rtlab-view was not built";
+    Result r = run(kBin + "/rtlab-view scenes/spheres.json --keys 2:Z");
+    EXPECT_EQ(r.status, 1);
+    EXPECT_EQ(lines(r.err), 1) << r.err;
+    EXPECT_NE(r.err.find("--keys 2:Z: no control on 'Z'"), std::string::npos) << r.err;
+}
+
 TEST(ViewerErrors, BadSceneEndsInOneLine) {
     if (!fs::exists(kBin + "/rtlab-view")) GTEST_SKIP() << "rtlab-view was not built";
     Result r = run(kBin + "/rtlab-view scenes/no-such-scene.json");
