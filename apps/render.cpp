@@ -1,6 +1,7 @@
 // rtlab render / rtlab devices.
 #include <cstdio>
 #include <cstdlib>
+#include <fstream>
 #include <optional>
 #include <string>
 
@@ -9,6 +10,7 @@
 #include "core/accel.h"
 #include "core/cl_runtime.h"
 #include "core/error.h"
+#include "core/version.h"
 #include "core/pipeline.h"
 #include "pipelines/registry.h"
 #include "core/scene_loader.h"
@@ -22,6 +24,7 @@ struct RenderArgs {
     std::string scene, output, pipeline;  // the first device pipeline registered, by default
     SceneFlags flags;
     bool stats = false;
+    std::string statsJson;  // --stats-json FILE
 } renderArgs;
 
 CLI::App* renderCmd = nullptr;
@@ -85,10 +88,53 @@ int runRender() {
     std::optional<ClContext> cl;
     if (!info.reference) cl.emplace(selectDevice(a.flags.device), a.flags.kernelSources());
     std::unique_ptr<Pipeline> pipeline = makePipeline(info.name, cl ? &*cl : nullptr);
+    if (!a.statsJson.empty()) {
+        std::ofstream probe(a.statsJson, std::ios::app);
+        if (!probe) throw Error("--stats-json " + a.statsJson + ": cannot write there");
+    }
     Image image = pipeline->render(scene, options);
     writeImage(image, output);
+    FrameStats timed = pipeline->stats();
+    if (a.stats || !a.statsJson.empty()) {
+        FrameStats& s = timed;
+        // Ray counts come from one more, untimed frame: the device counters' atomics cost time.
+        RayCounts rays{};
+        bool counted = false;
+        if (!info.reference) {
+            RenderOptions counting = options;
+            counting.countRays = true;
+            pipeline->render(scene, counting);
+            rays = pipeline->stats().rays;
+            counted = pipeline->stats().raysCounted;
+            s.rays = rays;
+            s.raysCounted = counted;
+        }
+        uint64_t totalRays = 0;
+        for (uint64_t n : rays) totalRays += n;
+        const double raysPerS = s.deviceMs > 0 ? double(totalRays) / (s.deviceMs * 1e-3) : 0;
+        if (!a.statsJson.empty()) {
+            nlohmann::json j = {{"scene", scene.name}, {"pipeline", info.name},
+                                {"width", options.width}, {"height", options.height},
+                                {"bounces", options.bounces}, {"commit", RTLAB_COMMIT},
+                                {"device", cl ? cl->device().name : std::string("cpu reference")},
+                                {"driver", cl ? cl->device().driver : std::string()},
+                                {"device_ms", s.deviceMs}, {"host_ms", s.hostMs},
+                                {"launches", s.launches}, {"longest_launch_ms", s.longestLaunchMs},
+                                {"tiles", s.tiles}, {"private_bytes", s.privateBytes},
+                                {"extras", s.extras}};
+            for (const auto& [name, ms] : s.kernelMs) j["kernel_ms"][name] = ms;
+            for (const auto& [name, bytes] : s.buffers) j["buffers"][name] = bytes;
+            if (counted) {
+                for (int t = 0; t < RT_RAY_TYPES; ++t) j["rays"][rayTypeName(t)] = rays[t];
+                j["rays_per_s"] = raysPerS;
+            }
+            std::ofstream f(a.statsJson);
+            f << j.dump(2) << "\n";
+            if (!f) throw Error("--stats-json " + a.statsJson + ": cannot write");
+        }
+    }
     if (a.stats) {
-        const FrameStats& s = pipeline->stats();
+        const FrameStats& s = timed;
         std::printf("scene %s, %dx%d, bounces %d, C=%d, N=%lld nodes/pixel, pipeline %s\n",
                     scene.name.c_str(), options.width, options.height, options.bounces,
                     scene.branching(), treeNodeCount(scene.branching(), options.bounces),
@@ -110,6 +156,19 @@ int runRender() {
         }
         for (const auto& [key, value] : s.extras.items())
             std::printf("  %-12s %s\n", key.c_str(), value.dump().c_str());
+        std::printf("  launches     %d, longest %.3f ms", s.launches, s.longestLaunchMs);
+        if (options.maxLaunchMs > 0) std::printf(" (--max-launch-ms %g caps each launch)", options.maxLaunchMs);
+        std::printf("\n");
+        if (s.raysCounted) {
+            uint64_t total = 0;
+            for (int t = 0; t < RT_RAY_TYPES; ++t) {
+                std::printf("  rays %-7s %llu\n", rayTypeName(t), (unsigned long long)s.rays[t]);
+                total += s.rays[t];
+            }
+            if (s.deviceMs > 0)
+                std::printf("  rays/s       %.3g (all types, over the timed frame's device time)\n",
+                            double(total) / (s.deviceMs * 1e-3));
+        }
     }
     std::printf("wrote %s\n", output.c_str());
     return 0;
@@ -128,7 +187,11 @@ void addRender(CLI::App& app) {
     a.pipeline = pipelineRegistry().names(true).at(0);
     addPipelineOption(*renderCmd, a.pipeline, true);
     a.flags.add(*renderCmd);
-    renderCmd->add_flag("--stats", a.stats, "Print kernel times (profiling events) and memory use");
+    renderCmd->add_flag("--stats", a.stats,
+                        "Print kernel times (profiling events), memory use, launches and ray "
+                        "counts (from one more, untimed frame)");
+    renderCmd->add_option("--stats-json", a.statsJson,
+                          "Write the same statistics as JSON to this file, for scripts");
 }
 
 void addDevices(CLI::App& app) {

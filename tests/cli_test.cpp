@@ -6,10 +6,13 @@
 #include <cctype>
 #include <ostream>
 #include <cstdio>
+#include <fstream>
 #include <filesystem>
 #include <string>
 #include <sys/wait.h>
 #include <unistd.h>
+
+#include <nlohmann/json.hpp>
 
 #include "core/cl_runtime.h"
 #include "pipelines/registry.h"
@@ -119,6 +122,8 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"render tests/data/model.ply -o /tmp/x.png", "ply files are not supported"},
         BadCase{"render scenes/spheres.json -o scenes", "scenes: is a folder"},
         BadCase{"compare scenes/spheres.json -o /no/such/dir/p", "--output-prefix /no/such/dir/p"},
+        BadCase{"render scenes/spheres.json --stats-json /no/such/dir/s.json -o /tmp/x.png",
+                "--stats-json /no/such/dir/s.json"},
         BadCase{"bogus", "unknown command 'bogus'"}),
     caseName);
 
@@ -150,6 +155,26 @@ TEST(Cli, PipelineHelpListsTheRegistry) {
     Result c = run("compare --help");
     for (const std::string& name : rt::pipelineRegistry().names(true))
         EXPECT_NE(c.out.find(name), std::string::npos) << name << "\n" << c.out;
+}
+
+// --stats prints ray counts and rays/s; --stats-json writes them for scripts.
+TEST(Cli, StatsJsonCarriesTimesLaunchesAndRays) {
+    const std::string json = ::testing::TempDir() + "cli_stats_" + std::to_string(getpid()) + ".json";
+    const std::string png = ::testing::TempDir() + "cli_stats_" + std::to_string(getpid()) + ".png";
+    Result r = run("render scenes/shadows.json --size 32x18 --pipeline mega --stats --stats-json " +
+                   json + " -o " + png);
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_NE(r.out.find("rays primary"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("rays/s"), std::string::npos) << r.out;
+    std::ifstream in(json);
+    std::string text((std::istreambuf_iterator<char>(in)), {});
+    const nlohmann::json j = nlohmann::json::parse(text);
+    EXPECT_EQ(j.at("rays").at("primary").get<long long>(), 32 * 18);
+    EXPECT_GT(j.at("device_ms").get<double>(), 0);
+    EXPECT_GE(j.at("launches").get<int>(), 1);
+    EXPECT_EQ(j.at("pipeline"), "mega");
+    std::remove(json.c_str());
+    std::remove(png.c_str());
 }
 
 TEST(Cli, DevicesListsEveryDevice) {
