@@ -53,25 +53,36 @@ public:
     double elapsed() const {
         return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
     }
-    // Seconds the cells from i on should take, from the rate seen on their scene (else overall).
+    // Seconds the cells from i on should take, from the rate measured on the same scene and
+    // pipeline, else on the scene, else overall: pipelines differ by far more than the cost
+    // model's terms (the quick sweep's "ETA 2s" came before a 21 s wavefront cell).
     double remaining(size_t i) const {
         double overall = doneCost_ > 0 ? spent_ / doneCost_ : 0;
         double eta = 0;
         for (size_t j = i; j < cells_.size(); ++j) {
-            auto it = sceneRate_.find(cells_[j].scene);
-            double rate = it != sceneRate_.end() ? it->second.first / it->second.second : overall;
+            double rate = overall;
+            if (auto it = rate_.find(cells_[j].scene + "|" + cells_[j].pipeline); it != rate_.end())
+                rate = it->second.first / it->second.second;
+            else if (auto s = rate_.find(cells_[j].scene); s != rate_.end())
+                rate = s->second.first / s->second.second;
             eta += rate * cellCost(cells_[j]);
         }
         return eta;
+    }
+    // The time left as shown: nothing until two cells were measured (one cell's rate, stretched
+    // over a whole sweep, said "ETA <= 7h13m" for a 3-minute run), and a bound ("<=") where
+    // stop-after-failure may skip cells.
+    std::string eta(size_t i) const {
+        if (measured_ < 2) return "estimating";
+        return std::string(mayStop_ ? "<= " : "") + formatDuration(remaining(i));
     }
     double predict(size_t i, size_t j) const { return remaining(i) - remaining(j); }
     void starting(size_t i, size_t j) {
         if (!tty_) return;
         std::string what = cells_[i].label();
         if (j > i + 1) what += " (+" + std::to_string(j - i - 1) + " interleaved)";
-        std::fprintf(stderr, "\r\033[K[%zu/%zu] %s ... | elapsed %s, ETA %s%s", i + 1, cells_.size(),
-                     what.c_str(), formatDuration(elapsed()).c_str(), mayStop_ ? "<= " : "",
-                     doneCost_ > 0 ? formatDuration(remaining(i)).c_str() : "?");
+        std::fprintf(stderr, "\r\033[K[%zu/%zu] %s ... | elapsed %s, ETA %s", i + 1, cells_.size(),
+                     what.c_str(), formatDuration(elapsed()).c_str(), eta(i).c_str());
         std::fflush(stderr);
     }
     void skipped(size_t i, const std::string& why) {
@@ -86,19 +97,20 @@ public:
         double cost = cellCost(c);
         spent_ += seconds;
         doneCost_ += cost;
-        auto& r = sceneRate_[c.scene];
-        r.first += seconds;
-        r.second += cost;
+        for (const std::string& key : {c.scene + "|" + c.pipeline, c.scene}) {
+            auto& r = rate_[key];
+            r.first += seconds;
+            r.second += cost;
+        }
+        ++measured_;
         char result[96];
         if (m.ok)
             std::snprintf(result, sizeof result, "%.3f ms", m.deviceMs);
         else
             std::snprintf(result, sizeof result, "failed");
-        std::fprintf(stderr, "%s[%zu/%zu] %s: %s | elapsed %s, ETA %s%s%s", tty_ ? "\r\033[K" : "",
+        std::fprintf(stderr, "%s[%zu/%zu] %s: %s | elapsed %s, ETA %s%s", tty_ ? "\r\033[K" : "",
                      i + 1, cells_.size(), c.label().c_str(), result,
-                     formatDuration(elapsed()).c_str(), mayStop_ ? "<= " : "",
-                     formatDuration(remaining(i + 1)).c_str(),
-                     tty_ ? "" : "\n");
+                     formatDuration(elapsed()).c_str(), eta(i + 1).c_str(), tty_ ? "" : "\n");
         if (!m.ok) std::fprintf(stderr, "%s    %s\n", tty_ ? "\n" : "", m.error.c_str());
         std::fflush(stderr);
     }
@@ -111,7 +123,9 @@ private:
     bool tty_, mayStop_ = false;
     std::chrono::steady_clock::time_point start_;
     double spent_ = 0, doneCost_ = 0;
-    std::map<std::string, std::pair<double, double>> sceneRate_;  // seconds, cost
+    int measured_ = 0;
+    // Seconds and model cost measured per "scene|pipeline" and per scene.
+    std::map<std::string, std::pair<double, double>> rate_;
 };
 
 nlohmann::json rowJson(const SweepConfig& config, const Cell& c, const Measurement& m,
