@@ -17,6 +17,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <limits>
+#include <map>
 #include <new>
 #include <sstream>
 #include <string>
@@ -301,6 +302,29 @@ ObjMaterial toMaterial(const tinyobj::material_t& m) {
     return out;
 }
 
+// Reads mtllib files beside the OBJ, but only regular files of a sane size: a library named
+// /dev/urandom (or a FIFO) would otherwise be read forever. A refused library is reported like a
+// missing one, and the model renders with the default material.
+class BoundedMtlReader : public tinyobj::MaterialReader {
+public:
+    explicit BoundedMtlReader(fs::path base) : base_(std::move(base)), files_(base_.string() + "/") {}
+    bool operator()(const std::string& name, std::vector<tinyobj::material_t>* materials,
+                    std::map<std::string, int>* names, std::string* warn, std::string* err) override {
+        std::error_code ec;
+        const fs::path file = base_ / name;
+        if (!fs::is_regular_file(file, ec) || fs::file_size(file, ec) > kMaxMtlBytes || ec) {
+            if (warn) *warn += "Material file [ " + name + " ] not found or not a readable file\n";
+            return false;
+        }
+        return files_(name, materials, names, warn, err);
+    }
+
+private:
+    static constexpr std::uintmax_t kMaxMtlBytes = 64u << 20;
+    fs::path base_;
+    tinyobj::MaterialFileReader files_;
+};
+
 // tinyobjloader reports a missing or unreadable .mtl as a warning; rtlab then renders with its
 // default material, and says so.
 std::string materialNote(const std::string& warn) {
@@ -420,8 +444,8 @@ ObjMesh loadObj(const std::filesystem::path& path) {
         std::string warn, err;
         std::istringstream in(std::move(text));
         // mtllib files are looked up beside the OBJ file, as the format says.
-        std::string base = path.parent_path().string();
-        tinyobj::MaterialFileReader mtl(base.empty() ? std::string("./") : base + "/");
+        const fs::path base = path.parent_path().empty() ? fs::path(".") : path.parent_path();
+        BoundedMtlReader mtl(base);
         bool ok = tinyobj::LoadObj(&attrib, &shapes, &materials, &warn, &err, &in, &mtl,
                                    /*triangulate=*/true, /*default_vcols_fallback=*/false);
         if (!ok || !err.empty()) {

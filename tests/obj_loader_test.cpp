@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <unistd.h>
+#include <fstream>
 #include <glm/glm.hpp>
 #include <string>
 
@@ -174,6 +176,20 @@ TEST(ObjLoader, MissingMtlLibraryRendersWithTheDefaultMaterialAndSaysSo) {
     for (const dev::Triangle& t : scene.triangles) EXPECT_EQ(t.material, 0);
     ASSERT_EQ(scene.notes.size(), 1u);
     EXPECT_NE(scene.notes[0].find("no_such_library.mtl"), std::string::npos) << scene.notes[0];
+}
+
+// A library that is a device or FIFO would be read forever: refused like a missing one.
+TEST(ObjLoader, MtlLibraryThatIsNoRegularFileIsRefusedNotRead) {
+    const fs::path dir = fs::path(::testing::TempDir()) / ("rtlab_mtl_" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    const fs::path obj = dir / "endless.obj";
+    std::ofstream(obj) << "mtllib ../../../../../../../../dev/zero\nv 0 0 0\nv 1 0 0\nv 0 1 0\n"
+                          "usemtl x\nf 1 2 3\n";
+    const Scene scene = loadScene(obj);
+    ASSERT_EQ(scene.notes.size(), 1u);
+    EXPECT_NE(scene.notes[0].find("not a readable file"), std::string::npos) << scene.notes[0];
+    EXPECT_EQ(scene.triangles.at(0).material, 0);
+    fs::remove_all(dir);
 }
 
 TEST(ObjLoader, OtherModelFormatsAreRefusedByName) {
