@@ -20,6 +20,7 @@
 #include "megakernel/megakernel.h"
 #include "pipelines/registry.h"
 #include "test_device.h"
+#include "test_scenes.h"
 #include "wavefront/tree/wavefront.h"
 
 namespace rt {
@@ -47,28 +48,6 @@ fs::path stressScenes(const std::string& folder, const std::string& args) {
     return dir;
 }
 
-// A soup of random spheres and triangles of mixed sizes, some overlapping, some degenerate in
-// one axis (axis-aligned triangles), as a BVH and grid workout.
-Scene soup(int spheres, int triangles, unsigned seed) {
-    Scene s;
-    s.name = "soup";
-    dev::Material m{};
-    m.opacity = m.ior = 1.f;
-    s.materials = {m};
-    std::mt19937 rng(seed);
-    std::uniform_real_distribution<float> pos(-20.f, 20.f), size(0.01f, 1.5f);
-    for (int i = 0; i < spheres; ++i)
-        s.spheres.push_back({{pos(rng), pos(rng), pos(rng)}, size(rng), 0, {0, 0, 0}});
-    for (int i = 0; i < triangles; ++i) {
-        dev::Float3 a{pos(rng), pos(rng), pos(rng)};
-        float d = size(rng);
-        dev::Float3 b{a.x + d, a.y, a.z}, c{a.x, a.y + (i % 3 ? d : 0.f), a.z + d};
-        dev::Float3 n{0, 0, 1};
-        s.triangles.push_back({a, b, c, n, n, n, 0, 0});
-    }
-    finalizeScene(s);
-    return s;
-}
 
 bool samePrimitive(const dev::Sphere& a, const dev::Sphere& b) {
     return std::memcmp(&a, &b, sizeof a) == 0;
@@ -101,17 +80,17 @@ void expectValidBvh(const Scene& scene, const std::string& name) {
 
 TEST(AccelBvh, EveryPrimitiveInOneLeafAndEveryChildBoxInsideItsParent) {
     for (const char* name : kScenes) expectValidBvh(load(name), name);
-    expectValidBvh(soup(3000, 5000, 1), "soup");
-    expectValidBvh(soup(1, 0, 2), "one sphere");
-    expectValidBvh(soup(0, 1, 3), "one triangle");
+    expectValidBvh(test::soup(3000, 5000, 1), "soup");
+    expectValidBvh(test::soup(1, 0, 2), "one sphere");
+    expectValidBvh(test::soup(0, 1, 3), "one triangle");
     // Many primitives on one spot: no SAH split exists, the builder must still terminate.
-    Scene same = soup(0, 0, 4);
+    Scene same = test::soup(0, 0, 4);
     for (int i = 0; i < 100; ++i) same.spheres.push_back({{1, 2, 3}, 0.5f, 0, {0, 0, 0}});
     expectValidBvh(same, "coincident spheres");
 }
 
 TEST(AccelBvh, CheckerRejectsBrokenTrees) {
-    AccelData d = buildAccel(soup(50, 50, 5), Accel::Bvh);
+    AccelData d = buildAccel(test::soup(50, 50, 5), Accel::Bvh);
     ASSERT_EQ(checkBvh(d), "");
     AccelData shrunk = d;
     shrunk.bvh[1].hi.x = shrunk.bvh[0].hi.x + 1.f;  // child pokes out of the root
@@ -131,7 +110,7 @@ TEST(AccelBvh, CheckerRejectsBrokenTrees) {
 
 // The build runs on every core; threads only change who builds a subtree, never the tree.
 TEST(AccelBvh, SameTreeWithAnyThreadCount) {
-    Scene s = soup(150000, 150000, 6);  // above the parallel thresholds of core/accel_bvh.cpp
+    Scene s = test::soup(150000, 150000, 6);  // above the parallel thresholds of core/accel_bvh.cpp
     AccelData one, many;
     for (AccelData* d : {&one, &many}) {
         d->spheres = s.spheres;
@@ -148,7 +127,7 @@ TEST(AccelBvh, SameTreeWithAnyThreadCount) {
 }
 
 TEST(AccelGrid, EveryPrimitiveIsListedWhereItsCentreIs) {
-    Scene s = soup(2000, 2000, 7);
+    Scene s = test::soup(2000, 2000, 7);
     AccelData d = buildAccel(s, Accel::Grid);
     const dev::Grid& g = d.grid;
     size_t cells = size_t(g.nx) * g.ny * g.nz;
@@ -180,7 +159,7 @@ TEST(Accel, DefaultFollowsTheScene) {
     EXPECT_EQ(defaultAccel(load("spheres")), Accel::None);
     EXPECT_EQ(defaultAccel(load("cornell")), Accel::Bv);
     EXPECT_EQ(defaultAccel(load("mesh")), Accel::Bvh);
-    EXPECT_EQ(defaultAccel(soup(1000, 0, 8)), Accel::Bvh);
+    EXPECT_EQ(defaultAccel(test::soup(1000, 0, 8)), Accel::Bvh);
 }
 
 TEST(Accel, DefinesNameTheStructureOnlyWhenThereIsSomethingToHold) {

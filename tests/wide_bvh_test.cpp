@@ -17,6 +17,7 @@
 #include "image/image_io.h"
 #include "pipelines/registry.h"
 #include "test_device.h"
+#include "test_scenes.h"
 
 namespace rt {
 namespace {
@@ -28,27 +29,6 @@ const char* kScenes[] = {"empty", "spheres", "shadows", "cornell", "mesh", "envm
 
 Scene load(const std::string& name) { return loadScene("scenes/" + name + ".json", readImage); }
 
-// Random spheres and triangles of mixed sizes, some axis-aligned (flat boxes).
-Scene soup(int spheres, int triangles, unsigned seed) {
-    Scene s;
-    s.name = "soup";
-    dev::Material m{};
-    m.opacity = m.ior = 1.f;
-    s.materials = {m};
-    std::mt19937 rng(seed);
-    std::uniform_real_distribution<float> pos(-20.f, 20.f), size(0.01f, 1.5f);
-    for (int i = 0; i < spheres; ++i)
-        s.spheres.push_back({{pos(rng), pos(rng), pos(rng)}, size(rng), 0, {0, 0, 0}});
-    for (int i = 0; i < triangles; ++i) {
-        dev::Float3 a{pos(rng), pos(rng), pos(rng)};
-        float d = size(rng);
-        dev::Float3 b{a.x + d, a.y, a.z}, c{a.x, a.y + (i % 3 ? d : 0.f), a.z + d};
-        dev::Float3 n{0, 0, 1};
-        s.triangles.push_back({a, b, c, n, n, n, 0, 0});
-    }
-    finalizeScene(s);
-    return s;
-}
 
 void expectValidWide(const Scene& scene, const std::string& name) {
     AccelData d = buildAccel(scene, Accel::Wide);
@@ -61,10 +41,10 @@ void expectValidWide(const Scene& scene, const std::string& name) {
 
 TEST(WideBvh, EveryPrimitiveInOneLeafInsideEveryDecodedBoxOnItsPath) {
     for (const char* name : kScenes) expectValidWide(load(name), name);
-    expectValidWide(soup(3000, 5000, 1), "soup");
-    expectValidWide(soup(1, 0, 2), "one sphere");
-    expectValidWide(soup(0, 1, 3), "one triangle");
-    Scene same = soup(0, 0, 4);
+    expectValidWide(test::soup(3000, 5000, 1), "soup");
+    expectValidWide(test::soup(1, 0, 2), "one sphere");
+    expectValidWide(test::soup(0, 1, 3), "one triangle");
+    Scene same = test::soup(0, 0, 4);
     for (int i = 0; i < 100; ++i) same.spheres.push_back({{1, 2, 3}, 0.5f, 0, {0, 0, 0}});
     expectValidWide(same, "coincident spheres");
 }
@@ -73,7 +53,7 @@ TEST(WideBvh, EveryPrimitiveInOneLeafInsideEveryDecodedBoxOnItsPath) {
 // builder allows; the collapse must then keep the deferred entries within the device stack
 // (checkWide walks every path and counts them).
 TEST(WideBvh, DeepTreesStayWithinTheDeviceStack) {
-    Scene s = soup(0, 0, 5);
+    Scene s = test::soup(0, 0, 5);
     for (int i = 0; i < 400; ++i) {
         float r = std::pow(1.1f, float(i % 200)) * 1e-3f;
         s.spheres.push_back({{r * 3.f * (i % 2 ? 1.f : -1.f), r, 0}, r, 0, {0, 0, 0}});
@@ -83,7 +63,7 @@ TEST(WideBvh, DeepTreesStayWithinTheDeviceStack) {
 }
 
 TEST(WideBvh, CheckerRejectsBrokenTrees) {
-    AccelData d = buildAccel(soup(500, 500, 6), Accel::Wide);
+    AccelData d = buildAccel(test::soup(500, 500, 6), Accel::Wide);
     ASSERT_EQ(checkWide(d), "");
     ASSERT_GT(d.wide.size(), 2u);
     AccelData shrunk = d;
@@ -143,7 +123,7 @@ TEST_P(WideImages, StandardScenesMatchNone) {
 // A soup of spheres and triangles seen from inside: rays start in many boxes, and the four
 // children of a node overlap.
 TEST_P(WideImages, SoupMatchesNone) {
-    Scene scene = soup(300, 700, 7);
+    Scene scene = test::soup(300, 700, 7);
     scene.lights.push_back({{0, 30, 0}, 0.f, {1, 1, 1}, 0});
     scene.camera.position = {0, 0, -30};
     // A field of view (the soup leaves it 0, which makes every camera ray NaN: a frame that the

@@ -1,0 +1,34 @@
+// rtlab tests — generated scenes that several test files share.
+#pragma once
+
+#include <random>
+
+#include "core/scene.h"
+#include "core/scene_loader.h"
+
+namespace rt::test {
+
+// A soup of random spheres and triangles of mixed sizes, some overlapping, some degenerate in
+// one axis (axis-aligned triangles), as a BVH and grid workout.
+inline Scene soup(int spheres, int triangles, unsigned seed) {
+    Scene s;
+    s.name = "soup";
+    dev::Material m{};
+    m.opacity = m.ior = 1.f;
+    s.materials = {m};
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> pos(-20.f, 20.f), size(0.01f, 1.5f);
+    for (int i = 0; i < spheres; ++i)
+        s.spheres.push_back({{pos(rng), pos(rng), pos(rng)}, size(rng), 0, {0, 0, 0}});
+    for (int i = 0; i < triangles; ++i) {
+        dev::Float3 a{pos(rng), pos(rng), pos(rng)};
+        float d = size(rng);
+        dev::Float3 b{a.x + d, a.y, a.z}, c{a.x, a.y + (i % 3 ? d : 0.f), a.z + d};
+        dev::Float3 n{0, 0, 1};
+        s.triangles.push_back({a, b, c, n, n, n, 0, 0});
+    }
+    finalizeScene(s);
+    return s;
+}
+
+}  // namespace rt::test
