@@ -216,6 +216,17 @@ void cropToCenter(Scene& scene, RenderOptions& o, int w, int h) {
     o.height = h;
 }
 
+std::string firstUnvisited(const std::vector<int>& triangleSeen, const std::vector<int>& sphereSeen,
+                           const std::vector<int>& nodeSeen) {
+    for (size_t t = 0; t < triangleSeen.size(); ++t)
+        if (!triangleSeen[t]) return "triangle " + std::to_string(t) + " is in no leaf";
+    for (size_t s = 0; s < sphereSeen.size(); ++s)
+        if (!sphereSeen[s]) return "sphere " + std::to_string(s) + " is in no leaf";
+    for (size_t i = 0; i < nodeSeen.size(); ++i)
+        if (!nodeSeen[i]) return "node " + std::to_string(i) + " is unreachable";
+    return "";
+}
+
 std::string checkBvh(const AccelData& data) {
     const std::vector<dev::BvhNode>& nodes = data.bvh;
     size_t prims = data.spheres.size() + data.triangles.size();
@@ -277,13 +288,7 @@ std::string checkBvh(const AccelData& data) {
             }
         }
     }
-    for (size_t t = 0; t < triangleSeen.size(); ++t)
-        if (!triangleSeen[t]) return "triangle " + std::to_string(t) + " is in no leaf";
-    for (size_t s = 0; s < sphereSeen.size(); ++s)
-        if (!sphereSeen[s]) return "sphere " + std::to_string(s) + " is in no leaf";
-    for (size_t i = 0; i < nodeSeen.size(); ++i)
-        if (!nodeSeen[i]) return "node " + std::to_string(i) + " is unreachable";
-    return "";
+    return firstUnvisited(triangleSeen, sphereSeen, nodeSeen);
 }
 
 }  // namespace rt

@@ -73,6 +73,11 @@ PrimBoxes primitiveBoxes(const AccelData& data);
 // (--accel none) on a million triangles is timed this way on a frame it can finish.
 void cropToCenter(Scene& scene, RenderOptions& options, int w, int h);
 
+// The tail of both checkers: the first triangle or sphere no leaf holds, or node no path
+// reaches ("" when every entry was seen).
+std::string firstUnvisited(const std::vector<int>& triangleSeen, const std::vector<int>& sphereSeen,
+                           const std::vector<int>& nodeSeen);
+
 // Checks the BVH invariants (each primitive in exactly one leaf, each child box inside its
 // parent's, one kind per leaf, every node reachable once); returns "" or the first violation.
 std::string checkBvh(const AccelData& data);

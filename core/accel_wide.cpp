@@ -229,13 +229,7 @@ std::string checkWide(const AccelData& data) {
             }
         }
     }
-    for (size_t t = 0; t < triangleSeen.size(); ++t)
-        if (!triangleSeen[t]) return "triangle " + std::to_string(t) + " is in no leaf";
-    for (size_t s = 0; s < sphereSeen.size(); ++s)
-        if (!sphereSeen[s]) return "sphere " + std::to_string(s) + " is in no leaf";
-    for (size_t i = 0; i < nodeSeen.size(); ++i)
-        if (!nodeSeen[i]) return "node " + std::to_string(i) + " is unreachable";
-    return "";
+    return firstUnvisited(triangleSeen, sphereSeen, nodeSeen);
 }
 
 }  // namespace rt

@@ -29,9 +29,8 @@ namespace {
 namespace fs = std::filesystem;
 using Accel = RenderOptions::Accel;
 
-const char* kScenes[] = {"empty", "spheres", "shadows", "cornell", "mesh", "envmap"};
-
-Scene load(const std::string& name) { return loadScene("scenes/" + name + ".json", readImage); }
+using test::kScenes;
+using test::load;
 
 // Generates the stress scenes with `args` into build/<folder> unless they are newer than the
 // generator, and returns the folder.

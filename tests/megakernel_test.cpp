@@ -14,13 +14,13 @@
 #include "image/image_io.h"
 #include "megakernel/megakernel.h"
 #include "test_device.h"
+#include "test_scenes.h"
 
 namespace rt {
 namespace {
 
-const char* kScenes[] = {"empty", "spheres", "shadows", "cornell", "mesh", "envmap"};
-
-Scene load(const std::string& name) { return loadScene("scenes/" + name + ".json", readImage); }
+using test::kScenes;
+using test::load;
 
 RenderOptions small(const Scene& scene, int bounces) {
     RenderOptions o = scene.defaults;

@@ -2,11 +2,21 @@
 #pragma once
 
 #include <random>
+#include <string>
 
 #include "core/scene.h"
 #include "core/scene_loader.h"
+#include "image/image_io.h"
 
 namespace rt::test {
+
+// The standard scenes of scenes/, which the equivalence and acceleration tests each cover.
+inline constexpr const char* kScenes[] = {"empty", "spheres", "shadows", "cornell", "mesh", "envmap"};
+
+// A standard scene by name (tests run from the source root).
+inline Scene load(const std::string& name) {
+    return loadScene("scenes/" + name + ".json", readImage);
+}
 
 // A soup of random spheres and triangles of mixed sizes, some overlapping, some degenerate in
 // one axis (axis-aligned triangles), as a BVH and grid workout.

@@ -12,14 +12,14 @@
 #include "image/image_io.h"
 #include "megakernel/megakernel.h"
 #include "test_device.h"
+#include "test_scenes.h"
 #include "wavefront/tree/wavefront.h"
 
 namespace rt {
 namespace {
 
-const char* kScenes[] = {"empty", "spheres", "shadows", "cornell", "mesh", "envmap"};
-
-Scene load(const std::string& name) { return loadScene("scenes/" + name + ".json", readImage); }
+using test::kScenes;
+using test::load;
 
 // The global tree's size, as the pipeline reports it among its extras.
 size_t treeBytes(const FrameStats& s) { return s.extras.value("tree_bytes", size_t(0)); }

@@ -25,9 +25,8 @@ namespace {
 namespace fs = std::filesystem;
 using Accel = RenderOptions::Accel;
 
-const char* kScenes[] = {"empty", "spheres", "shadows", "cornell", "mesh", "envmap"};
-
-Scene load(const std::string& name) { return loadScene("scenes/" + name + ".json", readImage); }
+using test::kScenes;
+using test::load;
 
 
 void expectValidWide(const Scene& scene, const std::string& name) {
