@@ -27,7 +27,7 @@ namespace fs = std::filesystem;
 namespace {
 
 struct SweepArgs {
-    std::string config, device, out, sceneDir, kernelDir, exportScenes;
+    std::string config, device, devices, shard, out, sceneDir, kernelDir, exportScenes;
     std::vector<std::string> importDirs;
     double timeLimit = 0;
     bool noCharts = false;
@@ -199,6 +199,13 @@ void addSweep(CLI::App& app) {
                          "bench/sweeps/README.md");
     sweepCmd->add_option("--device", a.device,
                          "OpenCL device: index or name substring [$RTLAB_DEVICE, else first GPU]");
+    sweepCmd->add_option("--devices", a.devices,
+                         "Run the cells on several devices at once, one context each: all (every "
+                         "GPU) or indices and names separated by commas (0,1; a device named twice "
+                         "gets two contexts); rows keep the sweep's cell order");
+    sweepCmd->add_option("--shard", a.shard,
+                         "Run only share i of N (i/N: work units u with u % N == i), e.g. one task "
+                         "of a cluster array job; merge the shards with --import DIR0 DIR1 ...");
     sweepCmd->add_option("--out", a.out, "Output folder [results/<device-slug>]");
     sweepCmd->add_option("--import", a.importDirs,
                          "Do not measure: score and chart what `rtlab-bench --sweep CONFIG --out DIR` "
@@ -269,6 +276,11 @@ int runSweepCommand() {
     } else {
         bench::SweepRunOptions o;
         o.device = a.device;
+        if (!a.devices.empty() && !a.device.empty())
+            throw Error("sweep: --device and --devices: give one (--devices " + a.device +
+                        " for one device)");
+        o.devices = a.devices;
+        if (!a.shard.empty()) o.shard = bench::parseShard(a.shard);
         o.sceneDir = a.sceneDir;
         o.readImage = readImage;
         o.sources = KernelSources(a.kernelDir.empty() && std::getenv("RTLAB_KERNEL_DIR")

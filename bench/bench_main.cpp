@@ -54,7 +54,12 @@ Google Benchmark mode (every --benchmark_* flag works, e.g. --benchmark_filter=R
   --warmup=N            untimed frames before timing [2]
   --count-rays=yes|no   one untimed frame with device ray counters [yes]
 Sweep mode (no Google Benchmark; what `rtlab sweep --import` reads):
-  --sweep=SWEEP --out=DIR [--time-limit=SECONDS] [--device=SPEC] [--resume=ROWS,...]
+  --sweep=SWEEP --out=DIR [--time-limit=SECONDS] [--device=SPEC | --devices=SPEC]
+        [--shard=i/N] [--resume=ROWS,...]
+                        --devices=all (every GPU) or a list of indices and names runs the
+                        cells on those devices at once, one context each, rows in cell order;
+                        --shard=i/N runs only work units u with u % N == i, for N machines
+                        (merge: `rtlab sweep CONFIG --import DIR0 DIR1 ...`).
                         --resume skips the cells an earlier run's rows.jsonl measured; give
                         `rtlab sweep --import` both output folders afterwards. Groups with
                         stop-after-failure (bench/sweeps/limits) skip the settings no smaller
@@ -83,7 +88,7 @@ struct Flags {
     std::vector<std::string> sizes{"640x360", "1280x720", "1920x1080", "3840x2160"};
     std::string bounces = "0..8";
     std::vector<std::string> accels;  // empty: each scene's default
-    std::string cells, sweep, out, device, sceneDir, kernelDir, resume;
+    std::string cells, sweep, out, device, sceneDir, kernelDir, resume, shard;
     std::vector<std::string> devices;
     int repeats = 5, warmup = 2, frames = 5;
     bool countRays = true, listDevices = false;
@@ -146,6 +151,7 @@ Flags parseFlags(int argc, char** argv) {
         else if (key == "--resume") f.resume = value;
         else if (key == "--device") f.device = value;
         else if (key == "--devices") f.devices = split(value);
+        else if (key == "--shard") f.shard = value;
         else if (key == "--scene-dir") f.sceneDir = value;
         else if (key == "--kernel-dir") f.kernelDir = value;
         else if (key == "--repeats") f.repeats = integer(1, 1000);
@@ -185,6 +191,10 @@ int sweepCommand(const Flags& f) {
     if (!rows) throw Error((out / "rows.jsonl").string() + ": cannot write");
     SweepRunOptions o;
     o.device = f.device;
+    if (!f.devices.empty() && !f.device.empty())
+        throw Error("--device and --devices: give one (--devices=" + f.device + " for one device)");
+    for (const std::string& d : f.devices) o.devices += (o.devices.empty() ? "" : ",") + d;
+    if (!f.shard.empty()) o.shard = parseShard(f.shard);
     o.sceneDir = f.sceneDir;
     o.readImage = readFace;
     o.sources = KernelSources(f.kernelDir);
@@ -352,6 +362,7 @@ std::vector<int> bounceList(const std::string& spec) {
 }
 
 int benchmarkCommand(const Flags& f) {
+    if (!f.shard.empty()) throw Error("--shard: only with --sweep (the Google Benchmark mode runs no work units)");
     std::vector<std::string> deviceSpecs = f.devices;
     if (deviceSpecs.empty()) deviceSpecs.push_back(f.device);
     std::vector<Target> targets;
