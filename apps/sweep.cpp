@@ -3,6 +3,7 @@
 // results/<device-slug>/<sweep>.{json,csv}, the five charts (scripts/charts.py) and README.md
 // (scripts/results-readme.py). With --import DIR it does the same for what `rtlab-bench --sweep`
 // measured on another machine; --export-scenes makes the scene folder that rtlab-bench can read.
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -188,6 +189,26 @@ nlohmann::json readJsonLines(const fs::path& path) {
     return rows;
 }
 
+// Rows in the sweep's cell order (cell_index): shards and devices measure out of order, and
+// merged shards then read like a run on one machine. Rows without an index keep their place.
+void sortByCell(nlohmann::json& rows, std::vector<PendingFrame>& frames) {
+    for (const auto& r : rows)
+        if (!r.contains("cell_index")) return;
+    std::vector<size_t> order(rows.size());
+    for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::stable_sort(order.begin(), order.end(), [&](size_t x, size_t y) {
+        return rows[x]["cell_index"].get<size_t>() < rows[y]["cell_index"].get<size_t>();
+    });
+    std::vector<size_t> placeOf(rows.size());
+    nlohmann::json sorted = nlohmann::json::array();
+    for (size_t i = 0; i < order.size(); ++i) {
+        placeOf[order[i]] = i;
+        sorted.push_back(std::move(rows[order[i]]));
+    }
+    rows = std::move(sorted);
+    for (PendingFrame& f : frames) f.row = placeOf[f.row];
+}
+
 }  // namespace
 
 void addSweep(CLI::App& app) {
@@ -209,7 +230,8 @@ void addSweep(CLI::App& app) {
     sweepCmd->add_option("--out", a.out, "Output folder [results/<device-slug>]");
     sweepCmd->add_option("--import", a.importDirs,
                          "Do not measure: score and chart what `rtlab-bench --sweep CONFIG --out DIR` "
-                         "wrote to DIR on another machine (repeat for runs continued with --resume)")
+                         "wrote to DIR on another machine; several folders: runs continued with "
+                         "--resume, or the shards of --shard i/N, merged in cell order")
         ->take_all();
     sweepCmd->add_option("--time-limit", a.timeLimit,
                          "Stop before a cell that would end after this many seconds");
@@ -228,6 +250,8 @@ int runSweepCommand() {
 
     nlohmann::json meta, rows = nlohmann::json::array();
     std::vector<PendingFrame> frames;
+    std::map<std::string, bool> shardComplete;  // by --shard spec ("" for none)
+    int shardCount = 0;
     if (!a.importDirs.empty()) {
         std::map<std::string, size_t> cellRow;
         for (const std::string& d : a.importDirs) {
@@ -239,8 +263,23 @@ int runSweepCommand() {
             if (part.value("sweep", "") != config.name)
                 throw Error(dir.string() + " holds sweep '" + part.value("sweep", "") + "', not '" +
                             config.name + "'");
+            // Shards (--shard i/N) are parts of one run: their cells add up, and the set is
+            // complete once every shard's last part is. Parts of one shard continue each other.
+            std::string shard = part.value("shard", "");
+            auto [seenShard, firstOfShard] = shardComplete.emplace(shard, false);
+            seenShard->second = part.value("complete", false);
+            if (!shard.empty()) shardCount = std::stoi(shard.substr(shard.find('/') + 1));
             if (meta.is_null()) {
                 meta = part;
+                meta.erase("shard");
+            } else if (firstOfShard) {
+                for (const char* k : {"measured", "failed", "not_run", "seconds", "cells",
+                                      "skipped_as_done"})
+                    meta[k] = meta.value(k, 0.0) + part.value(k, 0.0);
+                meta["finished"] = std::max(meta.value("finished", ""), part.value("finished", ""));
+                if (part.value("commit", "") != meta.value("commit", ""))
+                    throw Error(dir.string() + " was measured at commit " + part.value("commit", "") +
+                                ", the first folder at " + meta.value("commit", ""));
             } else {
                 // A continued run: its cells add to the first run's; the sums and the end move.
                 for (const char* k : {"measured", "failed", "not_run", "seconds"})
@@ -293,6 +332,22 @@ int runSweepCommand() {
             rows.push_back(row);
         });
         meta = s.meta;
+    }
+    if (!a.importDirs.empty()) {
+        if (shardCount > 0) {
+            nlohmann::json shards = nlohmann::json::array();
+            bool complete = true;
+            for (const auto& [shard, done] : shardComplete) {
+                shards.push_back(shard);
+                complete = complete && done;
+            }
+            meta["shards"] = shards;
+            meta["complete"] = complete && int(shardComplete.size()) == shardCount;
+            if (int(shardComplete.size()) != shardCount || shardComplete.count(""))
+                std::fprintf(stderr, "rtlab sweep: warning: %zu of %d shards imported; the set is "
+                                     "incomplete\n", shardComplete.size(), shardCount);
+        }
+        sortByCell(rows, frames);
     }
     if (!frames.empty()) scoreFrames(rows, frames, config, a.sceneDir);
 
