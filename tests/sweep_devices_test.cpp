@@ -25,19 +25,19 @@ const char* kSweep =
     "[limits]\nscenes = spheres\npipelines = mega wave\nsizes = 8x6 16x9\nbounces = 11..13\n"
     "stop-after-failure = yes\n";
 
-struct Run {
+struct SweepRun {
     std::vector<nlohmann::json> rows;
     std::vector<std::vector<float>> images;  // kept frames, in row order
     bench::SweepSummary summary;
 };
 
-Run runSweep(const std::string& devices, bench::Shard shard = {}) {
+SweepRun runSweep(const std::string& devices, bench::Shard shard = {}) {
     bench::SweepConfig config = bench::parseSweep(kSweep, "devices-test");
     bench::SweepRunOptions o;
     o.device = std::to_string(test::device().device().index);
     o.devices = devices;
     o.shard = shard;
-    Run r;
+    SweepRun r;
     r.summary = bench::runSweep(config, o, nullptr, [&](const nlohmann::json& row, const Image* image) {
         r.rows.push_back(row);
         if (image) r.images.push_back(image->rgb);
@@ -57,8 +57,8 @@ nlohmann::json settled(nlohmann::json row) {
 
 TEST(SweepDevices, TwoContextsOnOneDeviceGiveTheOneContextRows) {
     std::string index = std::to_string(test::device().device().index);
-    Run one = runSweep("");
-    Run two = runSweep(index + "," + index);
+    SweepRun one = runSweep("");
+    SweepRun two = runSweep(index + "," + index);
     // 12 + 2 + 12 cells; at B = 12 both pipelines fail at 8x6, so 16x9 B >= 12 and 8x6 B = 13
     // are recorded as skipped.
     ASSERT_EQ(one.rows.size(), 26u);
@@ -78,11 +78,11 @@ TEST(SweepDevices, TwoContextsOnOneDeviceGiveTheOneContextRows) {
 }
 
 TEST(SweepDevices, ShardsCoverEveryCellOnceAndMergeIntoCellOrder) {
-    Run whole = runSweep("");
+    SweepRun whole = runSweep("");
     std::vector<nlohmann::json> merged;
     std::set<int> seen;
     for (int i = 0; i < 3; ++i) {
-        Run part = runSweep("", {i, 3});
+        SweepRun part = runSweep("", {i, 3});
         EXPECT_EQ(part.summary.meta["shard"], std::to_string(i) + "/3");
         EXPECT_EQ(part.summary.meta["sweep_cells"], 26);
         EXPECT_GT(part.rows.size(), 0u) << "shard " << i;
