@@ -1,8 +1,9 @@
 // rtlab sweep CONFIG — runs a named sweep (bench/sweeps/, format in bench/sweeps/README.md) on one
-// device, scores the accuracy group against the converged CPU reference, and writes
-// results/<device-slug>/<sweep>.{json,csv}, the five charts (scripts/charts.py) and README.md
-// (scripts/results-readme.py). With --import DIR it does the same for what `rtlab-bench --sweep`
-// measured on another machine; --export-scenes makes the scene folder that rtlab-bench can read.
+// device or several (--devices), or one share of it (--shard), scores the accuracy group against
+// the converged CPU reference, and writes results/<device-slug>/<sweep>.{json,csv}, the five
+// charts (scripts/charts.py) and README.md (scripts/results-readme.py). With --import DIR... it
+// does the same for what `rtlab-bench --sweep` measured on other machines (continued runs and
+// shards merged in cell order); --export-scenes makes the scene folder that rtlab-bench can read.
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>

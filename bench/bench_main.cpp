@@ -5,7 +5,8 @@
 //       time), with per-kernel, ray, memory and tree-use counters. --benchmark_out=FILE.json
 //       writes JSON that Google Benchmark's compare.py reads.
 //   rtlab-bench --sweep FILE --out DIR              a sweep file's cells with a progress line,
-//       rows to DIR/rows.jsonl as they are measured, kept frames to DIR/images/*.pfm. This is
+//       on one device or several (--devices), all of them or one share (--shard i/N), rows to
+//       DIR/rows.jsonl in cell order as they are measured, kept frames to DIR/images/*.pfm. This is
 //       what runs on a GPU machine: it links no OpenImageIO, so `rtlab sweep --import DIR`
 //       compares the frames and draws the charts afterwards, elsewhere.
 #include <benchmark/benchmark.h>
@@ -47,7 +48,8 @@ Google Benchmark mode (every --benchmark_* flag works, e.g. --benchmark_filter=R
   --accels=bvh,...      none, bv, grid, bvh, wide [each scene's default]
   --cells=SWEEP         instead of the lists above: the cells of a sweep file (every cell:
                         stop-after-failure applies in sweep mode only)
-  --devices=SPEC,...    OpenCL devices by index or name [$RTLAB_DEVICE, else first GPU]
+  --devices=SPEC,...    OpenCL devices by index or name, or all (every GPU)
+                        [$RTLAB_DEVICE, else first GPU]
   --repeats=N           repetitions per benchmark; the median is reported [5]
   --frames=N            timed frames per repetition (fixed, so that sub-millisecond cells do
                         not auto-iterate for minutes) [5]
@@ -363,15 +365,22 @@ std::vector<int> bounceList(const std::string& spec) {
 
 int benchmarkCommand(const Flags& f) {
     if (!f.shard.empty()) throw Error("--shard: only with --sweep (the Google Benchmark mode runs no work units)");
-    std::vector<std::string> deviceSpecs = f.devices;
-    if (deviceSpecs.empty()) deviceSpecs.push_back(f.device);
+    // The same --devices specs as the sweep mode (all, indices, names); one benchmark set each.
+    std::string spec;
+    for (const std::string& d : f.devices) spec += (spec.empty() ? "" : ",") + d;
+    std::vector<DeviceInfo> chosen =
+        spec.empty() ? std::vector<DeviceInfo>{selectDevice(f.device)} : selectDevices(spec);
     std::vector<Target> targets;
-    for (const std::string& spec : deviceSpecs) {
+    for (const DeviceInfo& device : chosen) {
         Target t;
-        t.cl = std::make_unique<ClContext>(selectDevice(spec), KernelSources(f.kernelDir));
-        if (deviceSpecs.size() > 1) t.tag = "/dev" + std::to_string(t.cl->device().index);
+        t.cl = std::make_unique<ClContext>(device, KernelSources(f.kernelDir));
+        if (chosen.size() > 1) {
+            t.tag = "/dev" + std::to_string(device.index);
+            for (const Target& other : targets)  // a device named twice: a second set of its own
+                if (other.tag == t.tag) t.tag += "-" + std::to_string(targets.size());
+        }
         const DeviceInfo& d = t.cl->device();
-        std::string prefix = deviceSpecs.size() > 1 ? t.tag.substr(1) + "_" : "";
+        std::string prefix = chosen.size() > 1 ? t.tag.substr(1) + "_" : "";
         benchmark::AddCustomContext(prefix + "device", d.name);
         benchmark::AddCustomContext(prefix + "device_slug", deviceSlug(d));
         benchmark::AddCustomContext(prefix + "platform", d.platformName);
