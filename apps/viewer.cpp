@@ -95,7 +95,7 @@ std::string windowSizes(GLFWwindow* window, const RenderOptions& o, int scale) {
     glfwGetWindowSize(window, &ww, &wh);
     glfwGetFramebufferSize(window, &fw, &fh);
     char buf[256];
-    int n = std::snprintf(buf, sizeof buf, "rendering %dx%d (--size), window %dx%d (--scale %d)",
+    int n = std::snprintf(buf, sizeof buf, "rendering %dx%d, window %dx%d (--scale %d)",
                           o.width, o.height, ww, wh, scale);
     if ((fw != ww || fh != wh) && n > 0) {
         float sx = 1, sy = 1;

@@ -229,9 +229,11 @@ int Renderer::nextPieceRows(int remaining) const {
     if (!frame_.windows) return remaining;
     if (config_.pieceRows > 0) return std::min(remaining, config_.pieceRows);
     const int height = frame_.options.height;
-    if (msPerRow_ <= 0) return std::min(remaining, std::max(1, height / 16));  // learn first
-    int rows = int(kPieceMs / msPerRow_);
-    if (lastPieceRows_ > 0) rows = std::min(rows, 2 * lastPieceRows_);
+    if (lastPieceRows_ == 0) {  // the frame's first piece
+        if (frameMsPerRow_ <= 0) return std::min(remaining, std::max(1, height / 32));  // probe
+        return std::clamp(int(kPieceMs / frameMsPerRow_), 1, remaining);
+    }
+    int rows = int(std::min(double(2 * lastPieceRows_), kPieceMs / msPerRow_));
     return std::clamp(rows, 1, remaining);
 }
 
@@ -264,9 +266,10 @@ void Renderer::beginFrame(const ViewRequest& r) {
            std::to_string(o.bounces) + " " + accelName(o.accel);
     if (key != pieceKey_) {
         pieceKey_ = key;
-        msPerRow_ = 0;
-        lastPieceRows_ = 0;
+        msPerRow_ = frameMsPerRow_ = 0;
     }
+    lastPieceRows_ = 0;
+    frameMs_ = 0;
 
     FrameOut& f = p.out;
     f = FrameOut();
@@ -340,12 +343,15 @@ void Renderer::renderPiece(const ViewRequest& r) {
         return fail(e.what());
     }
     auto now = std::chrono::steady_clock::now();
-    msPerRow_ = std::max(std::chrono::duration<double, std::milli>(now - t0).count() / rows, 1e-6);
+    const double pieceMs = std::chrono::duration<double, std::milli>(now - t0).count();
+    msPerRow_ = std::max(pieceMs / rows, 1e-6);
     lastPieceRows_ = rows;
+    frameMs_ += pieceMs;
     f.rowsDone += rows;
     ++f.pieces;
     f.wallMs = std::chrono::duration<double, std::milli>(now - p.started).count();
     if (f.complete()) {
+        frameMsPerRow_ = std::max(frameMs_ / f.height, 1e-6);
         if (reloaded_) ++generation_;
         reloaded_ = false;
         backup_.reset();

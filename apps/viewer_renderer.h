@@ -190,11 +190,13 @@ private:
     uint64_t restarts_ = 0;
     // The last complete frame's pixels, per side: a partial frame shows them below its rows.
     std::array<std::vector<uint8_t>, 2> lastRgb_;
-    // Piece sizing: the cost of a row, learned while the workload (pipelines, options, scene)
-    // stays the same; rows of a new workload are met with pieces that grow at most twofold.
+    // Piece sizing, while the workload (pipelines, options, scene) stays the same: a frame's
+    // first piece from the last complete frame's cost per row, the next ones from the last
+    // piece's, growing at most twofold (rows differ in cost: sky against a mesh). A new workload
+    // starts with a probe of a few rows.
     std::string pieceKey_;
-    double msPerRow_ = 0;
-    int lastPieceRows_ = 0;
+    double msPerRow_ = 0, frameMsPerRow_ = 0, frameMs_ = 0;
+    int lastPieceRows_ = 0;  // in the frame in progress
     int nextPieceRows(int remaining) const;
 
     // Shared with the window thread.
