@@ -194,10 +194,11 @@ int main(int argc, char** argv) {
     char guard[512];
     std::snprintf(guard, sizeof guard,
                   "\nSlow frames come in pieces of rows (about 100 ms each), shown as they finish "
-                  "with a progress line in the overlay; any key or camera move restarts the "
-                  "frame. B asks before it switches to accel none (brute force) when the scene "
-                  "needs more than %.0e ray-triangle tests a frame (triangles x pixels x AA "
-                  "samples x (1 + bounce limit)): B again switches, any other key skips to bv.\n",
+                  "with a progress line in the overlay; a key that changes the view, or a "
+                  "camera move, restarts the frame. B asks before it switches to brute force "
+                  "(accel none, or bv, which bounds whole meshes only) when a frame would need "
+                  "more than %.0e ray-triangle tests (triangles x pixels x AA samples x (1 + "
+                  "bounce limit)): B again switches, any other key skips to grid.\n",
                   view::kBruteForceTests);
     keys += guard;
     CLI::App app{"rtlab-view: watch the pipelines render a scene in real time."};
@@ -216,8 +217,8 @@ int main(int argc, char** argv) {
             ") [" + a.pair[0] + "," + a.pair[1] + "]");
     split->expected(0, 1);
     app.add_option("--scale", a.scale,
-                   "Window size in rendered pixels per --size pixel, 1..8 [2 when that fits the "
-                   "screen, else 1]. The frame is always rendered at --size; a high-DPI screen "
+                   "Window pixels (screen coordinates) per rendered pixel, 1..8 [2 when the "
+                   "window then fits the screen, else 1]. The frame is always rendered at --size; a high-DPI screen "
                    "gives the window a larger framebuffer (the first line says so), and the "
                    "frame is scaled up to fill it");
     app.add_option("--piece-rows", a.pieceRows,

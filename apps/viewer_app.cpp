@@ -36,6 +36,10 @@ constexpr float kMaxPitch = 1.55f;       // just short of straight up or down
 
 }  // namespace
 
+bool isBruteForce(RenderOptions::Accel accel) {
+    return accel == RenderOptions::Accel::None || accel == RenderOptions::Accel::Bv;
+}
+
 double bruteForceTests(size_t triangles, long long pixels, int aa, int bounces) {
     return double(triangles) * double(pixels) * double(aa) * double(aa) * double(1 + bounces);
 }
@@ -131,39 +135,45 @@ void App::message(const std::string& text) {
 }
 
 void App::cycleAccel() {
-    auto next = RenderOptions::Accel((int(req_.accel) + 1) % 5);
-    if (next == RenderOptions::Accel::None && !confirmNone_) {
+    using Accel = RenderOptions::Accel;
+    const Accel next = Accel((int(req_.accel) + 1) % 5);
+    if (isBruteForce(next) && !confirming_) {
         size_t triangles = haveFrame_ ? frame_.triangles : config_.triangles;
         long long pixels = haveFrame_ ? (long long)(frame_.width) * frame_.height : config_.pixels;
         int aa = haveFrame_ ? frame_.options.aa : 1;
         double tests = bruteForceTests(triangles, pixels, aa, req_.bounces);
         if (tests > kBruteForceTests) {
-            char text[256];
+            char text[320];
             std::snprintf(text, sizeof text,
-                          "accel none tests every ray against all %zu triangles, %.1e tests a "
-                          "frame: press B again to use it, any other key to skip to %s",
-                          triangles, tests, accelName(RenderOptions::Accel((int(next) + 1) % 5)));
+                          next == Accel::None
+                              ? "accel none tests every ray against all %zu triangles, %.1e tests "
+                                "a frame: press B again to use it, any other key to skip to grid"
+                              : "accel bv tests every ray that enters a mesh's bounds against all "
+                                "its triangles (%zu), up to %.1e tests a frame: press B again to "
+                                "use it, any other key to skip to grid",
+                          triangles, tests);
             message(text);
             std::printf("rtlab-view: %s\n", text);
             std::fflush(stdout);
-            confirmNone_ = true;
+            confirming_ = true;
             return;
         }
     }
-    if (confirmNone_) std::printf("rtlab-view: accel none, as confirmed\n");
-    confirmNone_ = false;
+    if (confirming_) std::printf("rtlab-view: accel %s, as confirmed\n", accelName(next));
+    confirming_ = false;
     req_.accel = next;
     message(std::string("accel ") + accelName(req_.accel));
     send();
 }
 
 void App::onKey(int key) {
-    if (confirmNone_ && key != GLFW_KEY_B) {
-        // The answer to "press B again": any other key skips brute force and is used up by it.
-        confirmNone_ = false;
-        req_.accel = RenderOptions::Accel((int(RenderOptions::Accel::None) + 1) % 5);
-        message(std::string("skipped accel none: accel ") + accelName(req_.accel));
-        std::printf("rtlab-view: skipped accel none, accel %s\n", accelName(req_.accel));
+    if (confirming_ && key != GLFW_KEY_B) {
+        // The answer to "press B again": any other key skips brute force (none and bv, which
+        // bounds whole meshes only) for the grid, and is used up by it.
+        confirming_ = false;
+        req_.accel = RenderOptions::Accel::Grid;
+        message("skipped brute force: accel grid");
+        std::printf("rtlab-view: skipped brute force, accel grid\n");
         std::fflush(stdout);
         send();
         return;

@@ -42,11 +42,15 @@ struct AppConfig {
 // Keys: the letters of the controls, '+' and '-'. Throws rt::Error naming --keys.
 std::vector<ScriptedKey> parseKeyScript(const std::string& script);
 
-// Brute force (--accel none) tests every ray against every triangle. Ray-triangle tests a frame
-// at the least: triangles x pixels x AA samples x (1 + bounce limit), one ray per bounce (shadow
-// rays and glass's second ray come on top). Past kBruteForceTests (a few seconds a frame on a
-// CPU device; the 69,630-triangle bunny at 320x240, B 3: 2.1e10, 65 s on 2-core PoCL), B asks
-// before it switches to none.
+// Brute force: --accel none tests every ray against every triangle, and bv every ray that
+// enters a mesh's bounds against all of that mesh's triangles (nearly the same for one big mesh:
+// the 69,630-triangle bunny at 320x240 took 65 s a frame under none on 2-core PoCL (issue 19),
+// and 174 s of device time under bv on the same 2 cores shared with other work).
+bool isBruteForce(RenderOptions::Accel accel);
+// Ray-triangle tests a brute-force frame makes at the least: triangles x pixels x AA samples x
+// (1 + bounce limit), one ray per bounce (shadow rays and glass's second ray come on top). Past
+// kBruteForceTests (a few seconds a frame on a CPU device; the bunny at 320x240, B 3: 2.1e10),
+// B asks before it switches to none or bv.
 double bruteForceTests(size_t triangles, long long pixels, int aa, int bounces);
 constexpr double kBruteForceTests = 1e9;
 
@@ -99,7 +103,7 @@ private:
     int labelSize_[2] = {0, 0};  // the split view's side labels, in texels
     int screenshots_ = 0;
     std::string fatal_;
-    bool confirmNone_ = false;  // B asked whether to switch to brute force: B again says yes
+    bool confirming_ = false;  // B asked whether to switch to brute force: B again says yes
 };
 
 }  // namespace rt::view

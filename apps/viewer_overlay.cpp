@@ -51,7 +51,7 @@ const std::vector<std::string>& helpLines() {
         "W/A/S/D  move            Q/E  down/up      shift  faster",
         "drag     turn (yaw/pitch); in split view, drag the divider",
         "M  next pipeline         V  split view     +/-  bounce limit",
-        "B  accel none/bv/grid/bvh/wide (asks before none on a big mesh)",
+        "B  accel none/bv/grid/bvh/wide (asks first: none, bv on a big mesh)",
         "R  reload scene    P  screenshot",
         "O  overlay   H  help   Esc  quit",
     };
