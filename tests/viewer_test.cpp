@@ -258,6 +258,21 @@ TEST_F(Viewer, BruteForceOnASmallSceneSwitchesAtOnce) {
     EXPECT_EQ(r.out.find("accel none, as confirmed"), std::string::npos) << r.out;
 }
 
+TEST_F(Viewer, FirstLineNamesRenderAndWindowSizesAndScaleFitsTheScreen) {
+    // Xvfb's screen is 1024x768: 320x240 doubles to 640x480, 800x600 would not fit doubled.
+    Result small = run(kXvfb + kBin + "/rtlab-view scenes/spheres.json --frames 1 --no-overlay");
+    ASSERT_EQ(small.status, 0) << small.out << small.err;
+    EXPECT_NE(small.out.find("rendering 320x240, window 640x480 (--scale 2)"), std::string::npos)
+        << small.out;
+    Result large = run(kXvfb + kBin +
+                       "/rtlab-view scenes/spheres.json --size 800x600 --frames 1 --no-overlay");
+    ASSERT_EQ(large.status, 0) << large.out << large.err;
+    EXPECT_NE(large.out.find("rendering 800x600, window 800x600 (--scale 1)"), std::string::npos)
+        << large.out;
+    // Xvfb has no high-DPI screen: the framebuffer is the window, and is not named.
+    EXPECT_EQ(large.out.find("framebuffer"), std::string::npos) << large.out;
+}
+
 TEST(ViewerErrors, NoDisplayEndsInOneLine) {
     if (!fs::exists(kBin + "/rtlab-view")) GTEST_SKIP() << "rtlab-view was not built";
     Result r = run("env -u DISPLAY -u WAYLAND_DISPLAY " + kBin +
