@@ -137,9 +137,13 @@ TEST(Progress, GrowsAndEndsAtTheTotalInEveryPipelineThatReports) {
     // Launches capped far below a row's cost: one launch per row, each reported.
     cases.push_back({"mega", RenderOptions::Layout::Tree, 1, false, 1e-6});
     cases.push_back({"queue", RenderOptions::Layout::Tree, 2, false, 1e-6});
+    // The CPU reference reports rows as its threads finish them (it renders every row).
+    cases.push_back({"cpu"});
+    cases.push_back({"cpu", RenderOptions::Layout::Tree, 2, true});
     for (const Case& c : cases) {
         SCOPED_TRACE(label(c));
-        std::unique_ptr<Pipeline> pipeline = makePipeline(c.pipeline, &test::device());
+        std::unique_ptr<Pipeline> pipeline =
+            makePipeline(c.pipeline, c.pipeline == "cpu" ? nullptr : &test::device());
         RenderOptions o = options(scene, c);
         auto calls = progressOf(*pipeline, scene, o);
         expectMonotoneToTotal(calls);
@@ -151,6 +155,10 @@ TEST(Progress, GrowsAndEndsAtTheTotalInEveryPipelineThatReports) {
         }
         if (c.pipeline == "queue")
             EXPECT_EQ(calls.back().second, (long long)(o.width) * o.height * o.aa * o.aa);
+        if (c.pipeline == "cpu") {
+            EXPECT_EQ(calls.back().second, c.adaptive ? 2 * o.height : o.height);
+            continue;  // no row windows
+        }
         // A row window reports over its own rows.
         o.rowBegin = 10;
         o.rowEnd = 30;
