@@ -60,7 +60,8 @@ Image MegakernelPipeline::render(const Scene& scene, const RenderOptions& o) {
     for (const std::string& d : defines(scene, o)) key += " " + d;
     // A row window has a profile of its own: the planner's is by row from the first one rendered.
     const int first = o.rowBegin, last = o.lastRow();
-    if (first != 0 || last != o.height) key += " rows " + std::to_string(first) + "-" + std::to_string(last);
+    if (first != 0 || last != o.height)
+        key += " rows " + std::to_string(first) + "-" + std::to_string(last);
     planner_.begin(o.maxLaunchMs, key + (o.adaptiveAa ? " adaptive" : ""));
     const bool adaptive = o.adaptiveAa && o.aa > 1;
     // Progress in rows x passes; the adaptive centres cover one row more on each side.
