@@ -67,6 +67,10 @@ void checkOptions(const Scene& scene, const RenderOptions& o) {
     range("--bounces", o.bounces, 0, RT_MAX_BOUNCE_LIMIT);
     range("--shadow-samples", o.shadowSamples, 1, RT_MAX_SHADOW_SAMPLES);
     range("--aa", o.aa, 1, 16);
+    if (o.rowBegin != 0 || o.rowEnd != 0) {  // set by front ends, never by a flag
+        range("row window (first row)", o.rowBegin, 0, o.height - 1);
+        range("row window (end row)", o.rowEnd, o.rowBegin + 1, o.height);
+    }
     if (!(o.shadowStrength >= 0.f && o.shadowStrength <= 1.f))
         throw Error("shadow strength must be in [0, 1]", FailureKind::InvalidOption);
     if (scene.lights.size() > RT_MAX_LIGHTS)

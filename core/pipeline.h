@@ -5,6 +5,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
@@ -65,9 +66,18 @@ public:
     // (by address) and the frame size stay the same.
     virtual Image render(const Scene& scene, const RenderOptions& options) = 0;
     const FrameStats& stats() const { return stats_; }
+    // Progress of the frame being rendered: work done so far and the frame's total, in the
+    // pipeline's own units (rows x passes, pixels x samples), non-decreasing and ending at total.
+    // Pipelines that report nothing render as before; front ends draw bars from it.
+    using Progress = std::function<void(long long done, long long total)>;
+    void setProgress(Progress progress) { progress_ = std::move(progress); }
 
 protected:
+    void reportProgress(long long done, long long total) const {
+        if (progress_) progress_(done, total);
+    }
     FrameStats stats_;
+    Progress progress_;
 };
 
 // -D defines for a scene and its options: object kinds present, C, B, N, accuracy switches.
