@@ -64,7 +64,7 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
     }
     int rows = tileRows(o.width, o.height, C, o.bounces, budget, budgetName);
     // What an out-of-memory error from the driver is told about the frame (NVIDIA's, for one, can
-    // fail at launch when the image kernel's private trees and the global tree together do not fit).
+    // fail at launch when the global tree and the kernels' private memory together do not fit).
     const int memoryTiles = tileCount(o.height, rows);
     auto memoryHint = [&] {
         const double gib =
