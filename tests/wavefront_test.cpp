@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "bench/sweep_config.h"
 #include "core/error.h"
 #include "core/scene_loader.h"
 #include "image/compare.h"
@@ -170,6 +171,27 @@ TEST(Wavefront, ResetClearsEveryFlag) {
         for (uint32_t w : flags) set += w != 0;
         EXPECT_EQ(set, 0u) << "of " << flags.size() << " words, budget " << budget;
     }
+}
+
+// bench/sweeps/tree-wave, the measurement of issue 14's last part: the issue's frame (cornell
+// 1920x1080, B = 8, 8 shadow samples) and the README's (spheres 1280x720, B = 8), tree wavefront
+// and megakernel each, with the ray counts that give the share of slots used.
+TEST(Wavefront, BenchmarkSweepHoldsTheIssuesFrame) {
+    bench::SweepConfig c = bench::loadSweep(bench::findSweep("tree-wave"));
+    Scene cornell = load("cornell"), spheres = load("spheres");
+    std::vector<bench::Cell> cells = bench::expandCells(
+        c, [&](const std::string& name) -> const Scene& { return name == "cornell" ? cornell : spheres; });
+    ASSERT_EQ(cells.size(), 4u);
+    int wave = 0;
+    for (const bench::Cell& cell : cells) {
+        wave += cell.pipeline == "wave";
+        EXPECT_EQ(cell.options.bounces, 8);
+        EXPECT_TRUE(cell.countRays);
+    }
+    EXPECT_EQ(wave, 2);
+    EXPECT_EQ(cells[0].options.width, 1920);
+    EXPECT_EQ(cells[0].options.height, 1080);
+    EXPECT_EQ(cells[0].options.shadowSamples, 8);
 }
 
 }  // namespace
