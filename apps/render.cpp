@@ -208,7 +208,7 @@ int runRender() {
         for (const auto& [name, bytes] : s.buffers)
             std::printf("  %-12s %zu bytes (%s)\n", name.c_str(), bytes, mib(double(bytes)).c_str());
         if (info.supports.tiling)
-            std::printf("  tiles        %d, %zu B ray-tree node\n", s.tiles, sizeof(dev::Node));
+            std::printf("  tiles        %d\n", s.tiles);  // the tree's bytes a pixel: in extras
         if (!info.reference) {
             std::printf("  private      %zu bytes per work-item\n", s.privateBytes);
             printAccel(s.accel, options.accel);
