@@ -11,52 +11,27 @@
 #define RT_WIDE_STACK 64
 
 // 2^(e - 127): the exponent bits of a float.
-inline float Wide_Step(uint e) { return as_float(e << 23); }
-
-// A node as four 16-byte loads (the buffer and its 64-byte records are 16-byte aligned). Read
-// member by member, its byte arrays would be fetched a byte at a time on a GPU, where an
-// unaligned word load does not exist: about 40 loads per node. The words, in WideNode's order
-// (little-endian, as the host that wrote them):
-//   w0: origin.x, origin.y, origin.z, exponent[0..2] | sphereMask << 24
-//   w1: loX[0..3], loY[0..3], loZ[0..3], hiX[0..3]
-//   w2: hiY[0..3], hiZ[0..3], child[0], child[1]
-//   w3: child[2], child[3], count[0] | count[1] << 16, count[2] | count[3] << 16
-typedef struct WideWords {
-    uint4 w0, w1, w2, w3;
-} WideWords;
-
-inline WideWords Wide_Load(global const WideNode* nodes, int index) {
-    global const uint4* p = (global const uint4*)(nodes + index);
-    WideWords n;
-    n.w0 = p[0];
-    n.w1 = p[1];
-    n.w2 = p[2];
-    n.w3 = p[3];
-    return n;
-}
-
-inline float4 Wide_Bytes(uint word) { return convert_float4(as_uchar4(word)); }
+inline float Wide_Step(uchar e) { return as_float((uint)e << 23); }
 
 // Entry distances of the four children's boxes; INFINITY where the ray does not enter the box
 // before tMax, or the slot is empty. The decoded bound origin + q * step is exact in q * step,
 // so mad() and the host's arithmetic agree up to the rounding of one addition; the boxes are
 // padded far beyond that (core/accel.cpp kPad).
-inline float4 Wide_Enter(const WideWords* n, float3 rayOrigin, float3 inv, float tMax) {
-    uint e = n->w0.w;
-    float3 step = (float3)(Wide_Step(e & 0xffu), Wide_Step((e >> 8) & 0xffu),
-                           Wide_Step((e >> 16) & 0xffu));
-    float3 a = (as_float3(n->w0.xyz) - rayOrigin) * inv;
+inline float4 Wide_Enter(global const WideNode* n, float3 rayOrigin, float3 inv, float tMax) {
+    float3 step = (float3)(Wide_Step(n->exponent[0]), Wide_Step(n->exponent[1]),
+                           Wide_Step(n->exponent[2]));
+    float3 a = (f3(n->origin) - rayOrigin) * inv;
     float3 b = step * inv;
-    float4 x0 = mad(Wide_Bytes(n->w1.x), b.x, a.x);
-    float4 x1 = mad(Wide_Bytes(n->w1.w), b.x, a.x);
-    float4 y0 = mad(Wide_Bytes(n->w1.y), b.y, a.y);
-    float4 y1 = mad(Wide_Bytes(n->w2.x), b.y, a.y);
-    float4 z0 = mad(Wide_Bytes(n->w1.z), b.z, a.z);
-    float4 z1 = mad(Wide_Bytes(n->w2.y), b.z, a.z);
+    float4 x0 = mad(convert_float4(vload4(0, n->loX)), b.x, a.x);
+    float4 x1 = mad(convert_float4(vload4(0, n->hiX)), b.x, a.x);
+    float4 y0 = mad(convert_float4(vload4(0, n->loY)), b.y, a.y);
+    float4 y1 = mad(convert_float4(vload4(0, n->hiY)), b.y, a.y);
+    float4 z0 = mad(convert_float4(vload4(0, n->loZ)), b.z, a.z);
+    float4 z1 = mad(convert_float4(vload4(0, n->hiZ)), b.z, a.z);
     float4 enter = fmax(fmax(fmin(x0, x1), fmin(y0, y1)), fmax(fmin(z0, z1), 0.0f));
     float4 leave = fmin(fmin(fmax(x0, x1), fmax(y0, y1)), fmin(fmax(z0, z1), tMax));
-    int4 child = as_int4((uint4)(n->w2.zw, n->w3.xy));
-    return select((float4)(INFINITY), enter, (enter <= leave) & (child != (int4)(-1)));
+    int4 used = vload4(0, n->child) != (int4)(-1);
+    return select((float4)(INFINITY), enter, (enter <= leave) & used);
 }
 
 inline bool Wide_Leaf(const SceneData* sc, int first, int count, bool spheres, Ray ray, Hit* hit,
@@ -91,12 +66,14 @@ inline bool Wide_Query(const SceneData* sc, Ray ray, Hit* hit, bool anyHit) {
     int top = 0, index = 0;
     bool found = false;
     for (;;) {
-        WideWords n = Wide_Load(nodes, index);
+        global const WideNode* n = nodes + index;
         float t[4];
-        vstore4(Wide_Enter(&n, ray.origin, inv, hit->t), 0, t);
-        int child[4] = {as_int(n.w2.z), as_int(n.w2.w), as_int(n.w3.x), as_int(n.w3.y)};
-        uint count[4] = {n.w3.z & 0xffffu, n.w3.z >> 16, n.w3.w & 0xffffu, n.w3.w >> 16};
-        uint sphereMask = n.w0.w >> 24;
+        vstore4(Wide_Enter(n, ray.origin, inv, hit->t), 0, t);
+        int child[4];
+        vstore4(vload4(0, n->child), 0, child);
+        ushort count[4];
+        vstore4(vload4(0, n->count), 0, count);
+        uint sphereMask = n->sphereMask;
         // Leaves first: a hit there shortens the ray before the inner children are ordered.
         for (int k = 0; k < 4; ++k) {
             if (count[k] == 0 || !(t[k] < hit->t)) continue;
