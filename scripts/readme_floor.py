@@ -8,11 +8,13 @@ queue's per-bounce lengths), never from timings, and as the kernels load and sto
 lower bound, since caches, 32-byte sectors and scene reads only add to it.
 
   every pipeline   the finished image, 12 B (RGB float) per pixel, written once
-  wave (a global   per AA sample and pixel: Wavefront_Image reads all N nodes of the slice
-    ray tree)      (48 B each, sizeof(Node) in core/types.h), Wavefront_Reset clears one flag
-                   byte per node, Wavefront_Trace writes the nodes it traces (48 B each: the
-                   counted primary, reflection and refraction rays; without counts only the
-                   primary ray, one per pixel and sample)
+  wave (a global   per AA sample and pixel: Wavefront_Reset clears the pixel's traced flags
+    ray tree)      (N bits in 32-bit words: tree_pixel_bytes - 48 N; rows from before the bit
+                   mask kept one flag byte inside each 48-byte node, so N bytes), and each traced
+                   node (48 B, sizeof(Node) in core/types.h) is written by Wavefront_Trace and read
+                   by Wavefront_Image (the counted primary, reflection and refraction rays;
+                   without counts only the primary ray, one per pixel and sample). Slots no ray
+                   reached need not be read: the design's floor, whatever an implementation does
   queue (a pool    per ray extended (the sum of extras.queue_lengths: every extended ray lands
     of live rays)  in one class queue): its ray record (44 B) written and read once, and its
                    hit record (48 B) written by extend and read by shade
@@ -24,7 +26,7 @@ import json
 import os
 
 from readme_format import ms, size_label, table
-from sweep_rows import NODE_BYTES, setting  # NODE_BYTES: sizeof(Node), core/types.h
+from sweep_rows import LEGACY_NODE_BYTES as NODE_BYTES, setting  # sizeof(Node), core/types.h
 
 IMAGE_BYTES_PER_PIXEL = 12  # RGB float
 RAY_BYTES = 44              # origin, direction, weight, pixel, meta (queue_buffers.cpp)
@@ -33,9 +35,10 @@ FLOOR_TEXT = (
     "Floor: the bytes a frame's design must move through global memory, divided by the copy "
     "bandwidth rtlab-roofline measured on this device ({gbs:.0f} GB/s, read + write, "
     "[`roofline.json`](roofline.json)). Counted per frame: the image (12 B a pixel) for every "
-    "pipeline; for the report's wavefront, per pixel and AA sample, the N tree nodes the image "
-    "kernel reads (48 B each), the flag byte per node the reset kernel clears and the nodes the "
-    "trace kernel writes (the counted rays, else one primary ray); for the queue wavefront, per "
+    "pipeline; for the report's wavefront, per pixel and AA sample, the traced flags the reset "
+    "kernel clears (N bits), and each traced node (48 B) written by the trace kernel and read by "
+    "the image kernel (the counted rays, else one primary ray): slots no ray reached need not be "
+    "touched; for the queue wavefront, per "
     "ray extended (the sum of its per-bounce queue lengths), the ray record (44 B) and hit record "
     "(48 B), each written once and read once. The megakernel keeps its rays in private memory: "
     "its floor is the image alone, so its frame / floor says how far from memory-bound it is. "
@@ -64,7 +67,9 @@ def floor_bytes(r):
         nodes = r["tree_nodes"]
         rays = r.get("rays") or {}
         traced = sum(rays.get(t, 0) for t in ("primary", "reflection", "refraction")) or samples
-        total += samples * nodes * (NODE_BYTES + 1) + traced * NODE_BYTES
+        pixel = (r.get("extras") or {}).get("tree_pixel_bytes")
+        flags = pixel - nodes * NODE_BYTES if pixel else nodes  # bit mask, or a byte a node
+        total += samples * flags + traced * 2 * NODE_BYTES
     lengths = (r.get("extras") or {}).get("queue_lengths")
     if lengths:
         extended = sum(sum(depth) for depth in lengths)

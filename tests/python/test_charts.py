@@ -197,14 +197,18 @@ class ReadmeTest(unittest.TestCase):
         px = 320 * 180
         mega = row("mega", "megakernel", "tree", "s", 3)
         self.assertEqual(readme_floor.floor_bytes(mega), px * 12)  # the image alone
-        # The tree wavefront, 2x2 AA, N = 15, rays not counted: per pixel and sample all 15
-        # nodes read (48 B) and their flags cleared (1 B), the primary node written (48 B).
+        # The tree wavefront, 2x2 AA, N = 15, rays not counted, a row from before the bit mask:
+        # per pixel and sample 15 flag bytes cleared, the primary node written and read (48 B).
         wave = row("wave", "wavefront", "tree", "s", 3, aa=2, tree_nodes=15, tree_bytes=px * 15 * 48)
-        self.assertEqual(readme_floor.floor_bytes(wave), px * 12 + 4 * px * (15 * 49 + 48))
+        self.assertEqual(readme_floor.floor_bytes(wave), px * 12 + 4 * px * (15 + 2 * 48))
         # Counted rays: the traced nodes are the primary, reflection and refraction rays.
         wave["rays"] = {"primary": 4 * px, "reflection": 1000, "refraction": 10, "shadow": 7}
         self.assertEqual(readme_floor.floor_bytes(wave),
-                         px * 12 + 4 * px * 15 * 49 + (4 * px + 1010) * 48)
+                         px * 12 + 4 * px * 15 + (4 * px + 1010) * 2 * 48)
+        # The bit mask: a pixel's flags are its tree_pixel_bytes beyond the 15 nodes (one word).
+        wave["extras"] = {"tree_pixel_bytes": 15 * 48 + 4}
+        self.assertEqual(readme_floor.floor_bytes(wave),
+                         px * 12 + 4 * px * 4 + (4 * px + 1010) * 2 * 48)
         # The queue: every extended ray's record (44 B) and hit (48 B), written and read.
         queue = row("queue", "queue wavefront", "tree", "s", 1,
                     extras={"queue_lengths": [[10, 20, 30, 40, 0], [1, 2, 3, 4, 0]]})
