@@ -91,8 +91,8 @@ void checkPrivateTree(int branching, int bounces, const std::string& who, bool s
     while (fits > 0 && treePrivateBytes(branching, fits) > kPrivateTreeLimit) --fits;
     std::string msg = "--bounces " + std::to_string(bounces) + ": the " + who + " keeps " +
                       std::to_string(treeNodeCount(branching, bounces)) + " ray-tree nodes (" +
-                      std::to_string(need / 1024) + " KiB) in private memory per work-item, over the " +
-                      std::to_string(kPrivateTreeLimit / 1024) + " KiB limit; the highest bounce " +
+                      std::to_string(need / 1024) + " KiB) in private memory per work-item, over rtlab's " +
+                      std::to_string(kPrivateTreeLimit / 1024) + " KiB cap; the highest bounce " +
                       "limit that fits is " + std::to_string(fits);
     if (suggestWeighted) msg += " (or use --layout weighted)";
     throw Error(msg, FailureKind::PrivateTree);

@@ -89,7 +89,10 @@ dev::RenderSettings makeSettings(const Scene& scene, const RenderOptions& option
 // Validates options against the scene and the shared limits; throws rt::Error naming the flag.
 void checkOptions(const Scene& scene, const RenderOptions& options);
 
-// Private memory the tree layout needs per work-item, and the most it may use.
+// Private memory the tree layout needs per work-item, and the most rtlab lets it use. The cap is
+// rtlab's own, not a limit devices report (OpenCL has no query for private memory per
+// work-item). A private array that large lives in off-chip memory anyway, where the weighted
+// layout needs none: past the cap, a clear error that names the highest B that fits.
 size_t treePrivateBytes(int branching, int bounces);
 constexpr size_t kPrivateTreeLimit = 256 * 1024;
 // Throws when the tree of N nodes does not fit kPrivateTreeLimit, naming the bounce limit that

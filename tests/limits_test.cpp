@@ -156,7 +156,7 @@ TEST(LimitsSweep, RowsRecordHowEachCellEnded) {
     }
     EXPECT_EQ(rows["mega 32x18 b12"]["end"],
               "error: --bounces 12: the megakernel's tree layout keeps 8191 ray-tree nodes (511 KiB) "
-              "in private memory per work-item, over the 256 KiB limit; the highest bounce limit "
+              "in private memory per work-item, over rtlab's 256 KiB cap; the highest bounce limit "
               "that fits is 11 (or use --layout weighted)");
     EXPECT_EQ(rows["mega 32x18 b12"]["failure"], "private_tree");
     EXPECT_EQ(rows["mega 32x18 b11"]["failure"], "");
