@@ -24,13 +24,20 @@ struct Case {
     int aa = 1;
     bool adaptive = false;
     double maxLaunchMs = 0;
+    size_t memoryBudget = 0;  // bytes for a global ray tree (wave): row tiles smaller than pieces
 };
 
 std::string label(const Case& c) {
     return c.pipeline + (c.layout == RenderOptions::Layout::Weighted ? " weighted" : "") + " aa" +
            std::to_string(c.aa) + (c.adaptive ? " adaptive" : "") +
-           (c.maxLaunchMs > 0 ? " capped" : "");
+           (c.maxLaunchMs > 0 ? " capped" : "") +
+           (c.memoryBudget > 0 ? " budget " + std::to_string(c.memoryBudget) : "");
 }
+
+// Five rows of the tree wavefront's tree in the frames below: 64 pixels x (15 nodes x 48 B + one
+// word of flags) a row on cornell (C = 2) at bounce limit 3.
+constexpr size_t kRowBytes = 64 * (15 * 48 + 4);
+constexpr size_t kFiveRows = 5 * kRowBytes;
 
 // Every pipeline that renders row windows, in the settings that change its loops.
 std::vector<Case> windowCases() {
@@ -41,6 +48,9 @@ std::vector<Case> windowCases() {
         cases.push_back({p.name, RenderOptions::Layout::Tree, 2});
         if (p.supports.layouts) cases.push_back({p.name, RenderOptions::Layout::Weighted});
         if (p.supports.adaptiveAa) cases.push_back({p.name, RenderOptions::Layout::Tree, 2, true});
+        if (p.supports.tiling)  // a tree of 5 rows of the frames below: several tiles a piece
+            for (int aa : {1, 2})
+                cases.push_back({p.name, RenderOptions::Layout::Tree, aa, false, 0, kFiveRows});
     }
     return cases;
 }
@@ -54,6 +64,7 @@ RenderOptions options(const Scene& scene, const Case& c) {
     o.aa = c.aa;
     o.adaptiveAa = c.adaptive;
     o.maxLaunchMs = c.maxLaunchMs;
+    o.memoryBudget = c.memoryBudget;
     return o;
 }
 
@@ -137,6 +148,7 @@ TEST(Progress, GrowsAndEndsAtTheTotalInEveryPipelineThatReports) {
     // Launches capped far below a row's cost: one launch per row, each reported.
     cases.push_back({"mega", RenderOptions::Layout::Tree, 1, false, 1e-6});
     cases.push_back({"queue", RenderOptions::Layout::Tree, 2, false, 1e-6});
+    cases.push_back({"wave", RenderOptions::Layout::Tree, 2, false, 1e-6});
     // The CPU reference reports rows as its threads finish them (it renders every row).
     cases.push_back({"cpu"});
     cases.push_back({"cpu", RenderOptions::Layout::Tree, 2, true});
@@ -155,6 +167,14 @@ TEST(Progress, GrowsAndEndsAtTheTotalInEveryPipelineThatReports) {
         }
         if (c.pipeline == "queue")
             EXPECT_EQ(calls.back().second, (long long)(o.width) * o.height * o.aa * o.aa);
+        if (c.pipeline == "wave") {
+            // Rows x AA passes, one report per pass of a tile (trace, image and reset launches).
+            EXPECT_EQ(calls.back().second, (long long)(o.height) * o.aa * o.aa);
+            EXPECT_EQ(3 * int(calls.size()), pipeline->stats().launches);
+            EXPECT_EQ(int(calls.size()), pipeline->stats().tiles * o.aa * o.aa);
+            if (c.maxLaunchMs > 0) EXPECT_GT(pipeline->stats().tiles, 8) << "the cap split no tile";
+            if (c.memoryBudget > 0) EXPECT_EQ(pipeline->stats().tiles, 10);  // 48 rows, 5 a tile
+        }
         if (c.pipeline == "cpu") {
             EXPECT_EQ(calls.back().second, c.adaptive ? 2 * o.height : o.height);
             continue;  // no row windows
@@ -165,7 +185,51 @@ TEST(Progress, GrowsAndEndsAtTheTotalInEveryPipelineThatReports) {
         auto window = progressOf(*pipeline, scene, o);
         expectMonotoneToTotal(window);
         if (c.pipeline == "mega" && !c.adaptive) EXPECT_EQ(window.back().second, 20);
+        if (c.pipeline == "wave") {
+            EXPECT_EQ(window.back().second, 20 * o.aa * o.aa);
+            if (c.memoryBudget > 0) EXPECT_EQ(pipeline->stats().tiles, 4);  // 20 rows, 5 a tile
+        }
     }
+}
+
+// The tree wavefront's ray tree for a row window: a window smaller than a tile gets a tree of its
+// own rows, not the whole frame's; a later window of the same frame keeps the larger tree instead
+// of reallocating for every piece, but never more than the whole frame's tile. Its tiles are
+// counted over the window's rows.
+TEST(RowWindows, TheTreeWavefrontSizesItsTreeByTheWindow) {
+    Scene scene = test::load("cornell");
+    std::unique_ptr<Pipeline> wave = makePipeline("wave", &test::device());
+    RenderOptions o = options(scene, {"wave"});
+    auto treeBytes = [&] { return wave->stats().extras.value("tree_bytes", size_t(0)); };
+    auto memoryTiles = [&] { return wave->stats().extras.value("memory_tiles", 0); };
+    o.rowBegin = 7;
+    o.rowEnd = 10;  // 3 rows, the whole frame fits one tile of 48
+    wave->render(scene, o);
+    EXPECT_EQ(treeBytes(), 3 * kRowBytes);
+    EXPECT_EQ(memoryTiles(), 1);
+    EXPECT_EQ(wave->stats().tiles, 1);
+    o.rowBegin = 10;
+    o.rowEnd = 11;  // a smaller piece keeps the tree of three rows
+    wave->render(scene, o);
+    EXPECT_EQ(treeBytes(), 3 * kRowBytes);
+    o.rowBegin = 11;
+    o.rowEnd = 48;  // a larger one grows it
+    wave->render(scene, o);
+    EXPECT_EQ(treeBytes(), 37 * kRowBytes);
+    o.memoryBudget = kFiveRows;  // the budget caps what a window keeps: 5 rows, 8 tiles of 37
+    wave->render(scene, o);
+    EXPECT_EQ(treeBytes(), kFiveRows);
+    EXPECT_EQ(memoryTiles(), 8);
+    EXPECT_EQ(wave->stats().tiles, 8);
+    o.rowBegin = o.rowEnd = 0;  // a whole frame sizes the tree to its tile exactly
+    o.memoryBudget = 0;
+    wave->render(scene, o);
+    EXPECT_EQ(treeBytes(), 48 * kRowBytes);
+    o.rowBegin = 0;
+    o.rowEnd = 2;
+    wave->render(scene, o);
+    EXPECT_EQ(treeBytes(), 48 * kRowBytes);
+    EXPECT_EQ(memoryTiles(), 1);
 }
 
 }  // namespace

@@ -230,6 +230,26 @@ TEST_F(Viewer, SlowFrameComesInPiecesAndAKeyAtAPieceRestartsIt) {
     expectSame(shot, rt::readImage(expected), 0, shot.width, "the restarted frame, bounce limit 3");
 }
 
+TEST_F(Viewer, SplitViewOfMegaAndWaveComesInPieces) {
+    // Both default halves render row windows (the tree wavefront too, issue 19), so a slow split
+    // frame comes in pieces like a single pipeline's: 16 rows of 240, 15 pieces, each half the
+    // same as its pipeline's whole frame.
+    const std::string scene = "scenes/spheres.json";
+    std::string shotPath = privateDir("split_pieces") + "shot.png";
+    Result r = run(kXvfb + kBin + "/rtlab-view " + scene +
+                   " --split --piece-rows 16 --frames 1 --no-overlay --scale 1 --screenshot " +
+                   shotPath);
+    ASSERT_EQ(r.status, 0) << r.out << r.err;
+    EXPECT_NE(r.out.find("the last in 15 pieces, 0 restarted"), std::string::npos) << r.out;
+    rt::Image shot = rt::readImage(shotPath);
+    rt::Image mega = rt::readImage(renderPng(scene, "mega"));
+    rt::Image wave = rt::readImage(renderPng(scene, "wave"));
+    ASSERT_EQ(shot.width, mega.width);
+    const int divider = shot.width / 2;
+    expectSame(shot, mega, 0, divider, "left (megakernel)");
+    expectSame(shot, wave, divider, shot.width, "right (wavefront)");
+}
+
 TEST_F(Viewer, BruteForceOnABigMeshAsksFirst) {
     // The knot's 12,800 triangles x 320x240 pixels x 4 rays = 3.9e9 tests a frame. From wide, B
     // asks about none; M answers "skip" (to grid) and is used up; B, B reach wide again; B asks,

@@ -62,10 +62,14 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
         budget = o.memoryBudget;
         budgetName = "--memory-budget";
     }
-    int rows = tileRows(o.width, o.height, C, o.bounces, budget, budgetName);
+    // A row window (the viewer's pieces of a slow frame) renders rows [first, end) only, in tiles
+    // of at most `rows` rows: the budget's, or the window's when it is smaller.
+    const int first = o.rowBegin, end = o.lastRow();
+    const int frameRows = tileRows(o.width, o.height, C, o.bounces, budget, budgetName);
+    const int rows = std::min(frameRows, end - first);
     // What an out-of-memory error from the driver is told about the frame (NVIDIA's, for one, can
     // fail at launch when the global tree and the kernels' private memory together do not fit).
-    const int memoryTiles = tileCount(o.height, rows);
+    const int memoryTiles = tileCount(end - first, rows);
     auto memoryHint = [&] {
         const double gib =
             double(size_t(o.width) * rows * pixelBytes(C, o.bounces)) / double(1ull << 30);
@@ -84,7 +88,14 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
         scene_ = std::make_unique<DeviceScene>(cl_, scene, o.accel);
     stats_.accel = scene_->accelStats();
 
-    const size_t pixels = size_t(o.width) * rows;
+    // The tree holds treeRows_ rows. A whole frame sizes it to its tile exactly; a window keeps a
+    // larger tree of the same frame rather than reallocating for every piece, but never one
+    // larger than the whole frame's tile (the budget).
+    const size_t pixelSize = pixelBytes(C, o.bounces);
+    const bool keep = treeWidth_ == o.width && treePixelBytes_ == pixelSize &&
+                      treeRows_ >= rows && treeRows_ <= frameRows;  // a whole frame: == rows
+    const int capacityRows = keep ? treeRows_ : rows;
+    const size_t pixels = size_t(o.width) * capacityRows;
     const size_t treeBytes = pixels * size_t(treeNodes) * sizeof(dev::Node);
     const size_t flagBytes = pixels * flagWords * sizeof(cl_uint);
     size_t imageBytes = size_t(o.width) * o.height * 3 * sizeof(float);
@@ -95,10 +106,15 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
             if (treeBytes_ + flagBytes_) cl_.release(treeBytes_ + flagBytes_);
             tree_ = traced_ = cl::Buffer();
             treeBytes_ = flagBytes_ = 0;
+            treeRows_ = treeWidth_ = 0;
+            treePixelBytes_ = 0;
             tree_ = cl_.allocate(treeBytes, CL_MEM_READ_WRITE, "the wavefront ray tree");
             treeBytes_ = treeBytes;
             traced_ = cl_.allocate(flagBytes, CL_MEM_READ_WRITE, "the wavefront ray tree's flags");
             flagBytes_ = flagBytes;
+            treeRows_ = capacityRows;
+            treeWidth_ = o.width;
+            treePixelBytes_ = pixelSize;
             needsClear_ = true;
         }
         if (imageBytes != imageBytes_) {
@@ -114,8 +130,9 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
     stats_.addBuffer("ray tree", treeBytes);
     stats_.addBuffer("tree flags", flagBytes);
     stats_.addBuffer("image", imageBytes);
-    stats_.extras["tree_bytes"] = treeBytes + flagBytes;  // one tile's tree, both buffers
-    stats_.extras["tree_pixel_bytes"] = pixelBytes(C, o.bounces);
+    // The tree held, both buffers: one tile's (a window's may be an earlier piece's, larger).
+    stats_.extras["tree_bytes"] = treeBytes + flagBytes;
+    stats_.extras["tree_pixel_bytes"] = pixelSize;
     stats_.extras["memory_tiles"] = memoryTiles;
 
     cl::Kernel trace(program, "Wavefront_Trace"), image(program, "Wavefront_Image"),
@@ -145,11 +162,17 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
         bool haveLast = false;
         std::string key = std::to_string(o.width) + "x" + std::to_string(o.height);
         for (const std::string& d : featureDefines(scene, o)) key += " " + d;
-        planner_.begin(o.maxLaunchMs, key + " aa" + std::to_string(o.aa));
+        key += " aa" + std::to_string(o.aa);
+        // A row window has a profile of its own: the planner's is by row from the first one rendered.
+        if (first != 0 || end != o.height)
+            key += " rows " + std::to_string(first) + "-" + std::to_string(end);
+        planner_.begin(o.maxLaunchMs, key);
         stats_.tiles = 0;
-        for (int row0 = 0, tile = 0; row0 < o.height; row0 += tile) {
+        // Progress in rows x AA passes, reported after each pass of each tile.
+        const long long total = (long long)(end - first) * samples;
+        for (int row0 = first, tile = 0; row0 < end; row0 += tile) {
             // Rows bounded by the tree buffer and, when asked, by the time one launch may take.
-            tile = std::min(rows, planner_.nextRows(o.height - row0));
+            tile = std::min(rows, planner_.nextRows(end - row0));
             ++stats_.tiles;
             size_t firstEvent = events.size();
             Launch range = launch2d(dev, o.width, tile);
@@ -186,6 +209,11 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
                 last = er;
                 haveLast = true;
                 // setArg copies the settings, so the next pass may change them right away.
+                if (progress_) {
+                    er.wait();
+                    reportProgress((long long)(row0 - first) * samples + (long long)(tile) * (s + 1),
+                                   total);
+                }
             }
             stats_.launches += 3 * samples;
             if (o.maxLaunchMs > 0) {  // learn the cost per row from the slowest launch
@@ -196,13 +224,17 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
                 planner_.record(tile, slowest);
             }
         }
-        cl_.queue().enqueueReadBuffer(image_, CL_TRUE, 0, imageBytes, out.rgb.data());
+        // Only the window's rows: the others of the image buffer may hold an earlier frame's.
+        const size_t rowBytes = size_t(o.width) * 3 * sizeof(float);
+        cl_.queue().enqueueReadBuffer(image_, CL_TRUE, size_t(first) * rowBytes,
+                                      size_t(end - first) * rowBytes,
+                                      out.rgb.data() + size_t(first) * o.width * 3);
         if (o.countRays) {
             stats_.rays = scene_->readRayCounts(cl_.queue());
             stats_.raysCounted = true;
             // Every traced primary, reflected or refracted ray fills one tree slot; shadow rays
             // live inside their node. What share of the slots a frame touched.
-            double slots = double(o.width) * o.height * samples * double(treeNodes);
+            double slots = double(o.width) * (end - first) * samples * double(treeNodes);
             if (!o.adaptiveAa && slots > 0)
                 stats_.extras["tree_used"] =
                     double(stats_.rays[RT_RAY_PRIMARY] + stats_.rays[RT_RAY_REFLECTION] +
@@ -241,7 +273,7 @@ void registerWavefrontTree(PipelineRegistry& registry) {
     p.name = "wave";
     p.title = "wavefront (report's tree)";
     p.description = "trace, image and reset kernels around a global ray tree of W x rows x N slots";
-    p.supports = {.layouts = false, .adaptiveAa = false, .tiling = true};
+    p.supports = {.layouts = false, .adaptiveAa = false, .tiling = true, .rowWindow = true};
     p.make = [](ClContext* cl) { return std::make_unique<WavefrontPipeline>(*cl); };
     registry.add(std::move(p));
 }

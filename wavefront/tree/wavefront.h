@@ -1,6 +1,7 @@
 // rtlab — host driver of the wavefront pipeline (wavefront/tree/wavefront.cl): trace, image and reset
 // kernels around a global ray tree of W x rows x N slots (node payloads, and the traced flags in
-// a buffer of their own), in row tiles when it must.
+// a buffer of their own), in row tiles when it must, over a row window when asked (the viewer's
+// pieces of a slow frame), reporting progress by rows x AA passes.
 #pragma once
 
 #include <cstdint>
@@ -44,6 +45,9 @@ private:
     std::unique_ptr<DeviceScene> scene_;
     cl::Buffer tree_, traced_, image_;  // node payloads, traced flags, the image
     size_t treeBytes_ = 0, flagBytes_ = 0, imageBytes_ = 0;
+    // What the tree buffers were sized for: rows of a frame `treeWidth_` wide at pixelBytes().
+    int treeRows_ = 0, treeWidth_ = 0;
+    size_t treePixelBytes_ = 0;
     bool needsClear_ = false;  // a new flag buffer not yet cleared
     LaunchPlanner planner_;
 };
