@@ -57,23 +57,34 @@ Image MegakernelPipeline::render(const Scene& scene, const RenderOptions& o) {
     Image out(o.width, o.height);
     std::string key = std::to_string(o.width) + "x" + std::to_string(o.height);
     for (const std::string& d : defines(scene, o)) key += " " + d;
-    planner_.begin(o.maxLaunchMs, key + (o.adaptiveAa ? " adaptive" : ""));
-    // One pass over the frame in row tiles sized by the planner; kernel args after the scene's.
+    // Part of a row is launched in steps of the work-group width, one work-group row high.
+    const Launch rowShape = launch2d(cl_.device(), 1, 1);
+    const int colStep = int(rowShape.local[0]);
+    planner_.begin(o.maxLaunchMs, key + (o.adaptiveAa ? " adaptive" : ""), o.width, colStep);
+    // One pass over the frame in tiles sized by the planner (whole rows, or columns of one row
+    // when a row alone would run past --max-launch-ms); kernel args after the scene's.
     auto pass = [&](cl::Kernel& kernel, const char* name) {
         for (int row0 = 0; row0 < o.height;) {
-            int rows = planner_.nextRows(o.height - row0);
+            LaunchTile tile = planner_.next(o.height - row0);
             settings.rowOffset = row0;
             scene_->setArgs(kernel, settings);
-            Launch range = launch2d(cl_.device(), o.width, rows);
             cl::Event e;
-            cl_.queue().enqueueNDRangeKernel(kernel, cl::NullRange, range.global, range.local,
-                                             nullptr, &e);
+            if (tile.partialRow()) {  // the global offset shifts get_global_id(0) to col0
+                size_t cols = size_t((tile.cols + colStep - 1) / colStep * colStep);
+                cl_.queue().enqueueNDRangeKernel(kernel, cl::NDRange(size_t(tile.col0), 0),
+                                                 cl::NDRange(cols, 1),
+                                                 cl::NDRange(size_t(colStep), 1), nullptr, &e);
+            } else {
+                Launch range = launch2d(cl_.device(), o.width, tile.rows);
+                cl_.queue().enqueueNDRangeKernel(kernel, cl::NullRange, range.global,
+                                                 range.local, nullptr, &e);
+            }
             e.wait();
             double ms = eventMs(e);
-            planner_.record(rows, ms);
+            planner_.record(tile, ms);
             stats_.addKernel(name, ms);
             ++stats_.launches;
-            row0 += rows;
+            if (!tile.partialRow() || tile.col0 + tile.cols >= o.width) row0 += tile.rows;
         }
     };
     try {
