@@ -288,7 +288,10 @@ private:
         limit_ = std::clamp(grown, std::min(b_.pool, kProbeRays / 4), b_.pool);
     }
 
-    static constexpr size_t kProbeRays = 4096;
+    // The first bounce of a workload: small, since one ray can cost a lot (the bunny without an
+    // acceleration structure: ~70 us per ray on PoCL, so 4096 rays were ~300 ms); it grows
+    // twofold per bounce from there. The floor keeps a slow bounce from starving the pool.
+    static constexpr size_t kProbeRays = 256;
     ClContext& cl_;
     QueueFrame& f_;
     const QueueBuffers& b_;
