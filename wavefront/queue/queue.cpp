@@ -157,6 +157,8 @@ private:
         sh.setArg(a, b_.nodes);
         sh.setArg(a + 1, b_.shadowQueue);
         sh.setArg(a + 2, b_.counters);
+        sh.setArg(a + 3, b_.rays.pixel);
+        sh.setArg(a + 4, b_.rays.meta);
         for (const char* name : kShadeKernels) {
             cl::Kernel& k = f_.sceneKernel(name, s);
             at = QueueFrame::setRays(k, a, b_.rays);

@@ -19,13 +19,15 @@ kernel void Wavefront_Trace(RT_SCENE_PARAMS, global Node* tree, int rowEnd) {
     RT_SCENE_INIT(sc);
     global Node* slice = tree + Wavefront_Slice(&settings, x, y);
     slice[0] = RayTree_TraceNode(&sc, RayTree_PrimaryRay(&sc, x, y, settings.sampleIndex),
-                                 RT_RAY_PRIMARY);
+                                 RT_RAY_PRIMARY, Sampling_PointKey(x, y, settings.sampleIndex, 0));
     for (int i = 1; i < RT_TREE_NODES; ++i) {
         int parent = (i - 1) / RT_BRANCH;
         Node p = slice[parent];  // written earlier by this same work-item
         Ray ray;
         if (RayTree_ChildRay(&sc, &p, RayTree_Depth(parent), i - 1 - parent * RT_BRANCH, &ray))
-            slice[i] = RayTree_TraceNode(&sc, ray, RayTree_SlotType(i));
+            slice[i] = RayTree_TraceNode(
+                &sc, ray, RayTree_SlotType(i),
+                Sampling_PointKey(x, y, settings.sampleIndex, RayTree_Depth(i)));
     }
 }
 
