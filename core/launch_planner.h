@@ -13,6 +13,8 @@
 //    cutting a measured segment at an arbitrary row would assume its cost is spread evenly;
 //  - a row costlier than the target alone is split into column tiles (when the caller can
 //    launch part of a row; the megakernel can, the tree wavefront keeps whole rows);
+//  - the budget shrinks by how much longer than predicted recent launches ran (timing noise
+//    of a shared machine), and relaxes again as launches keep to their predictions;
 //  - rows not seen yet are priced at the costliest row seen so far, and a tile over them grows
 //    at most twofold in pixels from one launch to the next, starting from a probe of one row
 //    (or part of one) so that even the first launch stays short.
@@ -58,7 +60,7 @@ public:
     // row or, for a partial row, at least one column step.
     LaunchTile next(int remaining) const {
         if (targetMs_ <= 0 || remaining <= 0) return {std::max(remaining, 0), 0, 0};
-        const double budget = kHeadroom * targetMs_;
+        const double budget = kHeadroom * targetMs_ / slack_;
         if (col_ > 0) return columns(budget);  // finish the row begun
         if (pos_ < profile_.size()) return measuredRows(remaining, budget);
         if (maxRowMs_ <= 0) {  // nothing measured yet: a probe of one row, or part of one
@@ -89,6 +91,7 @@ public:
     // The launch just made (the tile next() returned) took `ms`.
     void record(const LaunchTile& t, double ms) {
         ms = std::max(ms, 1e-6);
+        learnSlack(t, ms);
         if (t.partialRow()) {
             partialMs_ += ms;
             maxRowMs_ = std::max(maxRowMs_, ms * double(width_) / double(t.cols));
@@ -153,6 +156,18 @@ private:
         for (size_t r = end; r < restEnd; ++r) profile_[r] *= scale;
     }
 
+    // How much longer than predicted launches over measured rows run: on a shared machine the
+    // same rows take 1.5x and more from one frame to the next (the PoCL limits sweep at a load
+    // of 9 on 2 cores). The budget is divided by it; it decays back towards 1 launch by launch.
+    void learnSlack(const LaunchTile& t, double ms) {
+        bool measured = t.partialRow() ? pos_ < profile_.size()
+                                       : pos_ + size_t(std::max(t.rows, 0)) <= profile_.size();
+        double predicted = measured ? predictedMs(t) : 0;
+        double decayed = 1.0 + (slack_ - 1.0) * kSlackDecay;
+        double ratio = predicted > 0 ? std::min(ms / predicted, kMaxSlack) : 1.0;
+        slack_ = std::max(decayed, ratio);
+    }
+
     int roundCols(int cols) const { return std::max(cols / colStep_ * colStep_, colStep_); }
 
     double rowCost(size_t row) const { return row < profile_.size() ? profile_[row] : maxRowMs_; }
@@ -174,7 +189,9 @@ private:
 
     static constexpr int kProbePixels = 256;  // the first launch of a workload: one row at most
     static constexpr double kHeadroom = 0.8;  // aim below the target: timings vary
+    static constexpr double kMaxSlack = 4.0, kSlackDecay = 0.9;
     double targetMs_ = 0, maxRowMs_ = 0, partialMs_ = 0;
+    double slack_ = 1.0;  // kept across workloads: it is the machine's, not the scene's
     std::string key_;
     int width_ = 0, colStep_ = 1;
     std::vector<double> profile_;  // ms per row, by row of the frame (passes one after another)
