@@ -1,4 +1,8 @@
 // rtlab render / rtlab devices.
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -52,6 +56,52 @@ void printAccel(const AccelStats& a, RenderOptions::Accel chosen) {
                 unit, mib(double(a.bytes)).c_str(), a.detail.c_str(), a.buildMs);
 }
 
+// A progress bar on stderr for a frame that takes more than about a second, when stderr is a
+// terminal; it draws from the pipeline's progress reports (Pipeline::setProgress) and erases
+// itself when the frame ends, so that what stays on the terminal is only the render's output.
+class ProgressBar {
+public:
+    explicit ProgressBar(std::string label)
+        : label_(std::move(label)), enabled_(isatty(STDERR_FILENO) == 1) {}
+    ~ProgressBar() { clear(); }
+    ProgressBar(const ProgressBar&) = delete;
+    ProgressBar& operator=(const ProgressBar&) = delete;
+
+    void update(long long done, long long total) {
+        if (!enabled_ || total <= 0) return;
+        auto now = Clock::now();
+        double elapsed = std::chrono::duration<double>(now - start_).count();
+        // Quiet for the first second (most frames end before), then at most 10 lines a second.
+        if (elapsed < 1.0 || (drawn_ && now - lastDraw_ < std::chrono::milliseconds(100))) return;
+        lastDraw_ = now;
+        drawn_ = true;
+        double f = std::clamp(double(done) / double(total), 0.0, 1.0);
+        constexpr int kWidth = 30;
+        int filled = int(f * kWidth);
+        std::string bar = std::string(size_t(filled), '#') + std::string(size_t(kWidth - filled), '-');
+        char eta[32] = "ETA ?";
+        if (done > 0) std::snprintf(eta, sizeof eta, "ETA %.1f s", elapsed * (1 - f) / f);
+        std::fprintf(stderr, "\r\033[K%s [%s] %3.0f%%  elapsed %.1f s  %s", label_.c_str(),
+                     bar.c_str(), 100 * f, elapsed, eta);
+        std::fflush(stderr);
+    }
+    void clear() {
+        if (!drawn_) return;
+        std::fprintf(stderr, "\r\033[K");
+        std::fflush(stderr);
+        drawn_ = false;
+    }
+    Pipeline::Progress callback() {
+        return [this](long long done, long long total) { update(done, total); };
+    }
+
+private:
+    using Clock = std::chrono::steady_clock;
+    std::string label_;
+    bool enabled_, drawn_ = false;
+    Clock::time_point start_ = Clock::now(), lastDraw_{};
+};
+
 int runDevices() {
     std::vector<DeviceInfo> devices = listDevices();
     if (devices.empty()) {
@@ -92,7 +142,13 @@ int runRender() {
         std::ofstream probe(a.statsJson, std::ios::app);
         if (!probe) throw Error("--stats-json " + a.statsJson + ": cannot write there");
     }
-    Image image = pipeline->render(scene, options);
+    Image image;
+    {
+        ProgressBar bar("rendering");
+        pipeline->setProgress(bar.callback());
+        image = pipeline->render(scene, options);
+        pipeline->setProgress({});
+    }
     writeImage(image, output);
     FrameStats timed = pipeline->stats();
     if (a.stats || !a.statsJson.empty()) {
@@ -103,7 +159,10 @@ int runRender() {
         if (!info.reference) {
             RenderOptions counting = options;
             counting.countRays = true;
+            ProgressBar bar("counting rays");
+            pipeline->setProgress(bar.callback());
             pipeline->render(scene, counting);
+            pipeline->setProgress({});
             rays = pipeline->stats().rays;
             counted = pipeline->stats().raysCounted;
             s.rays = rays;
@@ -149,7 +208,7 @@ int runRender() {
         for (const auto& [name, bytes] : s.buffers)
             std::printf("  %-12s %zu bytes (%s)\n", name.c_str(), bytes, mib(double(bytes)).c_str());
         if (info.supports.tiling)
-            std::printf("  tiles        %d, %zu B ray-tree node\n", s.tiles, sizeof(dev::Node));
+            std::printf("  tiles        %d\n", s.tiles);  // the tree's bytes a pixel: in extras
         if (!info.reference) {
             std::printf("  private      %zu bytes per work-item\n", s.privateBytes);
             printAccel(s.accel, options.accel);

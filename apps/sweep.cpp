@@ -1,8 +1,10 @@
 // rtlab sweep CONFIG — runs a named sweep (bench/sweeps/, format in bench/sweeps/README.md) on one
-// device, scores the accuracy group against the converged CPU reference, and writes
-// results/<device-slug>/<sweep>.{json,csv}, the five charts (scripts/charts.py) and README.md
-// (scripts/results-readme.py). With --import DIR it does the same for what `rtlab-bench --sweep`
-// measured on another machine; --export-scenes makes the scene folder that rtlab-bench can read.
+// device or several (--devices), or one share of it (--shard), scores the accuracy group against
+// the converged CPU reference, and writes results/<device-slug>/<sweep>.{json,csv}, the five
+// charts (scripts/charts.py) and README.md (scripts/results-readme.py). With --import DIR... it
+// does the same for what `rtlab-bench --sweep` measured on other machines (continued runs and
+// shards merged in cell order); --export-scenes makes the scene folder that rtlab-bench can read.
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -27,7 +29,7 @@ namespace fs = std::filesystem;
 namespace {
 
 struct SweepArgs {
-    std::string config, device, out, sceneDir, kernelDir, exportScenes;
+    std::string config, device, devices, shard, out, sceneDir, kernelDir, exportScenes;
     std::vector<std::string> importDirs;
     double timeLimit = 0;
     bool noCharts = false;
@@ -188,6 +190,26 @@ nlohmann::json readJsonLines(const fs::path& path) {
     return rows;
 }
 
+// Rows in the sweep's cell order (cell_index): shards and devices measure out of order, and
+// merged shards then read like a run on one machine. Rows without an index keep their place.
+void sortByCell(nlohmann::json& rows, std::vector<PendingFrame>& frames) {
+    for (const auto& r : rows)
+        if (!r.contains("cell_index")) return;
+    std::vector<size_t> order(rows.size());
+    for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::stable_sort(order.begin(), order.end(), [&](size_t x, size_t y) {
+        return rows[x]["cell_index"].get<size_t>() < rows[y]["cell_index"].get<size_t>();
+    });
+    std::vector<size_t> placeOf(rows.size());
+    nlohmann::json sorted = nlohmann::json::array();
+    for (size_t i = 0; i < order.size(); ++i) {
+        placeOf[order[i]] = i;
+        sorted.push_back(std::move(rows[order[i]]));
+    }
+    rows = std::move(sorted);
+    for (PendingFrame& f : frames) f.row = placeOf[f.row];
+}
+
 }  // namespace
 
 void addSweep(CLI::App& app) {
@@ -199,10 +221,18 @@ void addSweep(CLI::App& app) {
                          "bench/sweeps/README.md");
     sweepCmd->add_option("--device", a.device,
                          "OpenCL device: index or name substring [$RTLAB_DEVICE, else first GPU]");
+    sweepCmd->add_option("--devices", a.devices,
+                         "Run the cells on several devices at once, one context each: all (every "
+                         "GPU) or indices and names separated by commas (0,1; a device named twice "
+                         "gets two contexts); rows keep the sweep's cell order");
+    sweepCmd->add_option("--shard", a.shard,
+                         "Run only share i of N (i/N: work units u with u % N == i), e.g. one task "
+                         "of a cluster array job; merge the shards with --import DIR0 DIR1 ...");
     sweepCmd->add_option("--out", a.out, "Output folder [results/<device-slug>]");
     sweepCmd->add_option("--import", a.importDirs,
                          "Do not measure: score and chart what `rtlab-bench --sweep CONFIG --out DIR` "
-                         "wrote to DIR on another machine (repeat for runs continued with --resume)")
+                         "wrote to DIR on another machine; several folders: runs continued with "
+                         "--resume, or the shards of --shard i/N, merged in cell order")
         ->take_all();
     sweepCmd->add_option("--time-limit", a.timeLimit,
                          "Stop before a cell that would end after this many seconds");
@@ -221,6 +251,8 @@ int runSweepCommand() {
 
     nlohmann::json meta, rows = nlohmann::json::array();
     std::vector<PendingFrame> frames;
+    std::map<std::string, bool> shardComplete;  // by --shard spec ("" for none)
+    int shardCount = 0;
     if (!a.importDirs.empty()) {
         std::map<std::string, size_t> cellRow;
         for (const std::string& d : a.importDirs) {
@@ -232,8 +264,23 @@ int runSweepCommand() {
             if (part.value("sweep", "") != config.name)
                 throw Error(dir.string() + " holds sweep '" + part.value("sweep", "") + "', not '" +
                             config.name + "'");
+            // Shards (--shard i/N) are parts of one run: their cells add up, and the set is
+            // complete once every shard's last part is. Parts of one shard continue each other.
+            std::string shard = part.value("shard", "");
+            auto [seenShard, firstOfShard] = shardComplete.emplace(shard, false);
+            seenShard->second = part.value("complete", false);
+            if (!shard.empty()) shardCount = std::stoi(shard.substr(shard.find('/') + 1));
             if (meta.is_null()) {
                 meta = part;
+                meta.erase("shard");
+            } else if (firstOfShard) {
+                for (const char* k : {"measured", "failed", "not_run", "seconds", "cells",
+                                      "skipped_as_done"})
+                    meta[k] = meta.value(k, 0.0) + part.value(k, 0.0);
+                meta["finished"] = std::max(meta.value("finished", ""), part.value("finished", ""));
+                if (part.value("commit", "") != meta.value("commit", ""))
+                    throw Error(dir.string() + " was measured at commit " + part.value("commit", "") +
+                                ", the first folder at " + meta.value("commit", ""));
             } else {
                 // A continued run: its cells add to the first run's; the sums and the end move.
                 for (const char* k : {"measured", "failed", "not_run", "seconds"})
@@ -269,6 +316,11 @@ int runSweepCommand() {
     } else {
         bench::SweepRunOptions o;
         o.device = a.device;
+        if (!a.devices.empty() && !a.device.empty())
+            throw Error("sweep: --device and --devices: give one (--devices " + a.device +
+                        " for one device)");
+        o.devices = a.devices;
+        if (!a.shard.empty()) o.shard = bench::parseShard(a.shard);
         o.sceneDir = a.sceneDir;
         o.readImage = readImage;
         o.sources = KernelSources(a.kernelDir.empty() && std::getenv("RTLAB_KERNEL_DIR")
@@ -281,6 +333,22 @@ int runSweepCommand() {
             rows.push_back(row);
         });
         meta = s.meta;
+    }
+    if (!a.importDirs.empty()) {
+        if (shardCount > 0) {
+            nlohmann::json shards = nlohmann::json::array();
+            bool complete = true;
+            for (const auto& [shard, done] : shardComplete) {
+                shards.push_back(shard);
+                complete = complete && done;
+            }
+            meta["shards"] = shards;
+            meta["complete"] = complete && int(shardComplete.size()) == shardCount;
+            if (int(shardComplete.size()) != shardCount || shardComplete.count(""))
+                std::fprintf(stderr, "rtlab sweep: warning: %zu of %d shards imported; the set is "
+                                     "incomplete\n", shardComplete.size(), shardCount);
+        }
+        sortByCell(rows, frames);
     }
     if (!frames.empty()) scoreFrames(rows, frames, config, a.sceneDir);
 

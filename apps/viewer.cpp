@@ -31,7 +31,8 @@ using namespace rt;
 struct Args {
     std::string scene, pipeline, screenshot;  // pipeline: the registry's first by default
     cli::SceneFlags flags;
-    int scale = 2;
+    int scale = 0;      // 0: 2 when the window then fits the screen, else 1
+    int pieceRows = 0;  // --piece-rows
     std::array<std::string, 2> pair;  // --split LEFT,RIGHT
     bool split = false, noOverlay = false, animate = false, noRayCount = false;
     long long frames = 0;
@@ -79,6 +80,34 @@ std::string framePath(const ClContext& cl) {
     return "host copy (cl_khr_gl_sharing unused)";
 }
 
+// Whether a window of this many screen coordinates fits the primary monitor's current mode.
+bool fits(int width, int height) {
+    GLFWmonitor* monitor = glfwGetPrimaryMonitor();
+    const GLFWvidmode* mode = monitor ? glfwGetVideoMode(monitor) : nullptr;
+    return !mode || (width <= mode->width && height <= mode->height);
+}
+
+// "rendering 1280x720, window 1280x720 (--scale 1)", plus the framebuffer when a high-DPI
+// screen makes it larger than the window: the frame is rendered at --size whatever the window,
+// and drawn scaled to fill the framebuffer.
+std::string windowSizes(GLFWwindow* window, const RenderOptions& o, int scale) {
+    int ww = 0, wh = 0, fw = 0, fh = 0;
+    glfwGetWindowSize(window, &ww, &wh);
+    glfwGetFramebufferSize(window, &fw, &fh);
+    char buf[256];
+    int n = std::snprintf(buf, sizeof buf, "rendering %dx%d, window %dx%d (--scale %d)",
+                          o.width, o.height, ww, wh, scale);
+    if ((fw != ww || fh != wh) && n > 0) {
+        float sx = 1, sy = 1;
+        glfwGetWindowContentScale(window, &sx, &sy);
+        std::snprintf(buf + n, sizeof buf - size_t(n),
+                      ", framebuffer %dx%d (content scale %g: a high-DPI screen; the frame is "
+                      "scaled up to it, not rendered at it)",
+                      fw, fh, double(sx));
+    }
+    return buf;
+}
+
 int runViewer(Args& a) {
     Scene scene = loadScene(a.scene, readImage);
     for (const std::string& note : scene.notes) std::fprintf(stderr, "rtlab-view: note: %s\n", note.c_str());
@@ -94,16 +123,20 @@ int runViewer(Args& a) {
     }
     auto keys = view::parseKeyScript(a.keys);
     if (a.frames < 0) throw Error("--frames " + std::to_string(a.frames) + ": must be >= 0");
-    if (a.scale < 1 || a.scale > 8) throw Error("--scale " + std::to_string(a.scale) + ": must be in 1..8");
+    if (a.scale != 0 && (a.scale < 1 || a.scale > 8))
+        throw Error("--scale " + std::to_string(a.scale) + ": must be in 1..8");
+    if (a.pieceRows < 0) throw Error("--piece-rows " + std::to_string(a.pieceRows) + ": must be >= 0");
 
     GlfwSession glfw;
+    if (a.scale == 0) a.scale = fits(options.width * 2, options.height * 2) ? 2 : 1;
     Window window(options.width * a.scale, options.height * a.scale, "rtlab-view " + scene.name);
+    std::string sizes = windowSizes(window.handle, options, a.scale);
     view::GlDisplay display;
     display.warmUp();
     ClContext cl(selectDevice(a.flags.device), a.flags.kernelSources());
     std::string path = framePath(cl);
-    std::printf("rtlab-view: %s on %s, %dx%d, frames by %s; press H for help\n", scene.name.c_str(),
-                cl.device().label().c_str(), options.width, options.height, path.c_str());
+    std::printf("rtlab-view: %s on %s, %s, frames by %s; press H for help\n", scene.name.c_str(),
+                cl.device().label().c_str(), sizes.c_str(), path.c_str());
     std::fflush(stdout);
 
     view::Renderer::Config rc;
@@ -115,6 +148,7 @@ int runViewer(Args& a) {
     rc.countRays = !a.noRayCount;
     rc.frameLimit = a.frames;
     rc.fixedStep = a.frames > 0 ? 1.0 / 30 : 0;
+    rc.pieceRows = a.pieceRows;
     view::ViewRequest first;
     first.camera = scene.camera;
     first.split = a.split;
@@ -122,6 +156,7 @@ int runViewer(Args& a) {
     first.pair = a.pair;
     first.bounces = options.bounces;
     first.accel = options.accel;
+    const size_t triangles = scene.triangles.size();
     view::Renderer renderer(cl, std::move(scene), rc, [] { glfwPostEmptyEvent(); });
 
     view::AppConfig ac;
@@ -132,6 +167,8 @@ int runViewer(Args& a) {
     ac.speed = a.speed;
     ac.framePath = path;
     ac.animate = a.animate;
+    ac.triangles = triangles;
+    ac.pixels = (long long)(options.width) * options.height;
     view::App app(window.handle, display, renderer, first, ac);
     renderer.start(first);
     return app.run();
@@ -154,6 +191,16 @@ std::array<std::string, 2> parsePair(const std::string& text, const std::vector<
 int main(int argc, char** argv) {
     std::string keys = "\nKeys:\n";
     for (const std::string& line : view::helpLines()) keys += "  " + line + "\n";
+    char guard[512];
+    std::snprintf(guard, sizeof guard,
+                  "\nSlow frames come in pieces of rows (about 100 ms each), shown as they finish "
+                  "with a progress line in the overlay; a key that changes the view, or a "
+                  "camera move, restarts the frame. B asks before it switches to brute force "
+                  "(accel none, or bv, which bounds whole meshes only) when a frame would need "
+                  "more than %.0e ray-triangle tests (triangles x pixels x AA samples x (1 + "
+                  "bounce limit)): B again switches, any other key skips to grid.\n",
+                  view::kBruteForceTests);
+    keys += guard;
     CLI::App app{"rtlab-view: watch the pipelines render a scene in real time."};
     app.footer(keys);
     Args a;
@@ -169,7 +216,15 @@ int main(int argc, char** argv) {
         "Start in split view; LEFT,RIGHT picks any two pipelines (" + registry.joinedNames(true) +
             ") [" + a.pair[0] + "," + a.pair[1] + "]");
     split->expected(0, 1);
-    app.add_option("--scale", a.scale, "Window pixels per rendered pixel, 1..8")->capture_default_str();
+    app.add_option("--scale", a.scale,
+                   "Window pixels (screen coordinates) per rendered pixel, 1..8 [2 when the "
+                   "window then fits the screen, else 1]. The frame is always rendered at --size; a high-DPI screen "
+                   "gives the window a larger framebuffer (the first line says so), and the "
+                   "frame is scaled up to fill it");
+    app.add_option("--piece-rows", a.pieceRows,
+                   "Render each frame in pieces of this many rows (automation, tests); 0, the "
+                   "default, sizes pieces to take about 100 ms each, so a slow frame shows row "
+                   "by row and a key or camera move restarts it");
     app.add_flag("--no-overlay", a.noOverlay, "Hide the overlay and the split divider (O shows them)");
     app.add_flag("--animate", a.animate,
                  "Move the first sphere around a circle (until scene files carry 'animate')");
@@ -185,7 +240,8 @@ int main(int argc, char** argv) {
                    "After the last frame, save the window to this image (implies --frames 1)");
     app.add_option("--keys", a.keys,
                    "Automation: press keys once a number of frames is shown, e.g. \"6:R\" or "
-                   "\"3:V 5:B+ 8:P\" (the control letters, + and -)");
+                   "\"3:V 5:B+ 8:P\" (the control letters, + and -); \"2.3:B\" presses B once "
+                   "piece 3 of frame 2 is shown");
     a.flags.add(app);
     try {
         app.parse(argc, argv);

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <limits>
 
 #include "apps/viewer_overlay.h"
 #include "apps/viewer_srgb.h"
@@ -35,19 +36,37 @@ constexpr float kMaxPitch = 1.55f;       // just short of straight up or down
 
 }  // namespace
 
-std::vector<std::pair<long long, int>> parseKeyScript(const std::string& script) {
-    std::vector<std::pair<long long, int>> keys;
+bool isBruteForce(RenderOptions::Accel accel) {
+    return accel == RenderOptions::Accel::None || accel == RenderOptions::Accel::Bv;
+}
+
+double bruteForceTests(size_t triangles, long long pixels, int aa, int bounces) {
+    return double(triangles) * double(pixels) * double(aa) * double(aa) * double(1 + bounces);
+}
+
+std::vector<ScriptedKey> parseKeyScript(const std::string& script) {
+    std::vector<ScriptedKey> keys;
     std::string item;
     auto flush = [&] {
         if (item.empty()) return;
         size_t colon = item.find(':');
-        long long frame = -1;
+        long long frame = -1, piece = 0;
         try {
-            if (colon != std::string::npos) frame = std::stoll(item.substr(0, colon));
+            if (colon != std::string::npos) {
+                std::string at = item.substr(0, colon);
+                size_t dot = at.find('.'), used = 0;
+                frame = std::stoll(at.substr(0, dot), &used);
+                if (used != std::min(dot, at.size())) frame = -1;
+                if (dot != std::string::npos) {
+                    piece = std::stoll(at.substr(dot + 1), &used);
+                    if (used != at.size() - dot - 1 || piece < 1) frame = -1;
+                }
+            }
         } catch (const std::exception&) {
+            frame = -1;
         }
         if (frame < 1 || colon + 1 >= item.size())
-            throw Error("--keys " + item + ": expected FRAME:KEYS, e.g. 6:R");
+            throw Error("--keys " + item + ": expected FRAME:KEYS or FRAME.PIECE:KEYS, e.g. 6:R");
         for (char c : item.substr(colon + 1)) {
             char u = char(std::toupper((unsigned char)c));
             int key = u >= 'A' && u <= 'Z' ? GLFW_KEY_A + (u - 'A')
@@ -59,7 +78,7 @@ std::vector<std::pair<long long, int>> parseKeyScript(const std::string& script)
             if (key < 0 || kScriptable.find(u) == std::string::npos)
                 throw Error(std::string("--keys ") + item + ": no control on '" + c +
                             "' (scriptable keys: M V B R P H O + -)");
-            keys.emplace_back(frame, key);
+            keys.push_back({frame, int(piece), key});
         }
         item.clear();
     };
@@ -68,8 +87,12 @@ std::vector<std::pair<long long, int>> parseKeyScript(const std::string& script)
         else item += c;
     }
     flush();
+    // By when they are pressed: piece p of frame f comes before frame f is complete.
+    auto when = [](const ScriptedKey& k) {
+        return std::pair(k.frame, k.piece > 0 ? k.piece : std::numeric_limits<int>::max());
+    };
     std::stable_sort(keys.begin(), keys.end(),
-                     [](const auto& a, const auto& b) { return a.first < b.first; });
+                     [&](const auto& a, const auto& b) { return when(a) < when(b); });
     return keys;
 }
 
@@ -111,7 +134,50 @@ void App::message(const std::string& text) {
     while (messages_.size() > 4) messages_.pop_front();
 }
 
+void App::cycleAccel() {
+    using Accel = RenderOptions::Accel;
+    const Accel next = Accel((int(req_.accel) + 1) % 5);
+    if (isBruteForce(next) && !confirming_) {
+        size_t triangles = haveFrame_ ? frame_.triangles : config_.triangles;
+        long long pixels = haveFrame_ ? (long long)(frame_.width) * frame_.height : config_.pixels;
+        int aa = haveFrame_ ? frame_.options.aa : 1;
+        double tests = bruteForceTests(triangles, pixels, aa, req_.bounces);
+        if (tests > kBruteForceTests) {
+            char text[320];
+            std::snprintf(text, sizeof text,
+                          next == Accel::None
+                              ? "accel none tests every ray against all %zu triangles, %.1e tests "
+                                "a frame: press B again to use it, any other key to skip to grid"
+                              : "accel bv tests every ray that enters a mesh's bounds against all "
+                                "its triangles (%zu), up to %.1e tests a frame: press B again to "
+                                "use it, any other key to skip to grid",
+                          triangles, tests);
+            message(text);
+            std::printf("rtlab-view: %s\n", text);
+            std::fflush(stdout);
+            confirming_ = true;
+            return;
+        }
+    }
+    if (confirming_) std::printf("rtlab-view: accel %s, as confirmed\n", accelName(next));
+    confirming_ = false;
+    req_.accel = next;
+    message(std::string("accel ") + accelName(req_.accel));
+    send();
+}
+
 void App::onKey(int key) {
+    if (confirming_ && key != GLFW_KEY_B) {
+        // The answer to "press B again": any other key skips brute force (none and bv, which
+        // bounds whole meshes only) for the grid, and is used up by it.
+        confirming_ = false;
+        req_.accel = RenderOptions::Accel::Grid;
+        message("skipped brute force: accel grid");
+        std::printf("rtlab-view: skipped brute force, accel grid\n");
+        std::fflush(stdout);
+        send();
+        return;
+    }
     const std::string shown = pipelineInfo(req_.pipeline).title;
     switch (key) {
         case GLFW_KEY_ESCAPE: glfwSetWindowShouldClose(window_, GLFW_TRUE); return;
@@ -142,10 +208,7 @@ void App::onKey(int key) {
             if (req_.bounces <= 0) return message("bounce limit is already 0");
             --req_.bounces;
             break;
-        case GLFW_KEY_B:
-            req_.accel = RenderOptions::Accel((int(req_.accel) + 1) % 5);
-            message(std::string("accel ") + accelName(req_.accel));
-            break;
+        case GLFW_KEY_B: cycleAccel(); return;
         case GLFW_KEY_R:
             ++req_.reloads;
             message("reloading the scene");
@@ -234,9 +297,11 @@ void App::receive() {
     }
     FrameOut f;
     if (!renderer_.takeFrame(f)) return;
-    arrivals_.emplace_back(Clock::now(), f.index);
-    if (!haveFrame_) firstArrival_ = arrivals_.back();
-    while (arrivals_.size() > 20) arrivals_.pop_front();
+    if (f.complete()) {  // FPS counts whole frames; pieces of a slow one only update the image
+        arrivals_.emplace_back(Clock::now(), f.index);
+        if (firstArrival_.second == 0) firstArrival_ = arrivals_.back();
+        while (arrivals_.size() > 20) arrivals_.pop_front();
+    }
     display_.uploadFrame(0, f.pipelines[0].rgb, f.width, f.height);
     if (f.pipelines.size() > 1) display_.uploadFrame(1, f.pipelines[1].rgb, f.width, f.height);
     for (PipelineFrame& p : f.pipelines) p.rgb = {};  // on the GPU now
@@ -252,6 +317,11 @@ void App::receive() {
     sceneGeneration_ = f.sceneGeneration;
     frame_ = std::move(f);
     haveFrame_ = true;
+}
+
+long long App::framesShown() const {
+    if (!haveFrame_) return 0;
+    return (long long)frame_.index - (frame_.complete() ? 0 : 1);
 }
 
 double App::fps() const {
@@ -318,12 +388,16 @@ int App::run() {
         if (moving) moveCamera(std::chrono::duration<double>(Clock::now() - before).count());
         receive();
         if (!fatal_.empty()) throw Error(fatal_);
-        while (!config_.keys.empty() && haveFrame_ &&
-               (long long)frame_.index >= config_.keys.front().first) {
-            onKey(config_.keys.front().second);
+        auto due = [&](const ScriptedKey& k) {
+            if (k.piece == 0) return framesShown() >= k.frame;
+            return framesShown() >= k.frame ||
+                   (haveFrame_ && (long long)frame_.index == k.frame && frame_.pieces >= k.piece);
+        };
+        while (!config_.keys.empty() && due(config_.keys.front())) {
+            onKey(config_.keys.front().key);
             config_.keys.erase(config_.keys.begin());
         }
-        if (config_.frames > 0 && haveFrame_ && (long long)frame_.index >= config_.frames) {
+        if (config_.frames > 0 && framesShown() >= config_.frames) {
             auto now = Clock::now();
             double total = std::chrono::duration<double>(now - start).count();
             double first = std::chrono::duration<double>(firstArrival_.first - start).count();
@@ -338,6 +412,10 @@ int App::run() {
                 std::printf(", then %.2f FPS", double(frame_.index - firstArrival_.second) / rest);
             for (const PipelineFrame& p : frame_.pipelines)
                 std::printf(", %s %.1f ms device", p.name.c_str(), p.stats.deviceMs);
+            // How the last frame came: in how many pieces, and how many were abandoned part way.
+            std::printf(", accel %s, the last in %d piece%s, %llu restarted", accelName(frame_.options.accel),
+                        frame_.pieces, frame_.pieces == 1 ? "" : "s",
+                        (unsigned long long)frame_.restarts);
             std::printf("\n");
             glfwSwapBuffers(window_);
             return 0;

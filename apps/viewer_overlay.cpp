@@ -30,6 +30,17 @@ std::string pipelineLine(const PipelineFrame& p) {
     return line;
 }
 
+// A frame still coming in pieces: rows done, a bar, and the time so far.
+std::string progressLine(const FrameOut& f) {
+    constexpr int kWidth = 20;
+    double done = f.height > 0 ? double(f.rowsDone) / f.height : 0;
+    int filled = int(done * kWidth);
+    return format("rendering rows %d/%d [%s%s] %.0f%%  piece %d  %.1f s", f.rowsDone, f.height,
+                  std::string(size_t(filled), '#').c_str(),
+                  std::string(size_t(kWidth - filled), '-').c_str(), 100 * done, f.pieces,
+                  f.wallMs / 1000);
+}
+
 constexpr Rgba kBackground{0, 0, 0, 150}, kText{235, 235, 235, 255}, kDim{160, 200, 255, 255},
     kWarn{255, 190, 90, 255};
 
@@ -40,7 +51,8 @@ const std::vector<std::string>& helpLines() {
         "W/A/S/D  move            Q/E  down/up      shift  faster",
         "drag     turn (yaw/pitch); in split view, drag the divider",
         "M  next pipeline         V  split view     +/-  bounce limit",
-        "B  accel none/bv/grid/bvh    R  reload scene    P  screenshot",
+        "B  accel none/bv/grid/bvh/wide (asks first: none, bv on a big mesh)",
+        "R  reload scene    P  screenshot",
         "O  overlay   H  help   Esc  quit",
     };
     return lines;
@@ -63,6 +75,7 @@ TextCanvas makeOverlay(const OverlayInfo& info) {
             lines.push_back({format("FPS %.1f  frame %.0f ms  %s", info.fps, f->wallMs,
                                     info.framePath.c_str()),
                              kText});
+            if (!f->complete()) lines.push_back({progressLine(*f), kWarn});
             // The largest buffer any pipeline on screen holds (the wavefront's ray tree).
             std::pair<std::string, size_t> largest;
             for (const PipelineFrame& p : f->pipelines) {

@@ -2,6 +2,11 @@
 // renders whatever the window last asked for, and hands back 8-bit frames and their stats. The
 // window thread stays free for input and drawing, so a slow device (PoCL) never stalls the UI.
 //
+// Frames are rendered in pieces of rows (RenderOptions' row window), each sized to take about
+// kPieceMs from what the last piece cost: a fast frame is one piece, a slow one (a big mesh with
+// --accel none: a minute on PoCL) shows row by row, and a new request from the window abandons
+// it between two pieces and starts over. Pipelines without row windows render a frame whole.
+//
 // Buffers: each Pipeline keeps its device buffers while the scene address and the frame size stay
 // the same, so a still frame only changes the camera (kernel settings) and queues kernels. The
 // pipelines have no call yet to update objects in place, and know a scene only by its address; so
@@ -55,6 +60,9 @@ struct ViewRequest {
     uint64_t reloads = 0;  // bumped by R
 };
 
+// Whether two requests ask for the same frame (a newer, different one restarts the frame).
+bool sameRequest(const ViewRequest& a, const ViewRequest& b);
+
 struct PipelineFrame {
     std::string name;  // the registered pipeline name
     FrameStats stats;
@@ -62,7 +70,12 @@ struct PipelineFrame {
 };
 
 struct FrameOut {
-    uint64_t index = 0;  // 1 for the first frame
+    uint64_t index = 0;  // 1 for the first frame; a partial frame has the index it will complete
+    int rowsDone = 0;    // rows rendered so far, from the top; the rest show the previous frame
+    int pieces = 0;      // pieces rendered so far
+    uint64_t restarts = 0;  // frames abandoned part way so far (the view changed), all frames
+    size_t triangles = 0;   // in the scene rendered (the window's brute-force guard)
+    bool complete() const { return rowsDone >= height; }
     int width = 0, height = 0;
     std::vector<PipelineFrame> pipelines;  // split: left then right
     double wallMs = 0;                     // render thread time for the frame
@@ -94,7 +107,9 @@ public:
         long long frameLimit = 0;   // stop after this many frames (0 = never)
         // Animation clock: seconds per frame when > 0 (reproducible automation), else wall time.
         double fixedStep = 0;
+        int pieceRows = 0;  // rows per piece when > 0 (--piece-rows), else sized by kPieceMs
     };
+    static constexpr double kPieceMs = 100;  // what a piece should take: ten updates a second
     // `scene` is the already loaded scenePath; `wake` is called (from the render thread) after
     // each frame or notice, e.g. glfwPostEmptyEvent.
     Renderer(ClContext& cl, Scene scene, Config config, std::function<void()> wake);
@@ -110,7 +125,10 @@ public:
 
 private:
     void loop();
-    void renderOne(const ViewRequest& r);
+    void renderPiece(const ViewRequest& r);
+    void beginFrame(const ViewRequest& r);
+    void fail(const std::string& failure);
+    void publish();
     bool reload();
     void restoreBackup();
     void post(Notice n);
@@ -156,14 +174,40 @@ private:
     std::set<std::pair<int, RenderOptions::Accel>> refused_;
     uint64_t reloadsDone_ = 0, generation_ = 0;
     std::chrono::steady_clock::time_point started_ = std::chrono::steady_clock::now();
-    bool anyFrame_ = false, failed_ = false;
+    bool anyFrame_ = false, failed_ = false, reloaded_ = false;
+
+    // The frame in progress, rendered piece by piece; `active` is false between frames.
+    struct Progressive {
+        bool active = false;
+        ViewRequest request;
+        std::pair<int, RenderOptions::Accel> choice;
+        RenderOptions options;
+        std::vector<Held*> order;
+        bool windows = true;  // every pipeline in order renders row windows
+        FrameOut out;
+        std::chrono::steady_clock::time_point started;
+    } frame_;
+    uint64_t restarts_ = 0;
+    // The last complete frame's pixels, per side: a partial frame shows them below its rows.
+    std::array<std::vector<uint8_t>, 2> lastRgb_;
+    // Piece sizing, while the workload (pipelines, options, scene) stays the same: a frame's
+    // first piece from the last complete frame's cost per row, the next ones from the last
+    // piece's, growing at most twofold (rows differ in cost: sky against a mesh). A new workload
+    // starts with a probe of a few rows.
+    std::string pieceKey_;
+    double msPerRow_ = 0, frameMsPerRow_ = 0, frameMs_ = 0;
+    int lastPieceRows_ = 0;  // in the frame in progress
+    int nextPieceRows(int remaining) const;
 
     // Shared with the window thread.
     mutable std::mutex mutex_;
     std::condition_variable cv_;
     ViewRequest request_;
     FrameOut latest_;
-    uint64_t taken_ = 0, rendered_ = 0;
+    // published_ counts every frame or piece handed over, taken_ what the window took; rendered_
+    // counts complete frames. After a partial piece the thread waits until the window took it,
+    // so that every piece is seen and a key pressed at a piece reaches the frame in progress.
+    uint64_t published_ = 0, taken_ = 0, rendered_ = 0;
     std::vector<Notice> notices_;
     bool stop_ = false;
     std::thread thread_;

@@ -5,7 +5,8 @@
 //       time), with per-kernel, ray, memory and tree-use counters. --benchmark_out=FILE.json
 //       writes JSON that Google Benchmark's compare.py reads.
 //   rtlab-bench --sweep FILE --out DIR              a sweep file's cells with a progress line,
-//       rows to DIR/rows.jsonl as they are measured, kept frames to DIR/images/*.pfm. This is
+//       on one device or several (--devices), all of them or one share (--shard i/N), rows to
+//       DIR/rows.jsonl in cell order as they are measured, kept frames to DIR/images/*.pfm. This is
 //       what runs on a GPU machine: it links no OpenImageIO, so `rtlab sweep --import DIR`
 //       compares the frames and draws the charts afterwards, elsewhere.
 #include <benchmark/benchmark.h>
@@ -47,14 +48,20 @@ Google Benchmark mode (every --benchmark_* flag works, e.g. --benchmark_filter=R
   --accels=bvh,...      none, bv, grid, bvh, wide [each scene's default]
   --cells=SWEEP         instead of the lists above: the cells of a sweep file (every cell:
                         stop-after-failure applies in sweep mode only)
-  --devices=SPEC,...    OpenCL devices by index or name [$RTLAB_DEVICE, else first GPU]
+  --devices=SPEC,...    OpenCL devices by index or name, or all (every GPU)
+                        [$RTLAB_DEVICE, else first GPU]
   --repeats=N           repetitions per benchmark; the median is reported [5]
   --frames=N            timed frames per repetition (fixed, so that sub-millisecond cells do
                         not auto-iterate for minutes) [5]
   --warmup=N            untimed frames before timing [2]
   --count-rays=yes|no   one untimed frame with device ray counters [yes]
 Sweep mode (no Google Benchmark; what `rtlab sweep --import` reads):
-  --sweep=SWEEP --out=DIR [--time-limit=SECONDS] [--device=SPEC] [--resume=ROWS,...]
+  --sweep=SWEEP --out=DIR [--time-limit=SECONDS] [--device=SPEC | --devices=SPEC]
+        [--shard=i/N] [--resume=ROWS,...]
+                        --devices=all (every GPU) or a list of indices and names runs the
+                        cells on those devices at once, one context each, rows in cell order;
+                        --shard=i/N runs only work units u with u % N == i, for N machines
+                        (merge: `rtlab sweep CONFIG --import DIR0 DIR1 ...`).
                         --resume skips the cells an earlier run's rows.jsonl measured; give
                         `rtlab sweep --import` both output folders afterwards. Groups with
                         stop-after-failure (bench/sweeps/limits) skip the settings no smaller
@@ -83,7 +90,7 @@ struct Flags {
     std::vector<std::string> sizes{"640x360", "1280x720", "1920x1080", "3840x2160"};
     std::string bounces = "0..8";
     std::vector<std::string> accels;  // empty: each scene's default
-    std::string cells, sweep, out, device, sceneDir, kernelDir, resume;
+    std::string cells, sweep, out, device, sceneDir, kernelDir, resume, shard;
     std::vector<std::string> devices;
     int repeats = 5, warmup = 2, frames = 5;
     bool countRays = true, listDevices = false;
@@ -146,6 +153,7 @@ Flags parseFlags(int argc, char** argv) {
         else if (key == "--resume") f.resume = value;
         else if (key == "--device") f.device = value;
         else if (key == "--devices") f.devices = split(value);
+        else if (key == "--shard") f.shard = value;
         else if (key == "--scene-dir") f.sceneDir = value;
         else if (key == "--kernel-dir") f.kernelDir = value;
         else if (key == "--repeats") f.repeats = integer(1, 1000);
@@ -185,6 +193,10 @@ int sweepCommand(const Flags& f) {
     if (!rows) throw Error((out / "rows.jsonl").string() + ": cannot write");
     SweepRunOptions o;
     o.device = f.device;
+    if (!f.devices.empty() && !f.device.empty())
+        throw Error("--device and --devices: give one (--devices=" + f.device + " for one device)");
+    for (const std::string& d : f.devices) o.devices += (o.devices.empty() ? "" : ",") + d;
+    if (!f.shard.empty()) o.shard = parseShard(f.shard);
     o.sceneDir = f.sceneDir;
     o.readImage = readFace;
     o.sources = KernelSources(f.kernelDir);
@@ -352,15 +364,23 @@ std::vector<int> bounceList(const std::string& spec) {
 }
 
 int benchmarkCommand(const Flags& f) {
-    std::vector<std::string> deviceSpecs = f.devices;
-    if (deviceSpecs.empty()) deviceSpecs.push_back(f.device);
+    if (!f.shard.empty()) throw Error("--shard: only with --sweep (the Google Benchmark mode runs no work units)");
+    // The same --devices specs as the sweep mode (all, indices, names); one benchmark set each.
+    std::string spec;
+    for (const std::string& d : f.devices) spec += (spec.empty() ? "" : ",") + d;
+    std::vector<DeviceInfo> chosen =
+        spec.empty() ? std::vector<DeviceInfo>{selectDevice(f.device)} : selectDevices(spec);
     std::vector<Target> targets;
-    for (const std::string& spec : deviceSpecs) {
+    for (const DeviceInfo& device : chosen) {
         Target t;
-        t.cl = std::make_unique<ClContext>(selectDevice(spec), KernelSources(f.kernelDir));
-        if (deviceSpecs.size() > 1) t.tag = "/dev" + std::to_string(t.cl->device().index);
+        t.cl = std::make_unique<ClContext>(device, KernelSources(f.kernelDir));
+        if (chosen.size() > 1) {
+            t.tag = "/dev" + std::to_string(device.index);
+            for (const Target& other : targets)  // a device named twice: a second set of its own
+                if (other.tag == t.tag) t.tag += "-" + std::to_string(targets.size());
+        }
         const DeviceInfo& d = t.cl->device();
-        std::string prefix = deviceSpecs.size() > 1 ? t.tag.substr(1) + "_" : "";
+        std::string prefix = chosen.size() > 1 ? t.tag.substr(1) + "_" : "";
         benchmark::AddCustomContext(prefix + "device", d.name);
         benchmark::AddCustomContext(prefix + "device_slug", deviceSlug(d));
         benchmark::AddCustomContext(prefix + "platform", d.platformName);

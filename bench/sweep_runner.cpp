@@ -10,9 +10,12 @@
 #include <fstream>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <optional>
+#include <thread>
 
 #include "bench/measure.h"
+#include "bench/sweep_schedule.h"
 #include "core/accel.h"
 #include "core/error.h"
 #include "core/version.h"
@@ -42,57 +45,66 @@ double cellCost(const Cell& c) {
     return double(o.width) * o.height * o.aa * o.aa * work * frames;
 }
 
+// The progress line. Cells run out of order when several devices share a sweep: the count
+// shown is of cells finished, and the time left is the not yet started cells' estimate shared
+// out over the workers. Callers hold the sweep's lock.
 class Progress {
 public:
-    explicit Progress(const std::vector<Cell>& cells)
-        : cells_(cells), tty_(isatty(fileno(stderr))),
-          start_(std::chrono::steady_clock::now()) {
+    Progress(const std::vector<Cell>& cells, const std::vector<size_t>& toRun, int workers)
+        : cells_(cells), pending_(cells.size(), 0), total_(toRun.size()), workers_(workers),
+          tty_(isatty(fileno(stderr))), start_(std::chrono::steady_clock::now()) {
         // Cells that stop-after-failure may skip are counted in: the ETA is then a bound.
-        for (const Cell& c : cells) mayStop_ = mayStop_ || c.stopAfterFailure;
+        for (size_t i : toRun) {
+            pending_[i] = 1;
+            mayStop_ = mayStop_ || cells[i].stopAfterFailure;
+        }
     }
     double elapsed() const {
         return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
     }
-    // Seconds the cells from i on should take, from the rate measured on the same scene and
-    // pipeline, else on the scene, else overall: pipelines differ by far more than the cost
-    // model's terms (the quick sweep's "ETA 2s" came before a 21 s wavefront cell).
-    double remaining(size_t i) const {
-        double overall = doneCost_ > 0 ? spent_ / doneCost_ : 0;
+    // Seconds a cell should take, from the rate measured on the same scene and pipeline, else
+    // on the scene, else overall: pipelines differ by far more than the cost model's terms (the
+    // quick sweep's "ETA 2s" came before a 21 s wavefront cell).
+    double estimate(size_t i) const {
+        double rate = doneCost_ > 0 ? spent_ / doneCost_ : 0;
+        if (auto it = rate_.find(cells_[i].scene + "|" + cells_[i].pipeline); it != rate_.end())
+            rate = it->second.first / it->second.second;
+        else if (auto s = rate_.find(cells_[i].scene); s != rate_.end())
+            rate = s->second.first / s->second.second;
+        return rate * cellCost(cells_[i]);
+    }
+    double remaining() const {
         double eta = 0;
-        for (size_t j = i; j < cells_.size(); ++j) {
-            double rate = overall;
-            if (auto it = rate_.find(cells_[j].scene + "|" + cells_[j].pipeline); it != rate_.end())
-                rate = it->second.first / it->second.second;
-            else if (auto s = rate_.find(cells_[j].scene); s != rate_.end())
-                rate = s->second.first / s->second.second;
-            eta += rate * cellCost(cells_[j]);
-        }
-        return eta;
+        for (size_t i = 0; i < cells_.size(); ++i)
+            if (pending_[i]) eta += estimate(i);
+        return eta / workers_;
     }
     // The time left as shown: nothing until two cells were measured (one cell's rate, stretched
     // over a whole sweep, said "ETA <= 7h13m" for a 3-minute run), and a bound ("<=") where
     // stop-after-failure may skip cells.
-    std::string eta(size_t i) const {
+    std::string eta() const {
         if (measured_ < 2) return "estimating";
-        return std::string(mayStop_ ? "<= " : "") + formatDuration(remaining(i));
+        return std::string(mayStop_ ? "<= " : "") + formatDuration(remaining());
     }
-    double predict(size_t i, size_t j) const { return remaining(i) - remaining(j); }
-    void starting(size_t i, size_t j) {
+    void starting(const std::vector<size_t>& run, const std::string& where) {
+        for (size_t i : run) pending_[i] = 0;
         if (!tty_) return;
-        std::string what = cells_[i].label();
-        if (j > i + 1) what += " (+" + std::to_string(j - i - 1) + " interleaved)";
-        std::fprintf(stderr, "\r\033[K[%zu/%zu] %s ... | elapsed %s, ETA %s", i + 1, cells_.size(),
-                     what.c_str(), formatDuration(elapsed()).c_str(), eta(i).c_str());
+        std::string what = cells_[run.front()].label() + where;
+        if (run.size() > 1) what += " (+" + std::to_string(run.size() - 1) + " interleaved)";
+        std::fprintf(stderr, "\r\033[K[%zu/%zu] %s ... | elapsed %s, ETA %s", done_ + 1, total_,
+                     what.c_str(), formatDuration(elapsed()).c_str(), eta().c_str());
         std::fflush(stderr);
     }
     void skipped(size_t i, const std::string& why) {
         const Cell& c = cells_[i];
+        pending_[i] = 0;
+        ++done_;
         std::fprintf(stderr, "%s[%zu/%zu] %s: skipped | elapsed %s\n    %s\n", tty_ ? "\r\033[K" : "",
-                     i + 1, cells_.size(), c.label().c_str(), formatDuration(elapsed()).c_str(),
+                     done_, total_, c.label().c_str(), formatDuration(elapsed()).c_str(),
                      why.c_str());
         std::fflush(stderr);
     }
-    void finished(size_t i, double seconds, const Measurement& m) {
+    void finished(size_t i, double seconds, const Measurement& m, const std::string& where) {
         const Cell& c = cells_[i];
         double cost = cellCost(c);
         spent_ += seconds;
@@ -103,14 +115,15 @@ public:
             r.second += cost;
         }
         ++measured_;
+        ++done_;
         char result[96];
         if (m.ok)
             std::snprintf(result, sizeof result, "%.3f ms", m.deviceMs);
         else
             std::snprintf(result, sizeof result, "failed");
-        std::fprintf(stderr, "%s[%zu/%zu] %s: %s | elapsed %s, ETA %s%s", tty_ ? "\r\033[K" : "",
-                     i + 1, cells_.size(), c.label().c_str(), result,
-                     formatDuration(elapsed()).c_str(), eta(i + 1).c_str(), tty_ ? "" : "\n");
+        std::fprintf(stderr, "%s[%zu/%zu] %s%s: %s | elapsed %s, ETA %s%s", tty_ ? "\r\033[K" : "",
+                     done_, total_, c.label().c_str(), where.c_str(), result,
+                     formatDuration(elapsed()).c_str(), eta().c_str(), tty_ ? "" : "\n");
         if (!m.ok) std::fprintf(stderr, "%s    %s\n", tty_ ? "\n" : "", m.error.c_str());
         std::fflush(stderr);
     }
@@ -120,6 +133,9 @@ public:
 
 private:
     const std::vector<Cell>& cells_;
+    std::vector<char> pending_;  // to run and not yet started
+    size_t total_, done_ = 0;
+    int workers_;
     bool tty_, mayStop_ = false;
     std::chrono::steady_clock::time_point start_;
     double spent_ = 0, doneCost_ = 0;
@@ -312,6 +328,29 @@ nlohmann::json sweepSettingsJson(const SweepConfig& c) {
                        "in one further untimed frame"}};
 }
 
+namespace {
+
+// One cell's outcome, waiting for its turn in the output.
+struct Result {
+    nlohmann::json row;
+    std::optional<Image> image;
+};
+
+// What the workers share; every member is guarded by `lock`.
+struct SweepState {
+    std::mutex lock;
+    Progress* progress = nullptr;
+    SweepSummary* summary = nullptr;
+    size_t nextUnit = 0;
+    bool started = false, stop = false;  // a batch began; the time limit (or an error) stops all
+    std::exception_ptr error;
+    std::map<size_t, Result> results;    // by cell index, until every earlier cell is out
+    std::vector<size_t> order;           // the cells to run, in cell order
+    size_t emitted = 0;                  // order[0, emitted) went to the sink
+};
+
+}  // namespace
+
 SweepSummary runSweep(const SweepConfig& config, const SweepRunOptions& options,
                       const std::function<void(const nlohmann::json&)>& onStart,
                       const RowSink& sink) {
@@ -321,16 +360,36 @@ SweepSummary runSweep(const SweepConfig& config, const SweepRunOptions& options,
         scenes.emplace(name, loadScene(scenePath(name, options.sceneDir), options.readImage));
         sceneInfo[name] = sceneJson(scenes.at(name));
     }
-    std::vector<Cell> cells =
+    // The whole sweep's cells and units, whatever shard and resume leave of them: cell and unit
+    // indices are then the same on every machine.
+    const std::vector<Cell> cells =
         expandCells(config, [&](const std::string& n) -> const Scene& { return scenes.at(n); });
-    size_t before = cells.size();
-    std::erase_if(cells, [&](const Cell& c) { return options.skip.count(c.key()) > 0; });
-
-    ClContext cl(selectDevice(options.device), options.sources);
-    nlohmann::json device = deviceJson(cl.device());
+    std::vector<WorkUnit> units;
+    std::vector<char> inShard(cells.size(), 0);
+    {
+        std::vector<WorkUnit> all = workUnits(cells);
+        for (size_t u = 0; u < all.size(); ++u) {
+            if (int(u % size_t(options.shard.count)) != options.shard.index) continue;
+            for (auto [i, j] : all[u].batches)
+                for (size_t k = i; k < j; ++k) inShard[k] = 1;
+            units.push_back(std::move(all[u]));
+        }
+    }
+    SweepState state;
     SweepSummary summary;
-    summary.cells = int(cells.size());
-    summary.skipped = int(before - cells.size());
+    for (size_t k = 0; k < cells.size(); ++k) {
+        if (!inShard[k]) continue;
+        if (options.skip.count(cells[k].key())) ++summary.skipped;
+        else state.order.push_back(k);
+    }
+
+    std::vector<DeviceInfo> devices = options.devices.empty()
+                                          ? std::vector<DeviceInfo>{selectDevice(options.device)}
+                                          : selectDevices(options.devices);
+    std::vector<std::unique_ptr<ClContext>> contexts;
+    for (const DeviceInfo& d : devices) contexts.push_back(std::make_unique<ClContext>(d, options.sources));
+    nlohmann::json device = deviceJson(devices.front());
+    summary.cells = int(state.order.size());
     summary.meta = {{"sweep", config.name},
                     {"config_file", config.path.string()},
                     {"config", config.text},
@@ -338,120 +397,208 @@ SweepSummary runSweep(const SweepConfig& config, const SweepRunOptions& options,
                     {"scenes", sceneInfo},
                     {"started", utcNow()},
                     {"host_load_start", loadAverage()},
-                    {"cells", cells.size()},
+                    {"cells", state.order.size()},
                     {"skipped_as_done", summary.skipped}};
     summary.meta.update(device);
-    std::fprintf(stderr, "sweep %s: %zu cells on %s, commit %s\n", config.name.c_str(), cells.size(),
-                 cl.device().label().c_str(), RTLAB_COMMIT);
+    if (!options.shard.whole()) {
+        summary.meta["shard"] = options.shard.str();
+        summary.meta["sweep_cells"] = cells.size();
+    }
+    std::string on = devices.front().label();
+    if (devices.size() > 1) {
+        nlohmann::json list = nlohmann::json::array();
+        on = std::to_string(devices.size()) + " contexts:";
+        for (size_t w = 0; w < devices.size(); ++w) {
+            list.push_back(deviceJson(devices[w]));
+            list.back()["device_index"] = devices[w].index;
+            on += (w ? ", d" : " d") + std::to_string(w) + " = " + devices[w].label();
+            if (devices[w].name != devices.front().name)
+                std::fprintf(stderr, "sweep %s: warning: the devices differ (%s, %s); each row "
+                                     "names its own\n", config.name.c_str(),
+                             devices.front().name.c_str(), devices[w].name.c_str());
+        }
+        summary.meta["devices"] = list;
+    }
+    std::fprintf(stderr, "sweep %s: %zu cells%s on %s, commit %s\n", config.name.c_str(),
+                 state.order.size(),
+                 options.shard.whole() ? "" : (" (shard " + options.shard.str() + ")").c_str(),
+                 on.c_str(), RTLAB_COMMIT);
     if (onStart) onStart(summary.meta);
 
-    Progress progress(cells);
-    std::vector<Stop> stops;  // cells that failed or ran past max-frame-s (stop-after-failure)
-    for (size_t i = 0; i < cells.size();) {
-        // Adjacent cells that differ only in pipeline, accel or size (expandCells puts a group's
-        // pipelines and accels innermost) are measured together, their frames interleaved, so
-        // that wave/mega, accel/none and resolution ratios compare frames taken moments apart.
-        size_t j = i + 1;
-        while (j < cells.size() && cells[j].batchKey() == cells[i].batchKey()) ++j;
-        // stop-after-failure: cells no smaller than one that stopped are recorded, not run.
-        std::vector<size_t> run;
-        std::vector<std::string> skipWhy(j - i);
-        for (size_t k = i; k < j; ++k) {
-            if (cells[k].stopAfterFailure) skipWhy[k - i] = skipReason(config, cells[k], stops);
-            if (skipWhy[k - i].empty()) run.push_back(k);
-        }
-        if (!run.empty() && options.timeLimitS > 0 && i > 0 &&
-            progress.elapsed() + progress.predict(i, j) > options.timeLimitS) {
-            std::fprintf(stderr, "\nsweep %s: stopping before cell %zu of %zu, the time limit of %s "
-                                 "would pass\n",
-                         config.name.c_str(), i + 1, cells.size(),
-                         formatDuration(options.timeLimitS).c_str());
-            summary.complete = false;
-            break;
-        }
-        const Cell& c = cells[i];
-        std::vector<Measurement> ms(j - i);
-        double seconds = 0;
-        if (!run.empty()) {
-            std::vector<Variant> variants;
-            bool keep = false;
-            double cap = 0;
-            for (size_t k : run) {
-                variants.push_back({cells[k].pipeline, cells[k].options});
-                // The limits cells keep their frames: the pipelines' images must agree.
-                keep = keep || cells[k].images || cells[k].stopAfterFailure;
-                if (cells[k].maxFrameS > 0) cap = cap > 0 ? std::min(cap, cells[k].maxFrameS)
-                                                          : cells[k].maxFrameS;
+    Progress progress(cells, state.order, int(devices.size()));
+    state.progress = &progress;
+    state.summary = &summary;
+
+    // Hands finished rows to the sink in cell order, as far as every earlier cell is done
+    // (all: also past cells that never ran, at the end).
+    auto emit = [&](bool all) {
+        for (; state.emitted < state.order.size(); ++state.emitted) {
+            auto it = state.results.find(state.order[state.emitted]);
+            if (it == state.results.end()) {
+                if (all) continue;
+                return;
             }
-            progress.starting(run.front(), run.back() + 1);
-            auto t0 = std::chrono::steady_clock::now();
-            // A limits batch gets a context of its own: drivers keep memory per context (NVIDIA
-            // reserves private memory for the largest kernel it ran), and on the H100 that made
-            // a wavefront cell fail after the megakernel's B=11 cells, yet run in a new process.
-            std::optional<ClContext> own;
-            if (c.stopAfterFailure) own.emplace(cl.device(), options.sources);
-            std::vector<Measurement> got = measureCells(own ? *own : cl, scenes.at(c.scene), variants,
-                                                        c.warmup, c.repeats, c.countRays, keep, cap);
-            seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-            for (size_t r = 0; r < run.size(); ++r) ms[run[r] - i] = std::move(got[r]);
+            sink(it->second.row, it->second.image ? &*it->second.image : nullptr);
+            state.results.erase(it);
         }
-        double batchCost = 0;
-        for (size_t k : run) batchCost += cellCost(cells[k]);
-        // Frames of the same setting from every pipeline: they must agree (bit-identical by
-        // design), which catches a silent wrong image at a limit (tiling, launch splitting).
-        std::map<std::string, size_t> bySetting;
-        std::map<size_t, std::pair<std::string, double>> diff;  // cell -> (other pipeline, max |d|)
-        for (size_t k : run) {
-            const Measurement& m = ms[k - i];
-            if (!m.ok || !cells[k].stopAfterFailure || m.image.rgb.empty()) continue;
-            auto [it, fresh] = bySetting.emplace(cells[k].settingKey(), k);
-            if (fresh) continue;
-            double d = maxDifference(ms[it->second - i].image, m.image);
-            diff[k] = {cells[it->second].pipeline, d};
-            diff[it->second] = {cells[k].pipeline, d};
-        }
-        for (size_t k = i; k < j; ++k) {
-            const Measurement& m = ms[k - i];
-            nlohmann::json row;
-            if (!skipWhy[k - i].empty()) {
-                progress.skipped(k, skipWhy[k - i]);
-                ++summary.notRun;
-                row = rowJson(config, cells[k], m, device, sceneInfo.at(c.scene), skipWhy[k - i]);
-                sink(row, nullptr);
-                continue;
+    };
+
+    auto worker = [&](size_t w) {
+        ClContext& cl = *contexts[w];
+        nlohmann::json where = deviceJson(cl.device());
+        where["device_index"] = cl.device().index;
+        std::string tag = devices.size() > 1 ? " on d" + std::to_string(w) : "";
+        for (;;) {
+            size_t u;
+            {
+                std::lock_guard<std::mutex> hold(state.lock);
+                if (state.stop || state.nextUnit == units.size()) return;
+                u = state.nextUnit++;
             }
-            // The batch's time, shared out by the cost model (a 4K cell outweighs a 640x360 one).
-            progress.finished(k, seconds * cellCost(cells[k]) / batchCost, m);
-            ++(m.ok ? summary.measured : summary.failed);
-            row = rowJson(config, cells[k], m, device, sceneInfo.at(c.scene));
-            if (m.ok && cells[k].stopAfterFailure && !m.image.rgb.empty()) {
-                row["image_nonfinite"] = nonFinitePixels(m.image);
-                if (row["image_nonfinite"].get<long long>() > 0)
-                    std::fprintf(stderr, "    WARNING: %lld pixels are NaN or infinite\n",
-                                 row["image_nonfinite"].get<long long>());
-            }
-            if (auto it = diff.find(k); it != diff.end()) {
-                row["image_compared_with"] = it->second.first;
-                row["image_max_diff"] = it->second.second;
-                if (it->second.second != 0)
-                    std::fprintf(stderr, "    WARNING: %s and %s frames differ by up to %g\n",
-                                 cells[k].pipeline.c_str(), it->second.first.c_str(),
-                                 it->second.second);
-            }
-            if (cells[k].stopAfterFailure) {
-                if (!m.ok) {
-                    stops.push_back({cells[k], std::string("error: ") + failureKindName(m.failure)});
-                } else if (cells[k].maxFrameS > 0 && m.wallMs > cells[k].maxFrameS * 1e3) {
-                    char why[96];
-                    std::snprintf(why, sizeof why, "a frame took %.1f s, over max-frame-s %g",
-                                  m.wallMs / 1e3, cells[k].maxFrameS);
-                    stops.push_back({cells[k], why});
+            std::vector<Stop> stops;  // cells of this unit that failed or ran past max-frame-s
+            for (auto [i, j] : units[u].batches) {
+                std::vector<size_t> here;
+                for (size_t k = i; k < j; ++k)
+                    if (!options.skip.count(cells[k].key())) here.push_back(k);
+                if (here.empty()) continue;
+                // stop-after-failure: cells no smaller than one that stopped are recorded, not run.
+                std::vector<size_t> run;
+                std::map<size_t, std::string> skipWhy;
+                for (size_t k : here) {
+                    if (cells[k].stopAfterFailure) skipWhy[k] = skipReason(config, cells[k], stops);
+                    if (skipWhy[k].empty()) run.push_back(k);
                 }
+                if (!run.empty()) {
+                    std::lock_guard<std::mutex> hold(state.lock);
+                    if (state.stop) return;
+                    double predicted = 0;
+                    for (size_t k : run) predicted += progress.estimate(k);
+                    if (options.timeLimitS > 0 && state.started &&
+                        progress.elapsed() + predicted > options.timeLimitS) {
+                        std::fprintf(stderr, "\nsweep %s: stopping before %s, the time limit of "
+                                             "%s would pass\n",
+                                     config.name.c_str(), cells[run.front()].label().c_str(),
+                                     formatDuration(options.timeLimitS).c_str());
+                        summary.complete = false;
+                        state.stop = true;
+                        return;
+                    }
+                    state.started = true;
+                    progress.starting(run, tag);
+                }
+                const Cell& c = cells[i];
+                std::map<size_t, Measurement> ms;
+                double seconds = 0;
+                if (!run.empty()) {
+                    std::vector<Variant> variants;
+                    bool keep = false;
+                    double cap = 0;
+                    for (size_t k : run) {
+                        variants.push_back({cells[k].pipeline, cells[k].options});
+                        // The limits cells keep their frames: the pipelines' images must agree.
+                        keep = keep || cells[k].images || cells[k].stopAfterFailure;
+                        if (cells[k].maxFrameS > 0)
+                            cap = cap > 0 ? std::min(cap, cells[k].maxFrameS) : cells[k].maxFrameS;
+                    }
+                    auto t0 = std::chrono::steady_clock::now();
+                    // A limits batch gets a context of its own: drivers keep memory per context
+                    // (NVIDIA reserves private memory for the largest kernel it ran), and on the
+                    // H100 that made a wavefront cell fail after the megakernel's B=11 cells, yet
+                    // run in a new process.
+                    std::optional<ClContext> own;
+                    if (c.stopAfterFailure) own.emplace(cl.device(), options.sources);
+                    std::vector<Measurement> got =
+                        measureCells(own ? *own : cl, scenes.at(c.scene), variants, c.warmup,
+                                     c.repeats, c.countRays, keep, cap);
+                    seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+                    for (size_t r = 0; r < run.size(); ++r) ms[run[r]] = std::move(got[r]);
+                }
+                double batchCost = 0;
+                for (size_t k : run) batchCost += cellCost(cells[k]);
+                // Frames of the same setting from every pipeline: they must agree (bit-identical
+                // by design), which catches a silent wrong image at a limit (tiling, launch
+                // splitting).
+                std::map<std::string, size_t> bySetting;
+                std::map<size_t, std::pair<std::string, double>> diff;  // cell -> (other, max |d|)
+                for (size_t k : run) {
+                    const Measurement& m = ms[k];
+                    if (!m.ok || !cells[k].stopAfterFailure || m.image.rgb.empty()) continue;
+                    auto [it, fresh] = bySetting.emplace(cells[k].settingKey(), k);
+                    if (fresh) continue;
+                    double d = maxDifference(ms[it->second].image, m.image);
+                    diff[k] = {cells[it->second].pipeline, d};
+                    diff[it->second] = {cells[k].pipeline, d};
+                }
+                std::lock_guard<std::mutex> hold(state.lock);
+                for (size_t k : here) {
+                    Measurement& m = ms[k];
+                    nlohmann::json row;
+                    if (!skipWhy[k].empty()) {
+                        progress.skipped(k, skipWhy[k]);
+                        ++summary.notRun;
+                        row = rowJson(config, cells[k], m, where, sceneInfo.at(c.scene), skipWhy[k]);
+                        row["cell_index"] = k;
+                        state.results[k] = {row, std::nullopt};
+                        continue;
+                    }
+                    // The batch's time, shared out by the cost model (a 4K cell outweighs a
+                    // 640x360 one).
+                    progress.finished(k, seconds * cellCost(cells[k]) / batchCost, m, tag);
+                    ++(m.ok ? summary.measured : summary.failed);
+                    row = rowJson(config, cells[k], m, where, sceneInfo.at(c.scene));
+                    row["cell_index"] = k;
+                    if (m.ok && cells[k].stopAfterFailure && !m.image.rgb.empty()) {
+                        row["image_nonfinite"] = nonFinitePixels(m.image);
+                        if (row["image_nonfinite"].get<long long>() > 0)
+                            std::fprintf(stderr, "    WARNING: %lld pixels are NaN or infinite\n",
+                                         row["image_nonfinite"].get<long long>());
+                    }
+                    if (auto it = diff.find(k); it != diff.end()) {
+                        row["image_compared_with"] = it->second.first;
+                        row["image_max_diff"] = it->second.second;
+                        if (it->second.second != 0)
+                            std::fprintf(stderr, "    WARNING: %s and %s frames differ by up to %g\n",
+                                         cells[k].pipeline.c_str(), it->second.first.c_str(),
+                                         it->second.second);
+                    }
+                    if (cells[k].stopAfterFailure) {
+                        if (!m.ok) {
+                            stops.push_back({cells[k], std::string("error: ") + failureKindName(m.failure)});
+                        } else if (cells[k].maxFrameS > 0 && m.wallMs > cells[k].maxFrameS * 1e3) {
+                            char why[96];
+                            std::snprintf(why, sizeof why, "a frame took %.1f s, over max-frame-s %g",
+                                          m.wallMs / 1e3, cells[k].maxFrameS);
+                            stops.push_back({cells[k], why});
+                        }
+                    }
+                    Result& r = state.results[k];
+                    r.row = std::move(row);
+                    if (m.ok && cells[k].images) r.image = std::move(m.image);
+                }
+                emit(false);
             }
-            sink(row, m.ok && cells[k].images ? &m.image : nullptr);
         }
-        i = j;
+    };
+    // A worker that throws (the sink could not write, say) stops the others; the first error
+    // is rethrown here once they have finished.
+    auto guarded = [&](size_t w) {
+        try {
+            worker(w);
+        } catch (...) {
+            std::lock_guard<std::mutex> hold(state.lock);
+            if (!state.error) state.error = std::current_exception();
+            state.stop = true;
+        }
+    };
+    if (contexts.size() == 1) {
+        guarded(0);
+    } else {
+        std::vector<std::thread> threads;
+        for (size_t w = 0; w < contexts.size(); ++w) threads.emplace_back(guarded, w);
+        for (std::thread& t : threads) t.join();
     }
+    emit(true);
+    if (state.error) std::rethrow_exception(state.error);
     progress.done();
     summary.seconds = progress.elapsed();
     summary.meta["finished"] = utcNow();

@@ -1,6 +1,7 @@
-// rtlab bench — running a sweep on one device: loads the scenes, expands the cells, measures each
-// (bench/measure.h), shows a progress line with the cell and the time left, and hands every
-// result row to a sink as it is made, so that a run cut short keeps what it measured.
+// rtlab bench — running a sweep on one device or several: loads the scenes, expands the cells,
+// measures each (bench/measure.h), shows a progress line with the cell and the time left, and
+// hands every result row to a sink in cell order as soon as the cells before it are done, so
+// that a run cut short keeps what it measured.
 // `rtlab sweep` and `rtlab-bench --sweep` are two front ends of this one loop.
 #pragma once
 
@@ -12,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "bench/sweep_config.h"
+#include "bench/sweep_schedule.h"
 #include "core/kernel_sources.h"
 #include "core/scene_loader.h"
 
@@ -19,6 +21,10 @@ namespace rt::bench {
 
 struct SweepRunOptions {
     std::string device;                 // --device spec (empty: $RTLAB_DEVICE, else first GPU)
+    // --devices spec (bench/sweep_schedule.h): when set, one worker and context per device
+    // take work units from a shared queue; rows still reach the sink in cell order.
+    std::string devices;
+    Shard shard;                        // --shard i/N: only this share of the work units
     std::filesystem::path sceneDir;     // <scene>.json lives here; empty: scenes/ of the checkout
     ImageReader readImage;              // for cubemap faces
     KernelSources sources;

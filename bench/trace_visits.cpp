@@ -1,7 +1,7 @@
-// rtlab — the work one ray does in the wide BVH, counted on the host (see trace_visits.h). The
-// box test decodes the quantised boxes as the device does; the triangle test is Moller-Trumbore
-// in double, which may differ from the device's on grazing rays only, so the counts are the
-// device's up to those few rays.
+// rtlab — the work one ray does in the binary and the wide BVH, counted on the host (see
+// trace_visits.h). The box tests compute the entry distances as the device does (the wide one
+// decodes the quantised boxes); the triangle test is Moller-Trumbore in double, which may differ
+// from the device's on grazing rays only, so the counts are the device's up to those few rays.
 #include "bench/trace_visits.h"
 
 #include <algorithm>
@@ -52,7 +52,80 @@ void enter(const dev::WideNode& n, const BatchRay& r, const float inv[3], float 
     }
 }
 
+// Entry distance of a box, as Aabb_Enter computes it.
+float enter(const dev::BvhNode& n, const BatchRay& r, const float inv[3], float tMax) {
+    const float o[3] = {r.ox, r.oy, r.oz};
+    float near = 0.f, far = tMax;
+    for (int a = 0; a < 3; ++a) {
+        float t0 = ((&n.lo.x)[a] - o[a]) * inv[a], t1 = ((&n.hi.x)[a] - o[a]) * inv[a];
+        near = std::max(near, std::min(t0, t1));
+        far = std::min(far, std::max(t0, t1));
+    }
+    return near <= far ? near : INFINITY;
+}
+
+void invDir(const BatchRay& r, float inv[3]) {
+    const float d[3] = {r.dx, r.dy, r.dz};
+    for (int a = 0; a < 3; ++a)
+        inv[a] = 1.f / (std::fabs(d[a]) < 1e-20f ? std::copysign(1e-20f, d[a]) : d[a]);
+}
+
 }  // namespace
+
+TraversalCost binaryTraversalCost(const AccelData& data, const std::vector<BatchRay>& rays,
+                                  bool anyHit, size_t maxRays) {
+    TraversalCost cost;
+    if (data.bvh.empty() || rays.empty()) return cost;
+    size_t stride = std::max<size_t>(1, rays.size() / maxRays);
+    long long nodes = 0, pairs = 0, pops = 0, triangles = 0;
+    for (size_t i = 0; i < rays.size(); i += stride) {
+        const BatchRay& r = rays[i];
+        ++cost.rays;
+        float inv[3];
+        invDir(r, inv);
+        float best = r.tMax;
+        if (enter(data.bvh[0], r, inv, best) == INFINITY) {
+            ++nodes;  // the root's box, tested on its own
+            continue;
+        }
+        int stack[64];
+        float stackT[64];
+        int top = 0, index = 0;
+        for (bool done = false; !done;) {
+            const dev::BvhNode& n = data.bvh[index];
+            ++nodes;
+            if (n.count == 0) {
+                ++pairs;  // both children's records, one 64-byte fetch
+                float ta = enter(data.bvh[n.first], r, inv, best);
+                float tb = enter(data.bvh[n.first + 1], r, inv, best);
+                bool swap = tb < ta;
+                float tNear = swap ? tb : ta, tFar = swap ? ta : tb;
+                if (tNear != INFINITY) {
+                    if (tFar != INFINITY) stack[top] = swap ? n.first : n.first + 1, stackT[top++] = tFar;
+                    index = swap ? n.first + 1 : n.first;
+                    continue;
+                }
+            } else {
+                for (int p = n.first; p < n.first + n.count && !done; ++p) {
+                    ++triangles;
+                    double h = hitTriangle(data.triangles[p], r);
+                    if (h > 0 && h < best) best = float(h), done = anyHit;
+                }
+                if (done) break;
+            }
+            while (top > 0 && !(stackT[top - 1] < best)) --top;
+            if (top == 0) break;
+            index = stack[--top];
+            ++pops;  // a deferred node's record is loaded again
+        }
+    }
+    double n = double(cost.rays);
+    cost.nodes = double(nodes) / n;
+    cost.triangles = double(triangles) / n;
+    cost.bytes = (32.0 * double(cost.rays) + 64.0 * double(pairs) + 32.0 * double(pops)) / n +
+                 36 * cost.triangles;
+    return cost;
+}
 
 TraversalCost wideTraversalCost(const AccelData& data, const std::vector<BatchRay>& rays,
                                 bool anyHit, size_t maxRays) {
@@ -64,9 +137,7 @@ TraversalCost wideTraversalCost(const AccelData& data, const std::vector<BatchRa
         const BatchRay& r = rays[i];
         ++cost.rays;
         float inv[3];
-        const float d[3] = {r.dx, r.dy, r.dz};
-        for (int a = 0; a < 3; ++a)
-            inv[a] = 1.f / (std::fabs(d[a]) < 1e-20f ? std::copysign(1e-20f, d[a]) : d[a]);
+        invDir(r, inv);
         float best = r.tMax;
         int stack[64];
         float stackT[64];

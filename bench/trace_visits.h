@@ -1,5 +1,6 @@
-// rtlab — the work one ray does in the wide BVH (issue 18), counted on the host: node visits,
-// triangles tested and bytes fetched per ray, in the traversal order of core/cl/accel_wide.cl.
+// rtlab — the work one ray does in the binary and the wide BVH (issue 18), counted on the host:
+// node visits, triangles tested and bytes fetched per ray, in the traversal order of
+// core/cl/accel.cl (Bvh_Query) and core/cl/accel_wide.cl.
 // rtlab-trace-bench prints it beside the rays/s, so that a missed figure names its bound.
 #pragma once
 
@@ -11,11 +12,17 @@
 namespace rt {
 
 struct TraversalCost {
-    double nodes = 0;      // wide nodes visited per ray
+    double nodes = 0;      // nodes visited per ray
     double triangles = 0;  // triangle tests per ray
-    double bytes = 0;      // node records (64 B) and triangle vertices (36 B) read per ray
+    double bytes = 0;      // node records and triangle vertices (36 B) read per ray (wide: 64 B a node)
     size_t rays = 0;       // how many rays were followed (an even sample of the batch)
 };
+
+// Binary BVH: nodes are inner and leaf visits; bytes count the root record (32 B), each inner
+// node's pair of child records (64 B), each deferred node loaded again when popped (32 B) and
+// the triangles' vertices (36 B).
+TraversalCost binaryTraversalCost(const AccelData& bvh, const std::vector<BatchRay>& rays,
+                                  bool anyHit, size_t maxRays = 65536);
 
 TraversalCost wideTraversalCost(const AccelData& wide, const std::vector<BatchRay>& rays,
                                 bool anyHit, size_t maxRays = 65536);

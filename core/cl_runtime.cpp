@@ -1,6 +1,7 @@
 #include "core/cl_runtime.h"
 
 #include <pthread.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cctype>
@@ -9,6 +10,7 @@
 #include <fstream>
 #include <mutex>
 #include <sstream>
+#include <thread>
 
 #include "core/error.h"
 
@@ -309,8 +311,12 @@ cl::Program ClContext::program(const std::string& mainFile, const std::vector<st
             if (!bins.empty() && !bins[0].empty()) {
                 std::error_code ec;
                 std::filesystem::create_directories(dir, ec);
+                // One temporary file per process and thread: sweeps on several devices (and
+                // shards on one machine) build the same program at the same moment.
                 std::filesystem::path tmp = file;
-                tmp += ".tmp";
+                tmp += "." + std::to_string(getpid()) + "-" +
+                       std::to_string(std::hash<std::thread::id>()(std::this_thread::get_id())) +
+                       ".tmp";
                 std::ofstream out(tmp, std::ios::binary);
                 out.write(reinterpret_cast<const char*>(bins[0].data()), std::streamsize(bins[0].size()));
                 out.close();

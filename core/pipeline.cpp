@@ -67,6 +67,10 @@ void checkOptions(const Scene& scene, const RenderOptions& o) {
     range("--bounces", o.bounces, 0, RT_MAX_BOUNCE_LIMIT);
     range("--shadow-samples", o.shadowSamples, 1, RT_MAX_SHADOW_SAMPLES);
     range("--aa", o.aa, 1, 16);
+    if (o.rowBegin != 0 || o.rowEnd != 0) {  // set by front ends, never by a flag
+        range("row window (first row)", o.rowBegin, 0, o.height - 1);
+        range("row window (end row)", o.rowEnd, o.rowBegin + 1, o.height);
+    }
     if (!(o.shadowStrength >= 0.f && o.shadowStrength <= 1.f))
         throw Error("shadow strength must be in [0, 1]", FailureKind::InvalidOption);
     if (scene.lights.size() > RT_MAX_LIGHTS)
@@ -87,8 +91,8 @@ void checkPrivateTree(int branching, int bounces, const std::string& who, bool s
     while (fits > 0 && treePrivateBytes(branching, fits) > kPrivateTreeLimit) --fits;
     std::string msg = "--bounces " + std::to_string(bounces) + ": the " + who + " keeps " +
                       std::to_string(treeNodeCount(branching, bounces)) + " ray-tree nodes (" +
-                      std::to_string(need / 1024) + " KiB) in private memory per work-item, over the " +
-                      std::to_string(kPrivateTreeLimit / 1024) + " KiB limit; the highest bounce " +
+                      std::to_string(need / 1024) + " KiB) in private memory per work-item, over rtlab's " +
+                      std::to_string(kPrivateTreeLimit / 1024) + " KiB cap; the highest bounce " +
                       "limit that fits is " + std::to_string(fits);
     if (suggestWeighted) msg += " (or use --layout weighted)";
     throw Error(msg, FailureKind::PrivateTree);

@@ -5,6 +5,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
@@ -65,9 +66,18 @@ public:
     // (by address) and the frame size stay the same.
     virtual Image render(const Scene& scene, const RenderOptions& options) = 0;
     const FrameStats& stats() const { return stats_; }
+    // Progress of the frame being rendered: work done so far and the frame's total, in the
+    // pipeline's own units (rows x passes, pixels x samples), non-decreasing and ending at total.
+    // Pipelines that report nothing render as before; front ends draw bars from it.
+    using Progress = std::function<void(long long done, long long total)>;
+    void setProgress(Progress progress) { progress_ = std::move(progress); }
 
 protected:
+    void reportProgress(long long done, long long total) const {
+        if (progress_) progress_(done, total);
+    }
     FrameStats stats_;
+    Progress progress_;
 };
 
 // -D defines for a scene and its options: object kinds present, C, B, N, accuracy switches.
@@ -79,7 +89,10 @@ dev::RenderSettings makeSettings(const Scene& scene, const RenderOptions& option
 // Validates options against the scene and the shared limits; throws rt::Error naming the flag.
 void checkOptions(const Scene& scene, const RenderOptions& options);
 
-// Private memory the tree layout needs per work-item, and the most it may use.
+// Private memory the tree layout needs per work-item, and the most rtlab lets it use. The cap is
+// rtlab's own, not a limit devices report (OpenCL has no query for private memory per
+// work-item). A private array that large lives in off-chip memory anyway, where the weighted
+// layout needs none: past the cap, a clear error that names the highest B that fits.
 size_t treePrivateBytes(int branching, int bounces);
 constexpr size_t kPrivateTreeLimit = 256 * 1024;
 // Throws when the tree of N nodes does not fit kPrivateTreeLimit, naming the bounce limit that

@@ -64,7 +64,7 @@ public:
         checkOptions(scene, options);
         stats_ = {};
         auto t0 = std::chrono::steady_clock::now();
-        Image image = renderReference(scene, options);
+        Image image = renderReference(scene, options, 0, progress_);
         stats_.hostMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
                             .count();
         return image;

@@ -18,6 +18,7 @@ struct PipelineSupport {
     bool layouts = false;     // --layout tree|weighted changes how it keeps its rays
     bool adaptiveAa = false;  // --adaptive supersamples only edges
     bool tiling = false;      // splits a frame into row tiles when its memory does not fit
+    bool rowWindow = false;   // renders only RenderOptions' rows [rowBegin, rowEnd) when asked
 };
 
 struct PipelineInfo {

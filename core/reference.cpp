@@ -445,17 +445,23 @@ class Tracer {
     refbvh::Bvh bvh_;
 };
 
-// Runs fn(row) for every row, rows handed out by an atomic counter.
-template <class Fn>
-void forEachRow(int height, int threads, const Fn& fn) {
-    std::atomic<int> next{0};
-    auto worker = [&] {
-        for (int y = next++; y < height; y = next++) fn(y);
+// Runs fn(row) for every row, rows handed out by an atomic counter; after each of its own rows
+// the calling thread calls done(rows finished by all threads).
+template <class Fn, class Done>
+void forEachRow(int height, int threads, const Fn& fn, const Done& done) {
+    std::atomic<int> next{0}, finished{0};
+    auto worker = [&](bool report) {
+        for (int y = next++; y < height; y = next++) {
+            fn(y);
+            int rows = ++finished;
+            if (report) done(rows);
+        }
     };
     std::vector<std::thread> pool;
-    for (int i = 1; i < threads; ++i) pool.emplace_back(worker);
-    worker();
+    for (int i = 1; i < threads; ++i) pool.emplace_back(worker, false);
+    worker(true);
     for (std::thread& t : pool) t.join();
+    done(height);
 }
 
 void store(Image& image, int x, int y, dvec3 c) {
@@ -465,7 +471,8 @@ void store(Image& image, int x, int y, dvec3 c) {
 
 }  // namespace
 
-Image renderReference(const Scene& scene, const RenderOptions& options, int threads) {
+Image renderReference(const Scene& scene, const RenderOptions& options, int threads,
+                      const std::function<void(long long, long long)>& progress) {
     if (threads <= 0) threads = int(std::max(1u, std::thread::hardware_concurrency()));
     threads = std::min(threads, std::max(1, options.height));
     const Tracer tracer(scene, options);
@@ -481,17 +488,26 @@ Image renderReference(const Scene& scene, const RenderOptions& options, int thre
         return sum / double(n * n);
     };
 
-    if (!options.adaptiveAa || n == 1) {
+    // Rows x passes; a row is reported once, however many threads finish rows meanwhile.
+    const bool adaptive = options.adaptiveAa && n > 1;
+    const long long total = (long long)(options.height) * (adaptive ? 2 : 1);
+    long long reported = 0, passStart = 0;
+    auto done = [&](int rows) {
+        if (progress && passStart + rows > reported) progress(reported = passStart + rows, total);
+    };
+    if (!adaptive) {
         forEachRow(options.height, threads, [&](int y) {
             for (int x = 0; x < options.width; ++x) store(image, x, y, fullGrid(x, y));
-        });
+        }, done);
         return image;
     }
 
     // Section 11: centre samples, then the full grid where a 4-neighbour differs by > 0.1.
     forEachRow(options.height, threads, [&](int y) {
-        for (int x = 0; x < options.width; ++x) store(image, x, y, tracer.pixel(x, y, 0, 0.5, 0.5));
-    });
+        for (int x = 0; x < options.width; ++x)
+            store(image, x, y, tracer.pixel(x, y, 0, 0.5, 0.5));
+    }, done);
+    passStart = options.height;
     const Image centre = image;
     auto differs = [&](int x, int y, int nx, int ny) {
         if (nx < 0 || ny < 0 || nx >= centre.width || ny >= centre.height) return false;
@@ -507,7 +523,7 @@ Image renderReference(const Scene& scene, const RenderOptions& options, int thre
                 differs(x, y, x, y + 1))
                 store(image, x, y, fullGrid(x, y));
         }
-    });
+    }, done);
     return image;
 }
 

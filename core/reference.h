@@ -2,6 +2,7 @@
 // plain recursion, on every core. It is the accuracy oracle for both OpenCL pipelines.
 #pragma once
 
+#include <functional>
 #include <optional>
 
 #include <glm/glm.hpp>
@@ -12,7 +13,10 @@
 namespace rt {
 
 // Renders the scene; threads = 0 uses std::thread::hardware_concurrency().
-Image renderReference(const Scene& scene, const RenderOptions& options, int threads = 0);
+// progress, when set, is called on the calling thread with rows done (over every pass) and the
+// total, ending at the total.
+Image renderReference(const Scene& scene, const RenderOptions& options, int threads = 0,
+                      const std::function<void(long long done, long long total)>& progress = {});
 
 // Building blocks, exposed for the unit tests. Directions are unit length.
 namespace ref {

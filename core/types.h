@@ -164,8 +164,14 @@ typedef struct RenderSettings {
 #define RT_KIND_TRIANGLE 3
 
 // Node flags.
-#define RT_NODE_TRACED 1u  // this slot holds a traced ray (cleared by the reset kernel)
+#define RT_NODE_TRACED 1u  // this slot holds a traced ray (trees in private memory; see below)
 #define RT_NODE_INSIDE 2u  // the ray hit the surface from inside the object
+
+// The report's wavefront (wavefront/tree) keeps its global tree's "traced" flags apart from the
+// Node payloads, one bit per slot: RT_TRACED_WORDS(N) 32-bit words per pixel. Its reset kernel
+// then clears N/8 bytes a pixel rather than a byte in every 48-byte node, and its image kernel
+// reads a payload only where the bit is set; the payload's own RT_NODE_TRACED is not used there.
+#define RT_TRACED_WORDS(nodes) (((nodes) + 31) / 32)
 
 // One traced ray of a per-pixel ray tree, 48 bytes:
 //   point    12  hit point (unused on a miss)

@@ -1,5 +1,6 @@
 #include "megakernel/megakernel.h"
 
+#include <algorithm>
 #include <chrono>
 
 #include "core/error.h"
@@ -57,15 +58,24 @@ Image MegakernelPipeline::render(const Scene& scene, const RenderOptions& o) {
     Image out(o.width, o.height);
     std::string key = std::to_string(o.width) + "x" + std::to_string(o.height);
     for (const std::string& d : defines(scene, o)) key += " " + d;
+    // A row window has a profile of its own: the planner's is by row from the first one rendered.
+    const int first = o.rowBegin, last = o.lastRow();
+    if (first != 0 || last != o.height)
+        key += " rows " + std::to_string(first) + "-" + std::to_string(last);
     // Part of a row is launched in steps of the work-group width, one work-group row high.
     const Launch rowShape = launch2d(cl_.device(), 1, 1);
     const int colStep = int(rowShape.local[0]);
     planner_.begin(o.maxLaunchMs, key + (o.adaptiveAa ? " adaptive" : ""), o.width, colStep);
-    // One pass over the frame in tiles sized by the planner (whole rows, or columns of one row
-    // when a row alone would run past --max-launch-ms); kernel args after the scene's.
-    auto pass = [&](cl::Kernel& kernel, const char* name) {
-        for (int row0 = 0; row0 < o.height;) {
-            LaunchTile tile = planner_.next(o.height - row0);
+    const bool adaptive = o.adaptiveAa && o.aa > 1;
+    // Progress in rows x passes; the adaptive centres cover one row more on each side.
+    const int centreFirst = std::max(0, first - 1), centreLast = std::min(o.height, last + 1);
+    const long long total = (last - first) + (adaptive ? centreLast - centreFirst : 0);
+    long long done = 0;
+    // One pass over rows [from, to) in tiles sized by the planner (whole rows, or columns of one
+    // row when a row alone would run past --max-launch-ms); kernel args after the scene's.
+    auto pass = [&](cl::Kernel& kernel, const char* name, int from, int to) {
+        for (int row0 = from; row0 < to;) {
+            LaunchTile tile = planner_.next(to - row0);
             settings.rowOffset = row0;
             scene_->setArgs(kernel, settings);
             cl::Event e;
@@ -84,26 +94,31 @@ Image MegakernelPipeline::render(const Scene& scene, const RenderOptions& o) {
             planner_.record(tile, ms);
             stats_.addKernel(name, ms);
             ++stats_.launches;
-            if (!tile.partialRow() || tile.col0 + tile.cols >= o.width) row0 += tile.rows;
+            if (tile.partialRow() && tile.col0 + tile.cols < o.width) continue;  // row goes on
+            row0 += tile.rows;
+            reportProgress(done += tile.rows, total);
         }
     };
     try {
         if (o.countRays) scene_->resetRayCounts(cl_.queue());
-        if (o.adaptiveAa && o.aa > 1) {
+        if (adaptive) {
             // Every centre first: an edge test reads the neighbouring rows' centres.
             cl::Kernel centers(program, "Megakernel_RenderCenters");
             centers.setArg(DeviceScene::kFirstKernelArg, centers_);
-            pass(centers, "centers");
+            pass(centers, "centers", centreFirst, centreLast);
             cl::Kernel edges(program, "Megakernel_RenderEdges");
             edges.setArg(DeviceScene::kFirstKernelArg, centers_);
             edges.setArg(DeviceScene::kFirstKernelArg + 1, image_);
-            pass(edges, "edges");
+            pass(edges, "edges", first, last);
         } else {
             cl::Kernel kernel(program, "Megakernel_Render");
             kernel.setArg(DeviceScene::kFirstKernelArg, image_);
-            pass(kernel, "megakernel");
+            pass(kernel, "megakernel", first, last);
         }
-        cl_.queue().enqueueReadBuffer(image_, CL_TRUE, 0, bytes, out.rgb.data());
+        const size_t rowBytes = size_t(o.width) * 3 * sizeof(float);
+        cl_.queue().enqueueReadBuffer(image_, CL_TRUE, size_t(first) * rowBytes,
+                                      size_t(last - first) * rowBytes,
+                                      out.rgb.data() + size_t(first) * o.width * 3);
         if (o.countRays) {
             stats_.rays = scene_->readRayCounts(cl_.queue());
             stats_.raysCounted = true;
@@ -128,7 +143,7 @@ void registerMegakernel(PipelineRegistry& registry) {
     p.name = "mega";
     p.title = "megakernel";
     p.description = "one kernel launch per frame; each work-item keeps its rays in private memory";
-    p.supports = {.layouts = true, .adaptiveAa = true, .tiling = false};
+    p.supports = {.layouts = true, .adaptiveAa = true, .tiling = false, .rowWindow = true};
     p.make = [](ClContext* cl) { return std::make_unique<MegakernelPipeline>(*cl); };
     registry.add(std::move(p));
 }

@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
-# Runs on the GPU machine, from the repository root, as carry/gpu-sweep/run.sh (copied there by
-# `scripts/gpu-sweep.sh prepare` beside rtlab-bench, its libraries, the scenes and the sweep).
-# Finds NVIDIA's OpenCL, runs the sweep under a time limit, packs the kept frames, and runs a few
-# Google Benchmark cells. Everything it leaves in $OUT comes back; log.txt holds its output.
+# Runs on the GPU host as carry/gpu-sweep/run.sh (made by `scripts/gpu-sweep.sh prepare` beside
+# rtlab-bench, its libraries, the scenes and the sweep; copied there with them). Finds NVIDIA's
+# OpenCL, runs the sweep under a time limit, packs the kept frames, and runs a few Google
+# Benchmark cells. It writes to $OUT (default ./out), which goes back for `scripts/gpu-sweep.sh
+# import`; log.txt holds its output. RTLAB_GPU_DEVICES=all (or a list) runs the cells on several
+# GPUs at once; RTLAB_SHARD=i/N runs one share of the sweep (one machine or array task of N).
 set -uo pipefail
 C=$(cd "$(dirname "$0")" && pwd)
 OUT=${OUT:-$PWD/out}
@@ -10,6 +12,8 @@ mkdir -p "$OUT"
 SWEEP=$(cat "$C/SWEEP")
 LIMIT=${RTLAB_GPU_TIME_LIMIT:-480}
 DEVICE=${RTLAB_GPU_DEVICE:-gpu}  # "cpu" rehearses the whole run on PoCL
+DEVICES=${RTLAB_GPU_DEVICES:-}  # "all" or "0,1": the sweep on several devices at once
+SHARD=${RTLAB_SHARD:-}          # "i/N": this machine's share of the sweep
 GBENCH_S=${RTLAB_GPU_GBENCH_S:-60}  # time for the Google Benchmark cells at the end; 0 skips them
 export LD_LIBRARY_PATH=$C/bin${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}
 export RTLAB_CACHE_DIR=/tmp/rtlab-cache
@@ -58,11 +62,14 @@ main() {
 
     local resume status w=/tmp/rtlab-sweep
     resume=$(ls "$C"/resume/*.jsonl 2>/dev/null | paste -sd, -)
-    echo "== sweep $SWEEP (stops itself after ${LIMIT} s${resume:+; skips what $resume measured})"
+    local where=(--device "$DEVICE")
+    [ -z "$DEVICES" ] || where=(--devices "$DEVICES")
+    echo "== sweep $SWEEP${SHARD:+, shard $SHARD} (stops itself after ${LIMIT} s${resume:+; skips what $resume measured})"
     rm -rf "$w"
     # The hard stop still keeps the rows measured so far: rows.jsonl is written cell by cell.
     timeout $((LIMIT + 60)) "$C/bin/rtlab-bench" --sweep "$C/sweeps/$SWEEP" --out "$w" \
-        --device "$DEVICE" --scene-dir "$C/scenes" --time-limit "$LIMIT" ${resume:+--resume "$resume"}
+        "${where[@]}" --scene-dir "$C/scenes" --time-limit "$LIMIT" ${resume:+--resume "$resume"} \
+        ${SHARD:+--shard "$SHARD"}
     status=$?
     cp "$w/sweep.json" "$w/rows.jsonl" "$OUT/"
     echo "== packing frames"

@@ -1,27 +1,33 @@
 #!/usr/bin/env bash
-# Runs a sweep (bench/sweeps/full by default) on a GPU machine that has no OpenImageIO, such as
-# the H100 of the device tool, and turns what comes back into results/<device-slug>/ here.
+# Runs a sweep (bench/sweeps/full by default) on a GPU host that has no OpenImageIO (any Linux
+# machine with an OpenCL GPU driver: rtlab-bench and its libraries travel with it), and turns
+# what comes back into results/<device-slug>/ here.
 #
 #   scripts/gpu-sweep.sh prepare [SWEEP] [--resume DIR]...
 #       Builds rtlab and rtlab-bench from a clean clone of HEAD (so every result names an exact
 #       commit) in build-gpu/, and fills carry/gpu-sweep/ (git-ignored) with rtlab-bench, the
 #       libraries it needs beside it (libbenchmark.so.1debian, libtinyobjloader; not libOpenCL.so.1:
-#       the GPU machine's own ICD loader is used),
+#       the GPU host's own ICD loader is used),
 #       the scenes with .pfm cubemap faces, the sweep file and run.sh. --resume DIR (a folder
-#       fetched from an earlier run) makes the new run skip the cells that one measured.
+#       copied back from an earlier run) makes the new run skip the cells that one measured.
 #   scripts/gpu-sweep.sh command
-#       Prints the one device-tool call that runs it.
+#       Prints the steps below.
 #   scripts/gpu-sweep.sh import DIR [DIR...]
-#       Unpacks each fetched folder (images.tar.xz or its parts) and runs
+#       Unpacks each copied-back folder (images.tar.xz or its parts) and runs
 #       `rtlab sweep SWEEP --import ...` from the measured commit: accuracy against the converged
 #       CPU reference through OpenImageIO, CSV, JSON, the five charts and README.md into
 #       results/<device-slug>/, with the Google Benchmark JSON and the device log beside them.
+#       Several folders: runs continued with --resume, or the shards of one sweep, merged in the
+#       sweep's cell order.
 #
-# The device-tool call (one command, under its 10-minute limit; the sweep stops itself after
-# RTLAB_GPU_TIME_LIMIT seconds, 480 by default, and `prepare --resume` continues it):
-#   run(command="bash carry/gpu-sweep/run.sh", carry=["carry/gpu-sweep"], timeout_s=600)
-# What comes back ($OUT, at most 8 files): sweep.json, rows.jsonl, log.txt, gbench.json and
-# images.tar.xz (or images.tar.xz.part-aa, -ab, ... past 15 MiB).
+# On the GPU host (from the folder that holds carry/gpu-sweep/):
+#   OUT=/path/to/out bash carry/gpu-sweep/run.sh
+# The sweep stops itself after RTLAB_GPU_TIME_LIMIT seconds (480 by default; a session or job
+# with a time limit sets it below that) and `prepare --resume` continues it. RTLAB_GPU_DEVICES=all
+# (or 0,1) spreads the cells over the host's GPUs; RTLAB_SHARD=i/N runs share i of N, one per
+# machine or array task (bench/sweeps/README.md). What it writes to $OUT (at most 8 files):
+# sweep.json, rows.jsonl, log.txt, gbench.json and images.tar.xz (or images.tar.xz.part-aa, -ab,
+# ... past 15 MiB). Copy that folder back here and import it.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$PWD
@@ -86,13 +92,17 @@ prepare() {
 
 command_help() {
     cat <<'TEXT'
-Run it with the device tool (one call; the sweep stops itself before the 10-minute limit):
-  run(command="bash carry/gpu-sweep/run.sh", carry=["carry/gpu-sweep"], timeout_s=600)
-then, with the folder the call's files landed in (files_at):
-  scripts/gpu-sweep.sh import FILES_AT
+1. Copy carry/gpu-sweep/ to the GPU host, e.g.
+     rsync -a carry/gpu-sweep HOST:rtlab/carry/
+2. Run it there (the sweep stops itself after RTLAB_GPU_TIME_LIMIT seconds, 480 by default):
+     ssh HOST 'cd rtlab && OUT=$PWD/out bash carry/gpu-sweep/run.sh'
+   Several GPUs on the host: RTLAB_GPU_DEVICES=all. Several hosts or an array job: RTLAB_SHARD=i/N
+   in task i (e.g. RTLAB_SHARD=$SLURM_ARRAY_TASK_ID/N), each task with its own OUT.
+3. Copy the output folder back and import it (every shard's folder at once):
+     rsync -a HOST:rtlab/out/ /tmp/gpu-out/ && scripts/gpu-sweep.sh import /tmp/gpu-out
 If log.txt says the time limit stopped the sweep, continue it, then import both:
-  scripts/gpu-sweep.sh prepare full --resume FILES_AT     (and the same run call)
-  scripts/gpu-sweep.sh import FILES_AT FILES_AT_2
+  scripts/gpu-sweep.sh prepare full --resume /tmp/gpu-out     (copy and run again, into out-2)
+  scripts/gpu-sweep.sh import /tmp/gpu-out /tmp/gpu-out-2
 TEXT
 }
 
@@ -101,7 +111,7 @@ json_field() {
 }
 
 import() {
-    [ $# -ge 1 ] || die "import needs the fetched folder(s)"
+    [ $# -ge 1 ] || die "import needs the copied-back folder(s)"
     [ -x "$BUILD/build/bin/rtlab" ] || die "run prepare first (it builds $BUILD/build/bin/rtlab)"
     local staged=() n=0 stage sweep slug
     for dir in "$@"; do

@@ -24,8 +24,11 @@ def clean_meta(meta, rows=None):
         m["config_file"] = "bench/sweeps/" + os.path.basename(m["config_file"])
     if m.get("imported_from"):
         n = len(m["imported_from"].split(" + "))
-        m["imported_from"] = (f"{n} device runs, each continuing the one before"
-                              if n > 1 else "one device run")
+        if m.get("shards"):  # --shard i/N runs, merged in cell order (and continued, if n > N)
+            m["imported_from"] = f"{n} device runs: shards {', '.join(m['shards'])}"
+        else:
+            m["imported_from"] = (f"{n} device runs, each continuing the one before"
+                                  if n > 1 else "one device run")
     return m
 
 

@@ -12,7 +12,8 @@ time-against-bounce-limit and acceleration tables, the Pareto front of speed aga
 failed cells, and the charts.
 A folder may hold several sweeps of one device: the README covers them all, the `limits` sweep
 (bench/sweeps/limits) in its own section (per pipeline the last setting that ran, its time and
-memory, and how the first failing one failed).
+memory, and how the first failing one failed). Where rtlab-roofline's roofline.json lies in the
+folder, each frame is set against its memory floor (scripts/readme_floor.py).
 Every figure comes from the JSON; the header says which device, driver, commit and settings.
 
 The pipelines, their titles and layouts come from the rows (sweep_rows.py), so a new pipeline
@@ -30,6 +31,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from readme_format import (accel_label, clean_meta, geomean, ms, size_label,  # noqa: E402
                            table, tree_text)
 from readme_crossover import crossover_section  # noqa: E402
+from readme_floor import floor_section  # noqa: E402
 from readme_limits import limits_section, limits_summary  # noqa: E402
 from sweep_rows import Series, by_setting, failure, fastest, in_group  # noqa: E402
 
@@ -311,8 +313,9 @@ def full_doc(main_path, data, here, limit_docs):
             "tile's tree is what is allocated.",
             "",
             bounce_table(rows),
-            "",
-            "## Acceleration structures",
+            ""]
+    doc += floor_section(rows, Series, here)
+    doc += ["## Acceleration structures",
             "",
             accel_table(rows),
             "",

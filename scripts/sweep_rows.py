@@ -24,7 +24,9 @@ FAILURES = {"private_tree": "private ray tree over the per-work-item limit",
 FAILURES_SHORT = {"private_tree": "private tree > limit", "tree_row": "tree row > budget",
                   "out_of_memory": "out of memory", "opencl": "OpenCL error",
                   "invalid_option": "invalid option", "skipped": "not run", "other": "error"}
-NODE_BYTES = 48  # sizeof(RayNode) in core/types.h, for rows that do not record it
+# Rows written before issue 14 do not record their tree's bytes per pixel; their tree had one
+# 48-byte node (flags inside) per slot and nothing else. Newer rows carry tree_pixel_bytes.
+LEGACY_NODE_BYTES = 48
 
 
 def budget_label(b):
@@ -117,12 +119,12 @@ def memory_tiles(r):
 
 def tree_sizes(r):
     """(bytes of one tile's tree, bytes of the whole frame's tree, tiles) of a row with a global
-    ray tree, else None. The whole tree is width x height x nodes x node size; the tile is what
-    was allocated (tree_bytes)."""
+    ray tree, else None. The whole tree is width x height x the tree's bytes per pixel (payloads
+    and flags, as the pipeline recorded them); the tile is what was allocated (tree_bytes)."""
     if not r.get("tree_bytes") or not r.get("tree_nodes"):
         return None
-    node = r.get("node_bytes") or r.get("extras", {}).get("node_bytes") or NODE_BYTES
-    whole = r["width"] * r["height"] * r["tree_nodes"] * node
+    pixel = r.get("extras", {}).get("tree_pixel_bytes") or r["tree_nodes"] * LEGACY_NODE_BYTES
+    whole = r["width"] * r["height"] * pixel
     return r["tree_bytes"], whole, memory_tiles(r)
 
 

@@ -89,6 +89,14 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"render scenes/spheres.json --shadow-samples 1000 -o /tmp/x.png",
                 "--shadow-samples 1000"},
         BadCase{"render scenes/spheres.json --pipeline gpu -o /tmp/x.png", "--pipeline"},
+        BadCase{"sweep quick --no-charts --out /tmp/x --devices nosuchdevice",
+                "--devices nosuchdevice: 'nosuchdevice': no device name"},
+        BadCase{"sweep quick --no-charts --out /tmp/x --devices 0,97", "--devices 0,97: 97: no such"},
+        BadCase{"sweep quick --no-charts --out /tmp/x --device 0 --devices 0",
+                "--device and --devices: give one"},
+        BadCase{"sweep quick --no-charts --out /tmp/x --shard 0/0", "--shard 0/0: N must be"},
+        BadCase{"sweep quick --no-charts --out /tmp/x --shard 3/2", "--shard 3/2: i must be less"},
+        BadCase{"sweep quick --no-charts --out /tmp/x --shard x/y", "--shard x/y: 'x' is not"},
         BadCase{"render scenes/spheres.json --device 97 -o /tmp/x.png", "--device 97"},
         BadCase{"render scenes/spheres.json --device nosuchdevice -o /tmp/x.png", "nosuchdevice"},
         BadCase{"render scenes/spheres.json -o /no/such/dir/x.png", "/no/such/dir"},
@@ -195,3 +203,50 @@ TEST(Cli, HelpExplainsEveryRenderFlag) {
 }
 
 }  // namespace
+
+// Shards of a sweep measured by rtlab-bench (as on the machines of an array job) merge through
+// `rtlab sweep --import` into one set in the sweep's cell order, kept frames scored on the rows
+// they belong to; one shard alone is imported as an incomplete set (issue 16).
+TEST(Cli, ShardsImportIntoOneSetInCellOrder) {
+    std::string bench = std::string(RTLAB_BIN_DIR) + "/rtlab-bench";
+    if (!std::filesystem::exists(bench)) GTEST_SKIP() << "rtlab-bench not built";
+    std::filesystem::path dir = ::testing::TempDir() + "cli_shards_" + std::to_string(getpid());
+    std::filesystem::remove_all(dir);
+    std::filesystem::create_directories(dir);
+    std::ofstream(dir / "tiny") << "repeats = 1\nwarmup = 0\ncount-rays = no\n"
+                                   "reference-bounces = 2\nreference-shadow-samples = 1\n"
+                                   "reference-aa = 1\n"
+                                   "[bounces]\nscenes = spheres cornell\npipelines = mega wave\n"
+                                   "sizes = 16x12\nbounces = 1 2\n"
+                                   "[accuracy]\nscenes = spheres\npipelines = queue\nsizes = 16x12\n"
+                                   "bounces = 2\nimages = yes\n";
+    for (int i = 0; i < 2; ++i) {
+        std::string cmd = bench + " --sweep=" + (dir / "tiny").string() + " --out=" +
+                          (dir / ("s" + std::to_string(i))).string() + " --shard=" +
+                          std::to_string(i) + "/2 2>/dev/null";
+        ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+    }
+    auto load = [&](const char* out) {
+        std::ifstream f(dir / out / "tiny.json");
+        return nlohmann::json::parse(f);
+    };
+    Result r = run("sweep " + (dir / "tiny").string() + " --import " + (dir / "s1").string() + " " +
+                   (dir / "s0").string() + " --out " + (dir / "merged").string() + " --no-charts");
+    ASSERT_EQ(r.status, 0) << r.err;
+    nlohmann::json set = load("merged");
+    ASSERT_EQ(set["rows"].size(), 9u);  // 2 scenes x 2 pipelines x 2 bounce limits, + 1
+    for (size_t i = 0; i < 9; ++i) EXPECT_EQ(set["rows"][i]["cell_index"], i);
+    EXPECT_EQ(set["rows"][8]["pipeline"], "queue");
+    EXPECT_TRUE(set["rows"][8].contains("rmse"));  // its frame followed it
+    for (size_t i = 0; i < 8; ++i) EXPECT_FALSE(set["rows"][i].contains("rmse")) << i;
+    EXPECT_EQ(set["meta"]["shards"], nlohmann::json({"0/2", "1/2"}));
+    EXPECT_EQ(set["meta"]["complete"], true);
+    EXPECT_EQ(set["meta"]["cells"].get<double>(), 9);
+
+    r = run("sweep " + (dir / "tiny").string() + " --import " + (dir / "s0").string() + " --out " +
+            (dir / "half").string() + " --no-charts");
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_NE(r.err.find("1 of 2 shards imported"), std::string::npos) << r.err;
+    EXPECT_EQ(load("half")["meta"]["complete"], false);
+    std::filesystem::remove_all(dir);
+}

@@ -310,7 +310,7 @@ TEST(Stability, RayTreeAboveMaxAllocIsTiledOrRefusedBeforeAllocation) {
     RenderOptions o = scene.defaults;
     o.width = 64;
     o.height = 48;
-    o.bounces = 5;  // 63 nodes, 193,536 B per row: 21 rows per tile
+    o.bounces = 5;  // 63 nodes and 2 flag words, 194,048 B per row: 21 rows per tile
     WavefrontPipeline tiled(small), whole(test::device());
     Image a = tiled.render(scene, o), b = whole.render(scene, o);
     EXPECT_EQ(tiled.stats().tiles, 3);
@@ -319,10 +319,10 @@ TEST(Stability, RayTreeAboveMaxAllocIsTiledOrRefusedBeforeAllocation) {
 
     size_t before = small.allocatedBytes();
     o.width = 4096;
-    o.bounces = 10;  // 2,047 nodes: one row is 402 MB
+    o.bounces = 10;  // 2,047 nodes: one row is 404 MB
     try {
         tiled.render(scene, o);
-        FAIL() << "a 402 MB row rendered under a 4 MiB limit";
+        FAIL() << "a 404 MB row rendered under a 4 MiB limit";
     } catch (const Error& e) {
         std::string msg = e.what();
         EXPECT_NE(msg.find("one row of the wavefront ray tree"), std::string::npos) << msg;
@@ -350,7 +350,7 @@ TEST(Stability, RayTreeAboveMaxAllocIsTiledOrRefusedBeforeAllocation) {
     const size_t maxAlloc = test::device().device().maxAlloc;
     int fitting = 0;
     for (int bounces = 1; bounces <= 11; ++bounces) {
-        const size_t rowBytes = size_t(16384) * treeNodeCount(2, bounces) * sizeof(dev::Node);
+        const size_t rowBytes = size_t(16384) * WavefrontPipeline::pixelBytes(2, bounces);
         if (rowBytes <= maxAlloc) {
             ++fitting;
             int rows = WavefrontPipeline::tileRows(16384, 16384, 2, bounces, maxAlloc, "max");

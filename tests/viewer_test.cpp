@@ -15,6 +15,7 @@
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <thread>
+#include <utility>
 #include <unistd.h>
 
 #include "image/compare.h"
@@ -211,6 +212,67 @@ TEST_F(Viewer, AnimationMovesTheFirstSphereInBothPipelines) {
     expectSame(shot, expected, 0, shot.width, "frame 16 of the orbit");
 }
 
+TEST_F(Viewer, SlowFrameComesInPiecesAndAKeyAtAPieceRestartsIt) {
+    // 16-row pieces of a 240-row frame: 15 pieces. '+' pressed once piece 3 is on screen must
+    // reach the render thread before the frame ends (the thread waits for each piece to be
+    // shown), so the frame restarts with one bounce more, and --frames 1 ends on that frame.
+    const std::string scene = "scenes/spheres.json";
+    std::string shotPath = privateDir("pieces") + "shot.png";
+    Result r = run(kXvfb + kBin + "/rtlab-view " + scene +
+                   " --bounces 2 --piece-rows 16 --frames 1 --keys 1.3:+ --no-overlay --scale 1"
+                   " --screenshot " + shotPath);
+    ASSERT_EQ(r.status, 0) << r.out << r.err;
+    EXPECT_NE(r.out.find("the last in 15 pieces, 1 restarted"), std::string::npos) << r.out;
+    std::string expected = privateDir("pieces") + "b3.png";
+    Result render = run(kBin + "/rtlab render " + scene + " --bounces 3 -o " + expected);
+    ASSERT_EQ(render.status, 0) << render.err;
+    rt::Image shot = rt::readImage(shotPath);
+    expectSame(shot, rt::readImage(expected), 0, shot.width, "the restarted frame, bounce limit 3");
+}
+
+TEST_F(Viewer, BruteForceOnABigMeshAsksFirst) {
+    // The knot's 12,800 triangles x 320x240 pixels x 4 rays = 3.9e9 tests a frame. From wide, B
+    // asks about none; M answers "skip" (to grid) and is used up; B, B reach wide again; B asks,
+    // B confirms none; B asks about bv. --frames 1: the keys come after frame 1, so nothing
+    // renders with brute force.
+    Result r = run(kXvfb + kBin + "/rtlab-view scenes/models/knot.obj --accel wide --frames 1 " +
+                   "--keys 1:BMBBBBB --no-overlay --scale 1");
+    ASSERT_EQ(r.status, 0) << r.out << r.err;
+    const std::string askNone = "accel none tests every ray against all 12800 triangles, 3.9e+09";
+    size_t at = r.out.find(askNone);
+    ASSERT_NE(at, std::string::npos) << r.out;
+    for (const std::string& next : {std::string("skipped brute force, accel grid"), askNone,
+                                    std::string("accel none, as confirmed"),
+                                    std::string("accel bv tests every ray that enters a mesh's "
+                                                "bounds against all its triangles (12800)")}) {
+        at = r.out.find(next, at + 1);
+        ASSERT_NE(at, std::string::npos) << "no '" << next << "' in order in:\n" << r.out;
+    }
+}
+
+TEST_F(Viewer, BruteForceOnASmallSceneSwitchesAtOnce) {
+    Result r = run(kXvfb + kBin + "/rtlab-view scenes/spheres.json --accel wide --frames 1 " +
+                   "--keys 1:B --no-overlay --scale 1");
+    ASSERT_EQ(r.status, 0) << r.out << r.err;
+    EXPECT_EQ(r.out.find("press B again"), std::string::npos) << r.out;
+    EXPECT_EQ(r.out.find("accel none, as confirmed"), std::string::npos) << r.out;
+}
+
+TEST_F(Viewer, FirstLineNamesRenderAndWindowSizesAndScaleFitsTheScreen) {
+    // Xvfb's screen is 1024x768: 320x240 doubles to 640x480, 800x600 would not fit doubled.
+    Result small = run(kXvfb + kBin + "/rtlab-view scenes/spheres.json --frames 1 --no-overlay");
+    ASSERT_EQ(small.status, 0) << small.out << small.err;
+    EXPECT_NE(small.out.find("rendering 320x240, window 640x480 (--scale 2)"), std::string::npos)
+        << small.out;
+    Result large = run(kXvfb + kBin +
+                       "/rtlab-view scenes/spheres.json --size 800x600 --frames 1 --no-overlay");
+    ASSERT_EQ(large.status, 0) << large.out << large.err;
+    EXPECT_NE(large.out.find("rendering 800x600, window 800x600 (--scale 1)"), std::string::npos)
+        << large.out;
+    // Xvfb has no high-DPI screen: the framebuffer is the window, and is not named.
+    EXPECT_EQ(large.out.find("framebuffer"), std::string::npos) << large.out;
+}
+
 TEST(ViewerErrors, NoDisplayEndsInOneLine) {
     if (!fs::exists(kBin + "/rtlab-view")) GTEST_SKIP() << "rtlab-view was not built";
     Result r = run("env -u DISPLAY -u WAYLAND_DISPLAY " + kBin +
@@ -238,6 +300,21 @@ TEST(ViewerErrors, UnknownScriptedKeyEndsInOneLine) {
     EXPECT_EQ(r.status, 1);
     EXPECT_EQ(lines(r.err), 1) << r.err;
     EXPECT_NE(r.err.find("--keys 2:Z: no control on 'Z'"), std::string::npos) << r.err;
+}
+
+TEST(ViewerErrors, BadPieceInScriptOrPieceRowsEndsInOneLine) {
+    if (!fs::exists(kBin + "/rtlab-view")) GTEST_SKIP() << "rtlab-view was not built";
+    const std::pair<std::string, std::string> cases[] = {
+        {"--keys 1.0:B", "--keys 1.0:B: expected FRAME:KEYS or FRAME.PIECE:KEYS"},
+        {"--keys 1.x:B", "--keys 1.x:B: expected FRAME:KEYS or FRAME.PIECE:KEYS"},
+        {"--piece-rows -3", "--piece-rows -3: must be >= 0"},
+    };
+    for (const auto& [flags, message] : cases) {
+        Result r = run(kBin + "/rtlab-view scenes/spheres.json " + flags);
+        EXPECT_EQ(r.status, 1) << flags;
+        EXPECT_EQ(lines(r.err), 1) << flags << ": " << r.err;
+        EXPECT_NE(r.err.find(message), std::string::npos) << r.err;
+    }
 }
 
 TEST(ViewerErrors, BadSceneEndsInOneLine) {

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "bench/sweep_config.h"
 #include "core/error.h"
 #include "core/scene_loader.h"
 #include "image/compare.h"
@@ -59,16 +60,19 @@ TEST(Wavefront, TiledFrameEqualsUntiled) {
     RenderOptions o = scene.defaults;
     o.width = 40;
     o.height = 30;
-    o.bounces = 3;  // C = 2: N = 15 nodes, 720 B per pixel, 28,800 B per row
+    // C = 2: N = 15 nodes of 48 B and one word of traced flags, 724 B per pixel, 28,960 B a row.
+    o.bounces = 3;
+    EXPECT_EQ(WavefrontPipeline::pixelBytes(2, 3), size_t(15 * 48 + 4));
     WavefrontPipeline wave(test::device());
     Image whole = wave.render(scene, o);
     EXPECT_EQ(wave.stats().tiles, 1);
-    EXPECT_EQ(treeBytes(wave.stats()), size_t(40 * 30 * 15 * 48));
+    EXPECT_EQ(treeBytes(wave.stats()), size_t(40 * 30 * 724));
+    EXPECT_EQ(wave.stats().extras["tree_pixel_bytes"], 724);
     EXPECT_EQ(wave.stats().extras["memory_tiles"], 1);
     o.memoryBudget = 100'000;  // 3 rows per tile
     Image tiled = wave.render(scene, o);
     EXPECT_EQ(wave.stats().tiles, 10);
-    EXPECT_EQ(treeBytes(wave.stats()), size_t(40 * 3 * 15 * 48));
+    EXPECT_EQ(treeBytes(wave.stats()), size_t(40 * 3 * 724));
     EXPECT_EQ(wave.stats().extras["memory_tiles"], 10);
     EXPECT_EQ(std::memcmp(whole.rgb.data(), tiled.rgb.data(), whole.rgb.size() * 4), 0);
 }
@@ -78,8 +82,8 @@ TEST(Wavefront, BudgetBelowOneRowNamesABounceLimitThatFits) {
     RenderOptions o = scene.defaults;
     o.width = 40;
     o.height = 30;
-    o.bounces = 6;                // N = 127: 243,840 B per row
-    o.memoryBudget = 20'000;      // fits N <= 10 -> B = 2 (N = 7)
+    o.bounces = 6;                // N = 127: 40 x (127 x 48 + 4 x 4) = 244,480 B per row
+    o.memoryBudget = 20'000;      // B = 2 fits (N = 7: 13,600 B a row), B = 3 does not (28,960)
     WavefrontPipeline wave(test::device());
     try {
         wave.render(scene, o);
@@ -89,7 +93,8 @@ TEST(Wavefront, BudgetBelowOneRowNamesABounceLimitThatFits) {
         EXPECT_NE(msg.find("--memory-budget"), std::string::npos) << msg;
         EXPECT_NE(msg.find("the highest bounce limit that fits is 2"), std::string::npos) << msg;
     }
-    EXPECT_EQ(WavefrontPipeline::tileRows(40, 30, 2, 6, 243'840, "x"), 1);
+    EXPECT_EQ(WavefrontPipeline::tileRows(40, 30, 2, 6, 244'480, "x"), 1);
+    EXPECT_THROW(WavefrontPipeline::tileRows(40, 30, 2, 6, 244'479, "x"), Error);
     EXPECT_EQ(WavefrontPipeline::tileRows(40, 30, 1, 0, 1 << 30, "x"), 30);
 }
 
@@ -108,12 +113,85 @@ TEST(Wavefront, StatsReportKernelsAndTreeBytes) {
     EXPECT_EQ(s.kernelMs[1].first, "image");
     EXPECT_EQ(s.kernelMs[2].first, "reset");
     for (const auto& [name, ms] : s.kernelMs) EXPECT_GT(ms, 0.0) << name;
-    EXPECT_EQ(treeBytes(s), size_t(16 * 12) * size_t(treeNodeCount(scene.branching(), 2)) *
-                                sizeof(dev::Node));
-    // The buffers are named in the generic stats, the tree among them with the same size.
-    ASSERT_FALSE(s.buffers.empty());
+    const size_t nodes = size_t(treeNodeCount(scene.branching(), 2));
+    EXPECT_EQ(treeBytes(s), size_t(16 * 12) * (nodes * sizeof(dev::Node) + 4));
+    // The buffers are named in the generic stats: the tree's payloads and its flags add up to it.
+    ASSERT_GE(s.buffers.size(), 2u);
     EXPECT_EQ(s.buffers[0].first, "ray tree");
-    EXPECT_EQ(s.buffers[0].second, treeBytes(s));
+    EXPECT_EQ(s.buffers[0].second, size_t(16 * 12) * nodes * sizeof(dev::Node));
+    EXPECT_EQ(s.buffers[1].first, "tree flags");
+    EXPECT_EQ(s.buffers[0].second + s.buffers[1].second, treeBytes(s));
+}
+
+// The image kernel reads a node's payload only where trace set its bit this pass, and reset
+// clears every bit between passes. Payloads of the last frame are filled with NaNs that also read
+// as "traced" nodes (the layout before issue 14 kept the flag inside them): if the image kernel
+// read any unreached slot, or a bit survived from the last pass or sample, NaNs or stale nodes
+// would reach the image, which must instead stay bit-identical to the megakernel's.
+TEST(Wavefront, UnreachedPayloadsAreNeverRead) {
+    Scene scene = load("spheres");  // glass: C = 2, trees of every depth
+    RenderOptions o = scene.defaults;
+    o.width = 40;
+    o.height = 30;
+    o.bounces = 6;
+    o.aa = 2;
+    MegakernelPipeline mega(test::device());
+    WavefrontPipeline wave(test::device());
+    Image expected = mega.render(scene, o);
+    wave.render(scene, o);
+    for (int frame = 0; frame < 2; ++frame) {
+        wave.poisonPayloads();
+        Image w = wave.render(scene, o);
+        for (float v : w.rgb) ASSERT_TRUE(std::isfinite(v)) << "frame " << frame;
+        EXPECT_EQ(std::memcmp(expected.rgb.data(), w.rgb.data(), w.rgb.size() * 4), 0)
+            << "frame " << frame;
+    }
+}
+
+// Every flag word is zero after a frame (the next one starts from an untraced tree), on one
+// tile and on several, though each pass of these frames traced slots at every depth.
+TEST(Wavefront, ResetClearsEveryFlag) {
+    Scene scene = load("spheres");
+    RenderOptions o = scene.defaults;
+    o.width = 40;
+    o.height = 30;
+    o.bounces = 5;
+    o.aa = 2;
+    o.countRays = true;
+    WavefrontPipeline wave(test::device());
+    // N = 63: two flag words a pixel; 40 x 3,032 B a row, so 500,000 B hold 4 rows (8 tiles).
+    for (size_t budget : {size_t(0), size_t(500'000)}) {
+        o.memoryBudget = budget;
+        wave.render(scene, o);
+        EXPECT_EQ(wave.stats().tiles, budget ? 8 : 1);
+        EXPECT_GT(wave.stats().rays[RT_RAY_REFRACTION], 0u) << "no slot below the root traced";
+        std::vector<uint32_t> flags = wave.tracedFlags();
+        EXPECT_EQ(flags.size(), size_t(40 * (budget ? 4 : 30) * 2));
+        size_t set = 0;
+        for (uint32_t w : flags) set += w != 0;
+        EXPECT_EQ(set, 0u) << "of " << flags.size() << " words, budget " << budget;
+    }
+}
+
+// bench/sweeps/tree-wave, the measurement of issue 14's last part: the issue's frame (cornell
+// 1920x1080, B = 8, 8 shadow samples) and the README's (spheres 1280x720, B = 8), tree wavefront
+// and megakernel each, with the ray counts that give the share of slots used.
+TEST(Wavefront, BenchmarkSweepHoldsTheIssuesFrame) {
+    bench::SweepConfig c = bench::loadSweep(bench::findSweep("tree-wave"));
+    Scene cornell = load("cornell"), spheres = load("spheres");
+    std::vector<bench::Cell> cells = bench::expandCells(
+        c, [&](const std::string& name) -> const Scene& { return name == "cornell" ? cornell : spheres; });
+    ASSERT_EQ(cells.size(), 4u);
+    int wave = 0;
+    for (const bench::Cell& cell : cells) {
+        wave += cell.pipeline == "wave";
+        EXPECT_EQ(cell.options.bounces, 8);
+        EXPECT_TRUE(cell.countRays);
+    }
+    EXPECT_EQ(wave, 2);
+    EXPECT_EQ(cells[0].options.width, 1920);
+    EXPECT_EQ(cells[0].options.height, 1080);
+    EXPECT_EQ(cells[0].options.shadowSamples, 8);
 }
 
 }  // namespace

@@ -13,12 +13,20 @@ inline float3 Ray_InvDir(float3 d) {
     return 1.0f / select(d, tiny, fabs(d) < (float3)(1e-20f));
 }
 
+// Minimum and maximum as plain compare-and-select: one instruction on a CPU, where fmin/fmax
+// add a NaN fix-up to each. The slab distances are NaN only for a ray with a NaN component,
+// which no primitive test accepts either (Ray_InvDir keeps 1/d finite).
+inline float Min_Fast(float a, float b) { return a < b ? a : b; }
+inline float Max_Fast(float a, float b) { return a > b ? a : b; }
+inline float3 Min3_Fast(float3 a, float3 b) { return select(b, a, a < b); }
+inline float3 Max3_Fast(float3 a, float3 b) { return select(b, a, a > b); }
+
 // Distance at which the ray enters the box, if it does so before tMax; INFINITY otherwise.
 inline float Aabb_Enter(Ray ray, float3 invDir, float3 lo, float3 hi, float tMax) {
     float3 t0 = (lo - ray.origin) * invDir, t1 = (hi - ray.origin) * invDir;
-    float3 tn = fmin(t0, t1), tf = fmax(t0, t1);
-    float enter = fmax(fmax(tn.x, tn.y), fmax(tn.z, 0.0f));
-    float leave = fmin(fmin(tf.x, tf.y), fmin(tf.z, tMax));
+    float3 tn = Min3_Fast(t0, t1), tf = Max3_Fast(t0, t1);
+    float enter = Max_Fast(Max_Fast(tn.x, tn.y), Max_Fast(tn.z, 0.0f));
+    float leave = Min_Fast(Min_Fast(tf.x, tf.y), Min_Fast(tf.z, tMax));
     return enter <= leave ? enter : INFINITY;
 }
 
@@ -169,6 +177,20 @@ inline bool Grid_Query(const SceneData* sc, Ray ray, Hit* hit, bool anyHit) {
 #ifdef RT_ACCEL_BVH
 #define RT_BVH_STACK 64  // the builder caps the depth below this (core/accel_bvh.cpp)
 
+// A node record as two 16-byte loads. BvhNode's members are only 4-byte aligned, so a GPU
+// compiler may fetch it word by word (eight loads); the buffer and its 32-byte records are
+// 16-byte aligned. On PoCL it costs nothing measurable.
+inline BvhNode Bvh_Load(global const BvhNode* nodes, int index) {
+    global const float4* p = (global const float4*)(nodes + index);
+    float4 a = p[0], b = p[1];
+    BvhNode n;
+    n.lo = F3(a.xyz);
+    n.first = as_int(a.w);
+    n.hi = F3(b.xyz);
+    n.count = as_int(b.w);
+    return n;
+}
+
 inline bool Bvh_Leaf(const SceneData* sc, BvhNode node, Ray ray, Hit* hit, bool anyHit) {
     bool found = false;
 #ifdef RT_HAS_TRIANGLES
@@ -188,35 +210,33 @@ inline bool Bvh_Leaf(const SceneData* sc, BvhNode node, Ray ray, Hit* hit, bool 
     return found;
 }
 
+// The two children of an inner node are adjacent records, so one 64-byte fetch gives both boxes
+// and the nearer child's record becomes the current node without loading it again (the layout
+// idea of Aila and Laine 2009, kept in the binary tree the other modes and tests share). Only a
+// deferred node is loaded when it is popped.
 inline bool Bvh_Query(const SceneData* sc, Ray ray, Hit* hit, bool anyHit) {
     float3 inv = Ray_InvDir(ray.dir);
-    BvhNode root = sc->bvh[0];
-    if (Aabb_Enter(ray, inv, f3(root.lo), f3(root.hi), hit->t) == INFINITY) return false;
+    BvhNode node = Bvh_Load(sc->bvh, 0);
+    if (Aabb_Enter(ray, inv, f3(node.lo), f3(node.hi), hit->t) == INFINITY) return false;
     int stack[RT_BVH_STACK];
     float stackT[RT_BVH_STACK];  // entry distance of each pending node
-    int top = 0, index = 0;
+    int top = 0;
     bool found = false;
     for (;;) {
-        BvhNode node = sc->bvh[index];
         if (node.count == 0) {
-            global const BvhNode* kids = sc->bvh + node.first;
-            float ta = Aabb_Enter(ray, inv, f3(kids[0].lo), f3(kids[0].hi), hit->t);
-            float tb = Aabb_Enter(ray, inv, f3(kids[1].lo), f3(kids[1].hi), hit->t);
-            int near = node.first, far = node.first + 1;
-            if (tb < ta) {
-                float t = ta;
-                ta = tb;
-                tb = t;
-                near = far;
-                far = node.first;
-            }
-            if (ta != INFINITY) {
-                if (tb != INFINITY) {
-                    stack[top] = far;
-                    stackT[top] = tb;
+            int first = node.first;
+            BvhNode a = Bvh_Load(sc->bvh, first), b = Bvh_Load(sc->bvh, first + 1);
+            float ta = Aabb_Enter(ray, inv, f3(a.lo), f3(a.hi), hit->t);
+            float tb = Aabb_Enter(ray, inv, f3(b.lo), f3(b.hi), hit->t);
+            bool swap = tb < ta;  // ties keep the first child first
+            float tNear = swap ? tb : ta, tFar = swap ? ta : tb;
+            if (tNear != INFINITY) {
+                if (tFar != INFINITY) {
+                    stack[top] = swap ? first : first + 1;
+                    stackT[top] = tFar;
                     ++top;
                 }
-                index = near;
+                node = swap ? b : a;
                 continue;
             }
         } else if (Bvh_Leaf(sc, node, ray, hit, anyHit)) {
@@ -226,7 +246,7 @@ inline bool Bvh_Query(const SceneData* sc, Ray ray, Hit* hit, bool anyHit) {
         // Next: the most recently deferred node the ray enters before the current best hit.
         while (top > 0 && !(stackT[top - 1] < hit->t)) --top;
         if (top == 0) return found;
-        index = stack[--top];
+        node = Bvh_Load(sc->bvh, stack[--top]);
     }
 }
 #endif  // RT_ACCEL_BVH

@@ -1,6 +1,7 @@
 // rtlab — the per-pixel ray tree (report 3.2, core/SHADING.md sections 6 and 8). Both pipelines
 // build and combine trees with these functions and nothing else, which is what makes their
-// images bit-identical. Node i at depth k has children i*C + 1 + slot (slot 0 reflection,
+// images bit-identical (the tree wavefront's image kernel visits only traced slots, but shades
+// each with RayTree_NodeColor on the same inputs RayTree_Combine gives it). Node i at depth k has children i*C + 1 + slot (slot 0 reflection,
 // slot 1 refraction); C = RT_BRANCH, N = RT_TREE_NODES.
 #ifndef RTLAB_CL_RAYTREE
 #define RTLAB_CL_RAYTREE

@@ -139,8 +139,11 @@ class RowsTest(unittest.TestCase):
         r = row("wave", "wavefront", "tree", "s", 8, 1280, 720, tree_nodes=511,
                 tree_bytes=1280 * 676 * 511 * 48, memory_tiles=2)
         tile, whole, tiles = sweep_rows.tree_sizes(r)
-        self.assertEqual(whole, 1280 * 720 * 511 * 48)
+        self.assertEqual(whole, 1280 * 720 * 511 * 48)  # a row from before issue 14
         self.assertEqual((tile < whole, tiles), (True, 2))
+        # Newer rows say what a pixel's tree takes (payloads and traced flags).
+        r["extras"] = {"tree_pixel_bytes": 511 * 48 + 64}
+        self.assertEqual(sweep_rows.tree_sizes(r)[1], 1280 * 720 * (511 * 48 + 64))
 
 
 class ReadmeTest(unittest.TestCase):
@@ -188,6 +191,49 @@ class ReadmeTest(unittest.TestCase):
             for title in ("megakernel (tree)", "megakernel (weighted)", "queue wavefront",
                           "wavefront"):
                 self.assertIn(f"| {title}: time / fastest", text)
+
+    def test_floor_counts_each_design_s_bytes(self):
+        import readme_floor
+        px = 320 * 180
+        mega = row("mega", "megakernel", "tree", "s", 3)
+        self.assertEqual(readme_floor.floor_bytes(mega), px * 12)  # the image alone
+        # The tree wavefront, 2x2 AA, N = 15, rays not counted, a row from before the bit mask:
+        # per pixel and sample 15 flag bytes cleared, the primary node written and read (48 B).
+        wave = row("wave", "wavefront", "tree", "s", 3, aa=2, tree_nodes=15, tree_bytes=px * 15 * 48)
+        self.assertEqual(readme_floor.floor_bytes(wave), px * 12 + 4 * px * (15 + 2 * 48))
+        # Counted rays: the traced nodes are the primary, reflection and refraction rays.
+        wave["rays"] = {"primary": 4 * px, "reflection": 1000, "refraction": 10, "shadow": 7}
+        self.assertEqual(readme_floor.floor_bytes(wave),
+                         px * 12 + 4 * px * 15 + (4 * px + 1010) * 2 * 48)
+        # The bit mask: a pixel's flags are its tree_pixel_bytes beyond the 15 nodes (one word).
+        wave["extras"] = {"tree_pixel_bytes": 15 * 48 + 4}
+        self.assertEqual(readme_floor.floor_bytes(wave),
+                         px * 12 + 4 * px * 4 + (4 * px + 1010) * 2 * 48)
+        # The queue: every extended ray's record (44 B) and hit (48 B), written and read.
+        queue = row("queue", "queue wavefront", "tree", "s", 1,
+                    extras={"queue_lengths": [[10, 20, 30, 40, 0], [1, 2, 3, 4, 0]]})
+        self.assertEqual(readme_floor.floor_bytes(queue), px * 12 + 110 * 2 * 92)
+        self.assertIsNone(readme_floor.floor_bytes(row("mega", "m", "tree", "s", 1, status="error")))
+
+    def test_floor_section_only_beside_a_roofline(self):
+        with tempfile.TemporaryDirectory(prefix="rtlab-test-charts-") as tmp:
+            path = self.write_set(tmp)
+            readme = os.path.join(os.path.dirname(path), "README.md")
+            self.run_readme(path)
+            with open(readme) as f:
+                self.assertNotIn("against its floor", f.read())
+            with open(os.path.join(os.path.dirname(path), "roofline.json"), "w") as f:
+                json.dump({"copy_gb_per_s": 100.0}, f)
+            self.run_readme(path)
+            with open(readme) as f:
+                text = f.read()
+            self.assertIn("## Each frame against its floor", text)
+            self.assertIn("(100 GB/s, read + write", text)
+            # megakernel at 320x180: 691200 B / 100 GB/s = 0.006912 ms; its frame is
+            # (1 + b) * 5 ms, so at B = 0 the frame is 5 / 0.006912 = 723.4 floors.
+            section = text.split("## Each frame against its floor")[1].split("\n## ")[0]
+            line = next(x for x in section.splitlines() if x.startswith("| spheres | 320×180 | 0 | 1 |"))
+            self.assertIn("| 0.00691 | 723.4 |", line)
 
 
 @unittest.skipUnless(HAVE_MPL, "matplotlib is not installed")

@@ -8,6 +8,7 @@
 #include <cctype>
 #include <chrono>
 #include <deque>
+#include <functional>
 #include <map>
 
 #include "core/error.h"
@@ -129,15 +130,23 @@ public:
     size_t limit() const { return limit_; }
 
     // classes: which shade kernels the scene can need (a class without a material never runs).
-    void run(const dev::RenderSettings& settings, const std::array<bool, RT_Q_CLASSES>& classes) {
+    // started: called after each bounce with the pixels of the row window started so far.
+    void run(const dev::RenderSettings& settings, const std::array<bool, RT_Q_CLASSES>& classes,
+             const std::function<void(size_t started)>& started) {
         lights_ = settings.lightCount;
         classes_ = classes;
         bindKernels(settings);
-        next_ = 0;
+        next_ = firstPixel();
         retry_.clear();
         size_t n = admit(0);
-        while (n > 0) n = bounce(n);
+        while (n > 0) {
+            n = bounce(n);
+            started(next_ - firstPixel());
+        }
     }
+    // The pixels of RenderOptions' row window: [firstPixel, endPixel).
+    size_t firstPixel() const { return size_t(o_.rowBegin) * size_t(o_.width); }
+    size_t endPixel() const { return size_t(o_.lastRow()) * size_t(o_.width); }
 
 private:
     // Arguments that stay the same through the pass (the settings carry the sample index).
@@ -205,7 +214,7 @@ private:
     // Camera rays into slots [first, ...): pixels cut earlier first, then new ones, as many as
     // the pool (or the launch-time limit) has room for. Returns the live rays after it.
     size_t admit(size_t first) {
-        size_t total = size_t(o_.width) * size_t(o_.height);
+        size_t total = endPixel();
         size_t room = limit_ > first ? limit_ - first : 0;
         size_t count = std::min(room, retry_.size() + (total - next_));
         size_t fromRetry = std::min(count, retry_.size());
@@ -358,15 +367,21 @@ Image QueuePipeline::render(const Scene& scene, const RenderOptions& o) {
         for (const std::string& d : programDefines(scene, o, group)) key += " " + d;
         if (key != learnedKey_) learnedLimit_ = 0;
         QueuePass pass(cl_, frame, buf_, o, queue_, learnedLimit_);
+        // Progress in pixels started x AA samples, over the row window.
+        const size_t first = pass.firstPixel(), window = pass.endPixel() - first;
+        const long long total = (long long)(window) * o.aa * o.aa;
         for (int s = 0; s < o.aa * o.aa; ++s) {
             settings.sampleIndex = s;
-            pass.run(settings, sceneClasses(scene));
+            pass.run(settings, sceneClasses(scene), [&](size_t started) {
+                reportProgress((long long)(s) * (long long)(window) + (long long)(started), total);
+            });
             resolve.setArg(3, cl_int(s));
             frame.launch("Queue_Resolve", pixels);
         }
         learnedKey_ = key;
         learnedLimit_ = pass.limit();
-        cl_.queue().enqueueReadBuffer(buf_.image, CL_TRUE, 0, pixels * 12, out.rgb.data());
+        cl_.queue().enqueueReadBuffer(buf_.image, CL_TRUE, first * 12, window * 12,
+                                      out.rgb.data() + first * 3);
         std::vector<cl_int> words(RT_Q_WORDS);
         cl_.queue().enqueueReadBuffer(buf_.counters, CL_TRUE, 0, words.size() * 4, words.data());
         for (int d = 0; d <= o.bounces; ++d) {
@@ -401,7 +416,7 @@ void registerQueueWavefront(PipelineRegistry& registry) {
     p.title = "wavefront (queues of live rays)";
     p.description = "a pool of live rays in SoA buffers; generate, extend, shadow and per-material "
                     "shade kernels over compacted queues (--pool N)";
-    p.supports = {.layouts = false, .adaptiveAa = false, .tiling = false};
+    p.supports = {.layouts = false, .adaptiveAa = false, .tiling = false, .rowWindow = true};
     p.make = [](ClContext* cl) { return std::make_unique<QueuePipeline>(*cl); };
     registry.add(std::move(p));
 }

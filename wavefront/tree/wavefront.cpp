@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <limits>
 
 #include "core/error.h"
 #include "core/pipeline_registry.h"
@@ -10,21 +11,27 @@
 
 namespace rt {
 
+size_t WavefrontPipeline::pixelBytes(int branching, int bounces) {
+    const size_t nodes = size_t(treeNodeCount(branching, bounces));
+    return nodes * sizeof(dev::Node) + size_t(RT_TRACED_WORDS(nodes)) * sizeof(cl_uint);
+}
+
 int WavefrontPipeline::tileRows(int width, int height, int branching, int bounces, size_t budget,
                                 const std::string& budgetName) {
-    auto rowBytes = [&](int b) {
-        return size_t(width) * size_t(treeNodeCount(branching, b)) * sizeof(dev::Node);
-    };
+    auto rowBytes = [&](int b) { return size_t(width) * pixelBytes(branching, b); };
     size_t row = rowBytes(bounces);
     if (row > budget) {
+        const size_t nodes = size_t(treeNodeCount(branching, bounces));
         int fits = bounces;
         while (fits >= 0 && rowBytes(fits) > budget) --fits;
         // Named by what limits it (the budget), not by --bounces, which the user may not have set.
         std::string msg = "one row of the wavefront ray tree at bounce limit " + std::to_string(bounces) + " (" +
-                          std::to_string(width) + " pixels x " +
-                          std::to_string(treeNodeCount(branching, bounces)) + " nodes x " +
-                          std::to_string(sizeof(dev::Node)) + " B = " + std::to_string(row) +
-                          " B) exceeds " + budgetName + " (" + std::to_string(budget) + " B); ";
+                          std::to_string(width) + " pixels x (" +
+                          std::to_string(nodes) + " nodes x " + std::to_string(sizeof(dev::Node)) +
+                          " B + " + std::to_string(RT_TRACED_WORDS(nodes) * sizeof(cl_uint)) +
+                          " B of traced flags) = " + std::to_string(row) + " B) exceeds " +
+                          budgetName + " (" +
+                          std::to_string(budget) + " B); ";
         msg += fits >= 0 ? "the highest bounce limit that fits is " + std::to_string(fits)
                          : "not even bounce limit 0 fits";
         throw Error(msg, FailureKind::TreeRow);
@@ -43,8 +50,10 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
     stats_ = {};
     const int C = scene.branching();
     const long long treeNodes = treeNodeCount(C, o.bounces);
-    checkPrivateTree(C, o.bounces, "wavefront image kernel", false);
-    stats_.privateBytes = treePrivateBytes(C, o.bounces);
+    const size_t flagWords = RT_TRACED_WORDS(size_t(treeNodes));
+    // The image kernel walks the traced slots with one frame per depth (two colours and four
+    // ints: WaveFrame in wavefront.cl), not a private copy of the tree.
+    stats_.privateBytes = size_t(o.bounces + 1) * (2 * sizeof(cl_float3) + 4 * sizeof(cl_int));
 
     const DeviceInfo& dev = cl_.device();
     size_t budget = dev.maxAlloc;
@@ -55,18 +64,16 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
     }
     int rows = tileRows(o.width, o.height, C, o.bounces, budget, budgetName);
     // What an out-of-memory error from the driver is told about the frame (NVIDIA's, for one, can
-    // fail at launch when the image kernel's private trees and the global tree together do not fit).
+    // fail at launch when the global tree and the kernels' private memory together do not fit).
     const int memoryTiles = tileCount(o.height, rows);
     auto memoryHint = [&] {
-        const double gib = double(size_t(o.width) * rows * treeNodes * sizeof(dev::Node)) /
-                           double(1ull << 30);
+        const double gib =
+            double(size_t(o.width) * rows * pixelBytes(C, o.bounces)) / double(1ull << 30);
         char buf[256];
         std::snprintf(buf, sizeof buf,
-                      "the frame needs a %.2f GiB ray tree (%d row tile%s) and %zu KiB of private "
-                      "tree per work-item in the image kernel; lower --bounces or --size, or set "
-                      "--memory-budget",
-                      gib, memoryTiles, memoryTiles == 1 ? "" : "s",
-                      stats_.privateBytes / 1024);
+                      "the frame needs a %.2f GiB ray tree (%d row tile%s); lower --bounces or "
+                      "--size, or set --memory-budget",
+                      gib, memoryTiles, memoryTiles == 1 ? "" : "s");
         return std::string(buf);
     };
 
@@ -77,18 +84,21 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
         scene_ = std::make_unique<DeviceScene>(cl_, scene, o.accel);
     stats_.accel = scene_->accelStats();
 
-    size_t nodes = size_t(o.width) * rows * size_t(treeNodes);
-    size_t treeBytes = nodes * sizeof(dev::Node);
+    const size_t pixels = size_t(o.width) * rows;
+    const size_t treeBytes = pixels * size_t(treeNodes) * sizeof(dev::Node);
+    const size_t flagBytes = pixels * flagWords * sizeof(cl_uint);
     size_t imageBytes = size_t(o.width) * o.height * 3 * sizeof(float);
     try {
-        if (treeBytes != treeBytes_) {
-            // Forget the old size first: after a failed allocation no stale size names a buffer
+        if (treeBytes != treeBytes_ || flagBytes != flagBytes_) {
+            // Forget the old sizes first: after a failed allocation no stale size names a buffer
             // that is gone, and the next frame allocates afresh.
-            if (treeBytes_) cl_.release(treeBytes_);
-            tree_ = cl::Buffer();
-            treeBytes_ = 0;
+            if (treeBytes_ + flagBytes_) cl_.release(treeBytes_ + flagBytes_);
+            tree_ = traced_ = cl::Buffer();
+            treeBytes_ = flagBytes_ = 0;
             tree_ = cl_.allocate(treeBytes, CL_MEM_READ_WRITE, "the wavefront ray tree");
             treeBytes_ = treeBytes;
+            traced_ = cl_.allocate(flagBytes, CL_MEM_READ_WRITE, "the wavefront ray tree's flags");
+            flagBytes_ = flagBytes;
             needsClear_ = true;
         }
         if (imageBytes != imageBytes_) {
@@ -102,20 +112,24 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
         throwClError(e, "preparing wavefront buffers", memoryHint());
     }
     stats_.addBuffer("ray tree", treeBytes);
+    stats_.addBuffer("tree flags", flagBytes);
     stats_.addBuffer("image", imageBytes);
-    stats_.extras["tree_bytes"] = treeBytes;
+    stats_.extras["tree_bytes"] = treeBytes + flagBytes;  // one tile's tree, both buffers
+    stats_.extras["tree_pixel_bytes"] = pixelBytes(C, o.bounces);
     stats_.extras["memory_tiles"] = memoryTiles;
 
     cl::Kernel trace(program, "Wavefront_Trace"), image(program, "Wavefront_Image"),
         reset(program, "Wavefront_Reset");
-    reset.setArg(0, tree_);
+    reset.setArg(0, traced_);
+    // Reset clears `words` flag words, four per work-item.
+    auto resetRange = [](size_t words) { return cl::NDRange((words + 3) / 4); };
     if (needsClear_) {
         // Every slot starts untraced; from then on the reset kernel keeps it so. The reset kernel
         // (64-bit indices) clears a new buffer rather than clEnqueueFillBuffer, which left stale
         // "traced" flags in trees over 2 GiB on NVIDIA's OpenCL (illegal-address failures).
         try {
-            reset.setArg(1, cl_uint(nodes));
-            cl_.queue().enqueueNDRangeKernel(reset, cl::NullRange, cl::NDRange(nodes));
+            reset.setArg(1, cl_ulong(pixels * flagWords));
+            cl_.queue().enqueueNDRangeKernel(reset, cl::NullRange, resetRange(pixels * flagWords));
         } catch (const cl::Error& e) {
             throwClError(e, "clearing the wavefront ray tree", memoryHint());
         }
@@ -140,16 +154,19 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
             size_t firstEvent = events.size();
             Launch range = launch2d(dev, o.width, tile);
             settings.rowOffset = row0;
-            // AA in passes: one tree per pixel, reused by every sample; image accumulates.
+            // AA in passes: one tree per pixel, reused by every sample; image accumulates. The
+            // tile's P = width x tile pixels set the stride of the slot-major buffers.
             for (int s = 0; s < samples; ++s) {
                 settings.sampleIndex = s;
                 scene_->setArgs(trace, settings);
                 trace.setArg(DeviceScene::kFirstKernelArg, tree_);
-                trace.setArg(DeviceScene::kFirstKernelArg + 1, cl_int(row0 + tile));
+                trace.setArg(DeviceScene::kFirstKernelArg + 1, traced_);
+                trace.setArg(DeviceScene::kFirstKernelArg + 2, cl_int(row0 + tile));
                 scene_->setArgs(image, settings);
                 image.setArg(DeviceScene::kFirstKernelArg, tree_);
-                image.setArg(DeviceScene::kFirstKernelArg + 1, image_);
-                image.setArg(DeviceScene::kFirstKernelArg + 2, cl_int(row0 + tile));
+                image.setArg(DeviceScene::kFirstKernelArg + 1, traced_);
+                image.setArg(DeviceScene::kFirstKernelArg + 2, image_);
+                image.setArg(DeviceScene::kFirstKernelArg + 3, cl_int(row0 + tile));
                 cl::Event et, ei, er;
                 std::vector<cl::Event> waitTrace;
                 if (haveLast) waitTrace.push_back(last);
@@ -158,11 +175,12 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
                 std::vector<cl::Event> waitImage{et};
                 cl_.queue().enqueueNDRangeKernel(image, cl::NullRange, range.global, range.local,
                                                  &waitImage, &ei);
-                // Only this tile's slices were written, so only they need clearing.
-                size_t tileNodes = size_t(o.width) * size_t(tile) * size_t(treeNodes);
-                reset.setArg(1, cl_uint(tileNodes));
+                // Only this tile's flags were set (its pixels' words come first in the buffer),
+                // so only they need clearing; payloads are never cleared.
+                size_t tileWords = size_t(o.width) * size_t(tile) * flagWords;
+                reset.setArg(1, cl_ulong(tileWords));
                 std::vector<cl::Event> waitReset{ei};
-                cl_.queue().enqueueNDRangeKernel(reset, cl::NullRange, cl::NDRange(tileNodes),
+                cl_.queue().enqueueNDRangeKernel(reset, cl::NullRange, resetRange(tileWords),
                                                  cl::NullRange, &waitReset, &er);
                 events.insert(events.end(), {et, ei, er});
                 last = er;
@@ -200,6 +218,20 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
     return out;
 }
 
+void WavefrontPipeline::poisonPayloads() {
+    if (!treeBytes_) return;
+    const cl_float nan = std::numeric_limits<float>::quiet_NaN();
+    cl_.queue().enqueueFillBuffer(tree_, nan, 0, treeBytes_);
+    cl_.queue().finish();
+}
+
+std::vector<uint32_t> WavefrontPipeline::tracedFlags() {
+    std::vector<uint32_t> words(flagBytes_ / sizeof(uint32_t));
+    if (!words.empty())
+        cl_.queue().enqueueReadBuffer(traced_, CL_TRUE, 0, flagBytes_, words.data());
+    return words;
+}
+
 }  // namespace rt
 
 namespace rt {
@@ -208,7 +240,7 @@ void registerWavefrontTree(PipelineRegistry& registry) {
     PipelineInfo p;
     p.name = "wave";
     p.title = "wavefront (report's tree)";
-    p.description = "trace, image and reset kernels around a global ray tree of W x rows x N nodes";
+    p.description = "trace, image and reset kernels around a global ray tree of W x rows x N slots";
     p.supports = {.layouts = false, .adaptiveAa = false, .tiling = true};
     p.make = [](ClContext* cl) { return std::make_unique<WavefrontPipeline>(*cl); };
     registry.add(std::move(p));

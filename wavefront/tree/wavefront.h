@@ -1,8 +1,11 @@
 // rtlab — host driver of the wavefront pipeline (wavefront/tree/wavefront.cl): trace, image and reset
-// kernels around a global ray tree of W x rows x N nodes, in row tiles when it must.
+// kernels around a global ray tree of W x rows x N slots (node payloads, and the traced flags in
+// a buffer of their own), in row tiles when it must.
 #pragma once
 
+#include <cstdint>
 #include <memory>
+#include <vector>
 
 #include "core/launch_planner.h"
 #include "core/pipeline.h"
@@ -12,23 +15,36 @@ namespace rt {
 class WavefrontPipeline : public Pipeline {
 public:
     explicit WavefrontPipeline(ClContext& cl) : cl_(cl) {}
-    ~WavefrontPipeline() override { cl_.release(treeBytes_ + imageBytes_); }  // keep the device-memory tally true
+    ~WavefrontPipeline() override {  // keep the device-memory tally true
+        cl_.release(treeBytes_ + flagBytes_ + imageBytes_);
+    }
     const char* name() const override { return "wave"; }
     Image render(const Scene& scene, const RenderOptions& options) override;
 
-    // Rows per tile for a frame, given the budget for the tree buffer (bytes). Throws rt::Error
+    // Bytes of one pixel's tree: N node payloads and RT_TRACED_WORDS(N) words of traced flags.
+    // Every tree size (rows per tile, budgets, messages, stats) is counted from it.
+    static size_t pixelBytes(int branching, int bounces);
+    // Rows per tile for a frame, given the budget for the tree (payload and
+    // flag buffers together, bytes). Throws rt::Error
     // naming the bounce limit that would fit when not even one row does.
     static int tileRows(int width, int height, int branching, int bounces, size_t budget,
                         const std::string& budgetName);
     // Row tiles a frame of `height` rows needs at `rows` rows per tile: the one place it is counted.
     static int tileCount(int height, int rows) { return (height + rows - 1) / rows; }
 
+    // For tests. poisonPayloads fills every node payload of the last frame's tree with quiet NaNs,
+    // whose bytes also read as a node traced from inside an object (flags 0x7f): a kernel that
+    // read a slot its pass did not reach would show it in the image. tracedFlags reads the flag
+    // words back (all zero between frames).
+    void poisonPayloads();
+    std::vector<uint32_t> tracedFlags();
+
 private:
     ClContext& cl_;
     std::unique_ptr<DeviceScene> scene_;
-    cl::Buffer tree_, image_;
-    size_t treeBytes_ = 0, imageBytes_ = 0;
-    bool needsClear_ = false;  // a new tree buffer whose flags are not yet cleared
+    cl::Buffer tree_, traced_, image_;  // node payloads, traced flags, the image
+    size_t treeBytes_ = 0, flagBytes_ = 0, imageBytes_ = 0;
+    bool needsClear_ = false;  // a new flag buffer not yet cleared
     LaunchPlanner planner_;
 };
 

@@ -1,0 +1,79 @@
+// What one ray costs in each BVH, counted on the host (bench/trace_visits.cpp, issue 18): the node
+// visits, triangle tests and bytes that the trace-peer results name as the bound, checked on rays
+// whose work is known from the tree's shape.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "bench/trace_visits.h"
+#include "test_scenes.h"
+
+namespace rt {
+namespace {
+
+Scene triangles(std::initializer_list<dev::Triangle> list) {
+    Scene s;
+    s.name = "triangles";
+    dev::Material m{};
+    m.opacity = m.ior = 1.f;
+    s.materials = {m};
+    s.triangles = list;
+    finalizeScene(s);
+    return s;
+}
+
+dev::Triangle flat(float x0, float y0, float x1, float y1, float x2, float y2, float z) {
+    dev::Float3 n{0, 0, 1};
+    return {{x0, y0, z}, {x1, y1, z}, {x2, y2, z}, n, n, n, 0, 0};
+}
+
+BatchRay down(float x, float y) { return {x, y, 5.f, INFINITY, 0.f, 0.f, -1.f, 0.f}; }
+
+TEST(TraversalCost, ARayMissingTheRootCostsOneRecord) {
+    AccelData d = buildAccel(triangles({flat(-1, -1, 1, -1, 0, 1, 0)}), RenderOptions::Accel::Wide);
+    std::vector<BatchRay> miss = {{0.f, 0.f, 5.f, INFINITY, 1.f, 0.f, 0.f, 0.f}};
+    TraversalCost b = binaryTraversalCost(d, miss, false), w = wideTraversalCost(d, miss, false);
+    EXPECT_EQ(b.rays, 1u);
+    EXPECT_EQ(b.nodes, 1.0);
+    EXPECT_EQ(b.triangles, 0.0);
+    EXPECT_EQ(b.bytes, 32.0);  // the root's record
+    EXPECT_EQ(w.nodes, 1.0);
+    EXPECT_EQ(w.triangles, 0.0);
+    EXPECT_EQ(w.bytes, 64.0);
+}
+
+TEST(TraversalCost, ARayThroughOneTriangleTestsItOnce) {
+    AccelData d = buildAccel(triangles({flat(-1, -1, 1, -1, 0, 1, 0)}), RenderOptions::Accel::Wide);
+    std::vector<BatchRay> hit = {down(0.f, 0.f)};
+    TraversalCost b = binaryTraversalCost(d, hit, false);
+    EXPECT_EQ(b.nodes, 1.0);  // the root is the leaf
+    EXPECT_EQ(b.triangles, 1.0);
+    EXPECT_EQ(b.bytes, 32.0 + 36.0);
+    EXPECT_EQ(wideTraversalCost(d, hit, true).bytes, 64.0 + 36.0);
+}
+
+// A small triangle above a large one: a ray through the small one's box, beside the triangle,
+// enters both leaves, misses the nearer one and pops the farther one.
+TEST(TraversalCost, APoppedNodeIsLoadedAgain) {
+    AccelData d = buildAccel(triangles({flat(-1, -1, 1, -1, 0, 1, 0), flat(-3, -3, 3, -3, 0, 3, -5)}),
+                             RenderOptions::Accel::Wide);
+    ASSERT_EQ(d.bvh.size(), 3u);  // a root over two leaves
+    std::vector<BatchRay> beside = {down(0.9f, 0.9f)};
+    for (bool anyHit : {false, true}) {
+        TraversalCost b = binaryTraversalCost(d, beside, anyHit);
+        EXPECT_EQ(b.nodes, 3.0) << anyHit;
+        EXPECT_EQ(b.triangles, 2.0) << anyHit;
+        EXPECT_EQ(b.bytes, 32.0 + 64.0 + 32.0 + 2 * 36.0) << anyHit;  // root, pair, pop, tests
+    }
+    TraversalCost w = wideTraversalCost(d, beside, false);
+    EXPECT_EQ(w.nodes, 1.0);  // one wide node holds both leaves
+    EXPECT_EQ(w.triangles, 2.0);
+    EXPECT_EQ(w.bytes, 64.0 + 2 * 36.0);
+    // Through the small triangle the farther leaf is dropped without being loaded.
+    TraversalCost b = binaryTraversalCost(d, {down(0.f, 0.f)}, false);
+    EXPECT_EQ(b.nodes, 2.0);
+    EXPECT_EQ(b.bytes, 32.0 + 64.0 + 36.0);
+}
+
+}  // namespace
+}  // namespace rt
