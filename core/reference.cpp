@@ -14,6 +14,7 @@
 
 #include "core/procedural.h"
 #include "core/reference_bvh.h"
+#include "core/sampling.h"
 
 namespace rt {
 namespace ref {
@@ -148,8 +149,10 @@ class Tracer {
     Tracer(const Scene& scene, const RenderOptions& options)
         : scene_(scene), opt_(options), bvh_(scene.triangles) {}
 
-    dvec3 pixel(int x, int y, double ox, double oy) const {
-        return trace(Ray{toD(scene_.camera.position), primaryDir(x + ox, y + oy)}, 0);
+    // AA sample `sample` (sy n + sx, as the device numbers them) at offset (ox, oy) in the pixel.
+    dvec3 pixel(int x, int y, int sample, double ox, double oy) const {
+        return trace(Ray{toD(scene_.camera.position), primaryDir(x + ox, y + oy)}, 0,
+                     PixelSample{x, y, sample});
     }
 
   private:
@@ -312,8 +315,10 @@ class Tracer {
         return o;
     }
 
-    // Section 4: visibility of light j from p, in [1 - strength, 1].
-    double visibility(const Surface& s, const dev::Light& light, dvec3 o) const {
+    // Section 4: visibility of light j from p, in [1 - strength, 1]. The samples on the light's
+    // disk are the device's (core/sampling.h), keyed by the pixel, AA sample and depth.
+    double visibility(const Surface& s, int j, dvec3 o, uint32_t key) const {
+        const dev::Light& light = scene_.lights[size_t(j)];
         const dvec3 c = toD(light.position);
         int samples = 1;
         if (light.radius > 0) samples = opt_.shadowSamples;
@@ -331,9 +336,9 @@ class Tracer {
         for (int k = 0; k < samples; ++k) {
             dvec3 q = c;
             if (light.radius > 0) {
-                const double rho = double(light.radius) * std::sqrt((k + 0.5) / samples);
-                const double phi = 2.399963229728653 * k;
-                q = c + rho * (std::cos(phi) * t + std::sin(phi) * b);
+                const DiskSample ds = shadowDiskSample(key, j, k, samples);
+                const double rho = double(light.radius) * ds.radius;
+                q = c + rho * (std::cos(ds.angle) * t + std::sin(ds.angle) * b);
             }
             const double length = glm::length(q - o);
             if (occluded(Ray{o, (q - o) / length}, length)) ++blocked;
@@ -343,17 +348,19 @@ class Tracer {
 
     // Section 5: Blinn-Phong with shadowed lights.
     // Procedural materials (issue 15) change D and the shading normal only; shadow rays keep s.n.
-    dvec3 base(const Surface& s, dvec3 d, const dev::Material& m, dvec3 origin) const {
+    dvec3 base(const Surface& s, dvec3 d, const dev::Material& m, dvec3 origin,
+               uint32_t key) const {
         dvec3 colour = toD(m.ambient), diffuse = toD(m.diffuse), n = s.n;
         if (m.pattern != RT_PATTERN_NONE) proc::apply(m, s.p, diffuse, n);
-        for (const dev::Light& light : scene_.lights) {
+        for (size_t j = 0; j < scene_.lights.size(); ++j) {
+            const dev::Light& light = scene_.lights[j];
             const dvec3 l = glm::normalize(toD(light.position) - s.p);
             const double nl = glm::dot(n, l);
             if (!(nl > 0)) continue;
             const dvec3 h = glm::normalize(l - d);
             const double spec = std::pow(std::max(glm::dot(n, h), 0.0), double(m.exponent));
             // The device counts no shadow rays toward a light behind the geometric normal.
-            const double vis = glm::dot(s.n, l) > 0 ? visibility(s, light, origin) : 1.0;
+            const double vis = glm::dot(s.n, l) > 0 ? visibility(s, int(j), origin, key) : 1.0;
             colour += vis * toD(light.color) *
                       (diffuse * nl + toD(m.specular) * spec);
         }
@@ -401,13 +408,18 @@ class Tracer {
     }
 
     // Sections 6 and 8: children at depth < B, combined with Fresnel or reflectance weights.
-    dvec3 trace(const Ray& ray, int depth) const {
+    struct PixelSample {
+        int x, y, sample;
+    };
+
+    dvec3 trace(const Ray& ray, int depth, PixelSample px) const {
         const Hit hit = closestHit(ray);
         if (hit.kind == RT_KIND_MISS) return environment(ray.dir);
         const Surface s = surface(ray, hit);
         const dev::Material& m = scene_.materials[s.material];
         const dvec3 d = ray.dir;
-        const dvec3 baseColour = base(s, d, m, spawn(s, 1));
+        const uint32_t key = dev::Sampling_PointKey(px.x, px.y, px.sample, depth);
+        const dvec3 baseColour = base(s, d, m, spawn(s, 1), key);
         const bool transparent = m.opacity < 1;
         const double n1 = s.inside ? double(m.ior) : 1.0;
         const double n2 = s.inside ? 1.0 : double(m.ior);
@@ -415,12 +427,12 @@ class Tracer {
         double f = 0, o = 1;
         dvec3 reflected(0), refracted(0);
         if (depth < opt_.bounces && (m.reflectance > 0 || transparent)) {
-            reflected = trace(Ray{spawn(s, 1), ref::reflect(d, s.n)}, depth + 1);
+            reflected = trace(Ray{spawn(s, 1), ref::reflect(d, s.n)}, depth + 1, px);
             f = transparent ? ref::fresnel(-glm::dot(d, s.n), n1, n2) : double(m.reflectance);
         }
         if (depth < opt_.bounces && transparent) {
             if (const auto t = ref::refract(d, s.n, n1 / n2)) {
-                refracted = trace(Ray{spawn(s, -1), *t}, depth + 1);
+                refracted = trace(Ray{spawn(s, -1), *t}, depth + 1, px);
                 o = m.opacity;
             }
         }
@@ -472,7 +484,7 @@ Image renderReference(const Scene& scene, const RenderOptions& options, int thre
         dvec3 sum(0);
         for (int sy = 0; sy < n; ++sy)
             for (int sx = 0; sx < n; ++sx)
-                sum += tracer.pixel(x, y, (sx + 0.5) / n, (sy + 0.5) / n);
+                sum += tracer.pixel(x, y, sy * n + sx, (sx + 0.5) / n, (sy + 0.5) / n);
         return sum / double(n * n);
     };
 
@@ -492,7 +504,8 @@ Image renderReference(const Scene& scene, const RenderOptions& options, int thre
 
     // Section 11: centre samples, then the full grid where a 4-neighbour differs by > 0.1.
     forEachRow(options.height, threads, [&](int y) {
-        for (int x = 0; x < options.width; ++x) store(image, x, y, tracer.pixel(x, y, 0.5, 0.5));
+        for (int x = 0; x < options.width; ++x)
+            store(image, x, y, tracer.pixel(x, y, 0, 0.5, 0.5));
     }, done);
     passStart = options.height;
     const Image centre = image;

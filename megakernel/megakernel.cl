@@ -12,13 +12,15 @@
 inline float3 Megakernel_Sample(const SceneData* sc, int x, int y, int sample) {
     Node nodes[RT_TREE_NODES];
     float3 colors[RT_TREE_NODES];
-    nodes[0] = RayTree_TraceNode(sc, RayTree_PrimaryRay(sc, x, y, sample), RT_RAY_PRIMARY);
+    nodes[0] = RayTree_TraceNode(sc, RayTree_PrimaryRay(sc, x, y, sample), RT_RAY_PRIMARY,
+                                 Sampling_PointKey(x, y, sample, 0));
     for (int i = 1; i < RT_TREE_NODES; ++i) {
         int parent = (i - 1) / RT_BRANCH;
         Ray ray;
         if (RayTree_ChildRay(sc, &nodes[parent], RayTree_Depth(parent), i - 1 - parent * RT_BRANCH,
                              &ray))
-            nodes[i] = RayTree_TraceNode(sc, ray, RayTree_SlotType(i));
+            nodes[i] = RayTree_TraceNode(sc, ray, RayTree_SlotType(i),
+                                         Sampling_PointKey(x, y, sample, RayTree_Depth(i)));
         else
             nodes[i].flags = 0;
     }
@@ -34,7 +36,7 @@ inline float3 Megakernel_Sample(const SceneData* sc, int x, int y, int sample) {
     float3 color = (float3)(0.0f, 0.0f, 0.0f);
     while (top > 0) {
         Pending p = stack[--top];
-        Node node = RayTree_TraceNode(sc, p.ray, p.type);
+        Node node = RayTree_TraceNode(sc, p.ray, p.type, Sampling_PointKey(x, y, sample, p.depth));
         if (node.kind == RT_KIND_MISS) {
             color += PathState_Miss(sc, &p);
             continue;

@@ -62,29 +62,41 @@ Image MegakernelPipeline::render(const Scene& scene, const RenderOptions& o) {
     const int first = o.rowBegin, last = o.lastRow();
     if (first != 0 || last != o.height)
         key += " rows " + std::to_string(first) + "-" + std::to_string(last);
-    planner_.begin(o.maxLaunchMs, key + (o.adaptiveAa ? " adaptive" : ""));
+    // Part of a row is launched in steps of the work-group width, one work-group row high.
+    const Launch rowShape = launch2d(cl_.device(), 1, 1);
+    const int colStep = int(rowShape.local[0]);
+    planner_.begin(o.maxLaunchMs, key + (o.adaptiveAa ? " adaptive" : ""), o.width, colStep);
     const bool adaptive = o.adaptiveAa && o.aa > 1;
     // Progress in rows x passes; the adaptive centres cover one row more on each side.
     const int centreFirst = std::max(0, first - 1), centreLast = std::min(o.height, last + 1);
     const long long total = (last - first) + (adaptive ? centreLast - centreFirst : 0);
     long long done = 0;
-    // One pass over rows [from, to) in row tiles sized by the planner; kernel args after the scene's.
+    // One pass over rows [from, to) in tiles sized by the planner (whole rows, or columns of one
+    // row when a row alone would run past --max-launch-ms); kernel args after the scene's.
     auto pass = [&](cl::Kernel& kernel, const char* name, int from, int to) {
         for (int row0 = from; row0 < to;) {
-            int rows = planner_.nextRows(to - row0);
+            LaunchTile tile = planner_.next(to - row0);
             settings.rowOffset = row0;
             scene_->setArgs(kernel, settings);
-            Launch range = launch2d(cl_.device(), o.width, rows);
             cl::Event e;
-            cl_.queue().enqueueNDRangeKernel(kernel, cl::NullRange, range.global, range.local,
-                                             nullptr, &e);
+            if (tile.partialRow()) {  // the global offset shifts get_global_id(0) to col0
+                size_t cols = size_t((tile.cols + colStep - 1) / colStep * colStep);
+                cl_.queue().enqueueNDRangeKernel(kernel, cl::NDRange(size_t(tile.col0), 0),
+                                                 cl::NDRange(cols, 1),
+                                                 cl::NDRange(size_t(colStep), 1), nullptr, &e);
+            } else {
+                Launch range = launch2d(cl_.device(), o.width, tile.rows);
+                cl_.queue().enqueueNDRangeKernel(kernel, cl::NullRange, range.global,
+                                                 range.local, nullptr, &e);
+            }
             e.wait();
             double ms = eventMs(e);
-            planner_.record(rows, ms);
+            planner_.record(tile, ms);
             stats_.addKernel(name, ms);
             ++stats_.launches;
-            row0 += rows;
-            reportProgress(done += rows, total);
+            if (tile.partialRow() && tile.col0 + tile.cols < o.width) continue;  // row goes on
+            row0 += tile.rows;
+            reportProgress(done += tile.rows, total);
         }
     };
     try {

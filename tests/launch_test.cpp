@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <functional>
 
 #include "core/launch_planner.h"
 #include "core/scene_loader.h"
@@ -19,14 +20,128 @@ TEST(LaunchPlanner, LearnsRowsFromMeasuredTime) {
     p.begin(0, "a");
     EXPECT_EQ(p.nextRows(480), 480);  // disabled: the whole frame
     p.begin(100, "a");
-    EXPECT_EQ(p.nextRows(480), 8);  // probe tile first
-    p.record(8, 40.0);              // 5 ms per row -> 0.8 * 100 / 5 = 16 rows
+    EXPECT_EQ(p.nextRows(480), 1);  // a probe of one row first: even it must stay short
+    p.record(1, 5.0);               // 5 ms per row; unseen rows grow at most twofold
+    EXPECT_EQ(p.nextRows(480), 2);
+    p.record(2, 10.0);
+    EXPECT_EQ(p.nextRows(480), 4);
+    p.record(4, 20.0);
+    EXPECT_EQ(p.nextRows(480), 8);
+    p.record(8, 40.0);
+    EXPECT_EQ(p.nextRows(480), 16);  // 0.8 * 100 / 5 = 16 rows fit
+    p.record(16, 80.0);
     EXPECT_EQ(p.nextRows(480), 16);
     EXPECT_EQ(p.nextRows(10), 10);
     p.record(16, 1600.0);  // 100 ms per row: still at least one row
     EXPECT_EQ(p.nextRows(480), 1);
     p.begin(100, "b");  // another workload forgets
-    EXPECT_EQ(p.nextRows(480), 8);
+    EXPECT_EQ(p.nextRows(480), 1);
+}
+
+// A fake device: row r of a 1280-pixel-wide frame costs cost(r) ms, spread evenly over its
+// columns. Runs frames through the planner as the megakernel does (columns allowed, steps of
+// 64) and returns, per frame, the launches: the tile, what the planner predicted, what it cost.
+struct PlannedLaunch {
+    LaunchTile tile;
+    double predicted, actual;
+};
+// noise(i): the factor launch i (counted over all frames) takes longer than its rows' cost.
+template <class Cost>
+std::vector<std::vector<PlannedLaunch>> runFrames(LaunchPlanner& p, int frames, int width,
+                                                  int height, Cost cost,
+                                                  std::function<double(int)> noise = {}) {
+    std::vector<std::vector<PlannedLaunch>> out;
+    int launch = 0;
+    for (int f = 0; f < frames; ++f) {
+        p.begin(100, "fake", width, 64);
+        std::vector<PlannedLaunch> launches;
+        std::vector<int> covered(size_t(width) * size_t(height), 0);
+        for (int row = 0; row < height;) {
+            LaunchTile t = p.next(height - row);
+            EXPECT_GE(t.rows, 1);
+            double actual = 0;
+            if (t.partialRow()) {
+                EXPECT_EQ(t.rows, 1);
+                EXPECT_GT(t.cols, 0);
+                EXPECT_LE(t.col0 + t.cols, width);
+                actual = cost(row) * t.cols / width;
+                for (int x = t.col0; x < t.col0 + t.cols; ++x) ++covered[size_t(row) * width + x];
+            } else {
+                for (int r = row; r < row + t.rows; ++r) {
+                    actual += cost(r);
+                    for (int x = 0; x < width; ++x) ++covered[size_t(r) * width + x];
+                }
+            }
+            if (noise) actual *= noise(launch++);
+            launches.push_back({t, p.predictedMs(t), actual});
+            p.record(t, actual);
+            if (!t.partialRow() || t.col0 + t.cols == width) row += t.rows;
+        }
+        for (int c : covered) EXPECT_EQ(c, 1) << "frame " << f << ": every pixel launched once";
+        out.push_back(launches);
+    }
+    return out;
+}
+
+// Rows 100x apart in cost (0.4 ms of sky, 40 ms of glass, in bands): once a row was measured no
+// planned tile is predicted over the cap, and from the third frame no launch runs over it.
+TEST(LaunchPlanner, NeverPlansOverTheCapOnceRowsAreMeasured) {
+    auto cost = [](int row) { return (row / 37) % 3 == 1 ? 40.0 : 0.4; };
+    LaunchPlanner p;
+    auto frames = runFrames(p, 5, 1280, 300, cost);
+    const LaunchTile& probe = frames[0][0].tile;
+    EXPECT_TRUE(probe.partialRow());  // the probe is part of one row
+    EXPECT_LE(probe.cols, 256);
+    for (size_t f = 0; f < frames.size(); ++f)
+        for (size_t i = (f == 0 ? 1 : 0); i < frames[f].size(); ++i)
+            EXPECT_LE(frames[f][i].predicted, 80.0 + 1e-9) << "frame " << f << " launch " << i;
+    for (size_t f = 2; f < frames.size(); ++f) {
+        double worst = 0;
+        for (const PlannedLaunch& l : frames[f]) worst = std::max(worst, l.actual);
+        EXPECT_LE(worst, 100.0) << "frame " << f;
+        EXPECT_LT(frames[f].size(), 200u) << "frame " << f << ": cheap rows still share launches";
+    }
+}
+
+// A shared machine: every third launch takes 1.6x its rows' cost. With the 0.8 headroom alone
+// such a launch would reach 128 ms; the planner learns the slack and keeps under the cap.
+TEST(LaunchPlanner, NoisyTimingsShrinkTheBudget) {
+    auto cost = [](int) { return 1.0; };
+    auto noise = [](int launch) { return launch % 3 == 2 ? 1.6 : 1.0; };
+    LaunchPlanner quiet, noisy;
+    auto calm = runFrames(quiet, 5, 1280, 400, cost);
+    auto busy = runFrames(noisy, 5, 1280, 400, cost, noise);
+    for (size_t f = 2; f < busy.size(); ++f) {
+        double worst = 0;
+        for (const PlannedLaunch& l : busy[f]) worst = std::max(worst, l.actual);
+        EXPECT_LE(worst, 100.0) << "frame " << f;
+        EXPECT_GT(busy[f].size(), calm[f].size()) << "frame " << f << ": smaller tiles";
+    }
+}
+
+// A row that alone costs 3x the cap is launched in column tiles that each fit.
+TEST(LaunchPlanner, SplitsARowCostlierThanTheCapIntoColumns) {
+    auto cost = [](int row) { return row == 5 ? 300.0 : 1.0; };
+    LaunchPlanner p;
+    auto frames = runFrames(p, 4, 1280, 12, cost);
+    for (size_t f = 1; f < frames.size(); ++f) {
+        int pieces = 0;
+        for (const PlannedLaunch& l : frames[f]) {
+            EXPECT_LE(l.predicted, 80.0 + 1e-9) << "frame " << f;
+            EXPECT_LE(l.actual, 100.0) << "frame " << f;
+            if (l.tile.partialRow()) {
+                ++pieces;
+                EXPECT_EQ(l.tile.col0 % 64, 0);
+            }
+        }
+        EXPECT_GE(pieces, 4) << "frame " << f << ": 300 ms in pieces of at most 80 ms";
+    }
+    // Whole rows only (the tree wavefront): such a row still gets one launch of its own.
+    LaunchPlanner rows;
+    rows.begin(100, "rows");
+    EXPECT_EQ(rows.nextRows(12), 1);
+    rows.record(1, 300.0);
+    EXPECT_EQ(rows.nextRows(11), 1);
 }
 
 TEST(LaunchPlanner, TiledFramesEqualSingleLaunch) {
@@ -49,6 +164,35 @@ TEST(LaunchPlanner, TiledFramesEqualSingleLaunch) {
     EXPECT_EQ(std::memcmp(m1.rgb.data(), m2.rgb.data(), bytes), 0);
     EXPECT_EQ(std::memcmp(w1.rgb.data(), w2.rgb.data(), bytes), 0);
     EXPECT_EQ(std::memcmp(m1.rgb.data(), w2.rgb.data(), bytes), 0);
+}
+
+// A cap below any launch: every row of the megakernel runs in column tiles of one work-group
+// width (the global offset shifts them), in both layouts and in both adaptive-AA passes, and the
+// image is the one a single launch gives.
+TEST(LaunchPlanner, ColumnTilesEqualSingleLaunch) {
+    Scene scene = loadScene("scenes/spheres.json", readImage);
+    RenderOptions o = scene.defaults;
+    o.width = 3 * 64 + 17;  // three full column steps on a CPU device and a ragged end
+    o.height = 6;
+    o.bounces = 3;
+    o.aa = 2;
+    MegakernelPipeline mega(test::device());
+    for (const char* layout : {"tree", "weighted"})
+        for (bool adaptive : {false, true}) {
+            o.layout = std::string(layout) == "tree" ? RenderOptions::Layout::Tree
+                                                     : RenderOptions::Layout::Weighted;
+            o.adaptiveAa = adaptive;
+            o.maxLaunchMs = 0;
+            Image whole = mega.render(scene, o);
+            o.maxLaunchMs = 1e-6;
+            Image tiled = mega.render(scene, o);
+            Image again = mega.render(scene, o);  // planned from the measured profile
+            int passes = adaptive ? 2 : 1;
+            EXPECT_GT(mega.stats().launches, passes * o.height) << layout << " " << adaptive;
+            size_t bytes = whole.rgb.size() * sizeof(float);
+            EXPECT_EQ(std::memcmp(whole.rgb.data(), tiled.rgb.data(), bytes), 0) << layout;
+            EXPECT_EQ(std::memcmp(whole.rgb.data(), again.rgb.data(), bytes), 0) << layout;
+        }
 }
 
 }  // namespace

@@ -98,7 +98,7 @@ kernel void Probe_Spawn(RT_SCENE_PARAMS, global const float* rays, int spawn, gl
     RT_SCENE_INIT(sc);
     global const float* r = rays + i * 6;
     Ray ray = makeRay((float3)(r[0], r[1], r[2]), (float3)(r[3], r[4], r[5]));
-    Node node = RayTree_TraceNode(&sc, ray, RT_RAY_PRIMARY);
+    Node node = RayTree_TraceNode(&sc, ray, RT_RAY_PRIMARY, 0u);  // no pixel: one fixed key
     global int* o = out + i * 8;
     for (int k = 0; k < 8; ++k) o[k] = 0;
     o[0] = node.kind;
@@ -210,14 +210,17 @@ kernel void Probe_Shade(RT_SCENE_PARAMS, global const float* rays, global float*
     global const float* r = rays + i * 6;
     Node nodes[RT_TREE_NODES];
     float3 colors[RT_TREE_NODES];
-    nodes[0] = RayTree_TraceNode(
-        &sc, makeRay((float3)(r[0], r[1], r[2]), (float3)(r[3], r[4], r[5])), RT_RAY_PRIMARY);
+    // Rays without a pixel: the sampler key of pixel i of row 0, sample 0.
+    nodes[0] = RayTree_TraceNode(&sc,
+                                 makeRay((float3)(r[0], r[1], r[2]), (float3)(r[3], r[4], r[5])),
+                                 RT_RAY_PRIMARY, Sampling_PointKey((int)i, 0, 0, 0));
     for (int k = 1; k < RT_TREE_NODES; ++k) {
         int parent = (k - 1) / RT_BRANCH;
         Ray ray;
         if (RayTree_ChildRay(&sc, &nodes[parent], RayTree_Depth(parent),
                              k - 1 - parent * RT_BRANCH, &ray))
-            nodes[k] = RayTree_TraceNode(&sc, ray, RayTree_SlotType(k));
+            nodes[k] = RayTree_TraceNode(&sc, ray, RayTree_SlotType(k),
+                                         Sampling_PointKey((int)i, 0, 0, RayTree_Depth(k)));
         else
             nodes[k].flags = 0;
     }

@@ -77,8 +77,9 @@ inline float3 RayTree_SpawnOrigin(const SceneData* sc, const Node* node, float s
 }
 
 // Traces one ray of the given RT_RAY_* type: the closest hit, its facing normal, and its
-// shadow-ray occlusion counts.
-inline Node RayTree_TraceNode(const SceneData* sc, Ray ray, int type) {
+// shadow-ray occlusion counts. key: Sampling_PointKey of the ray's pixel, AA sample and depth,
+// which places its shadow samples on the lights (core/sampling.h).
+inline Node RayTree_TraceNode(const SceneData* sc, Ray ray, int type, uint key) {
     RT_COUNT_RAY(sc, type);
     (void)type;
     Hit hit = Scene_Intersect(sc, ray, INFINITY);
@@ -149,7 +150,7 @@ inline Node RayTree_TraceNode(const SceneData* sc, Ray ray, int type) {
     n.material = (ushort)material;
     float3 origin = RayTree_SpawnOrigin(sc, &n, 1.0f);
     for (int j = 0; j < sc->settings.lightCount; ++j)
-        n.occluded[j] = (uchar)Shade_OcclusionFrom(sc, p, normal, origin, j);
+        n.occluded[j] = (uchar)Shade_OcclusionFrom(sc, p, normal, origin, j, key);
     return n;
 }
 

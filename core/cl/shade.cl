@@ -3,6 +3,7 @@
 #ifndef RTLAB_CL_SHADE
 #define RTLAB_CL_SHADE
 #include "scene.cl"
+#include "sampling.h"  // the shadow samples' hash, shared with the CPU reference
 #ifdef RT_HAS_PROCEDURAL
 #include "procedural.cl"
 #endif
@@ -137,8 +138,12 @@ inline int Shade_LightSamples(const SceneData* sc, int j) {
 }
 
 // Occluded shadow rays toward light j from `origin`, the offset start of hit point p with
-// shading normal n; 0 when the light is behind the surface.
-inline int Shade_OcclusionFrom(const SceneData* sc, float3 p, float3 n, float3 origin, int j) {
+// shading normal n; 0 when the light is behind the surface. key: the shading point's sampler
+// key (Sampling_PointKey of its pixel, AA sample and depth), which places the samples on the
+// light's disk: one per ring of equal area, jittered, at golden-angle steps from a rotation
+// (core/sampling.h; core/reference.cpp does the same in double).
+inline int Shade_OcclusionFrom(const SceneData* sc, float3 p, float3 n, float3 origin, int j,
+                               uint key) {
     Light light = sc->lights[j];
     float3 lp = f3(light.position);
     float3 w = normalize(lp - p);
@@ -151,11 +156,13 @@ inline int Shade_OcclusionFrom(const SceneData* sc, float3 p, float3 n, float3 o
     float3 t = (float3)(1.0f + sign * w.x * w.x * a, sign * b, -sign * w.x);
     float3 bt = (float3)(b, sign + w.y * w.y * a, -w.y);
     int occluded = 0;
+    float turn = Sampling_Unit(key, j, 0, 0);
     for (int k = 0; k < samples; ++k) {
         float3 q = lp;
         if (light.radius > 0.0f) {
-            float rho = light.radius * sqrt(((float)k + 0.5f) / (float)samples);
-            float phi = 2.399963229728653f * (float)k;
+            float area = ((float)k + Sampling_Unit(key, j, k, 1)) / (float)samples;
+            float rho = light.radius * sqrt(area);
+            float phi = 2.399963229728653f * (float)k + 6.283185307179586f * turn;
             q = lp + rho * (cos(phi) * t + sin(phi) * bt);
         }
         float3 v = q - origin;
@@ -168,8 +175,8 @@ inline int Shade_OcclusionFrom(const SceneData* sc, float3 p, float3 n, float3 o
 
 // The same from p itself, offset by Shade_Offset(p) along n; RayTree_TraceNode uses the hit's
 // own error bound instead (RayTree_SpawnOrigin).
-inline int Shade_Occlusion(const SceneData* sc, float3 p, float3 n, int j) {
-    return Shade_OcclusionFrom(sc, p, n, p + Shade_Offset(p) * n, j);
+inline int Shade_Occlusion(const SceneData* sc, float3 p, float3 n, int j, uint key) {
+    return Shade_OcclusionFrom(sc, p, n, p + Shade_Offset(p) * n, j, key);
 }
 
 // ---- Blinn-Phong (section 5) ----

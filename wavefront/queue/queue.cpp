@@ -166,6 +166,8 @@ private:
         sh.setArg(a, b_.nodes);
         sh.setArg(a + 1, b_.shadowQueue);
         sh.setArg(a + 2, b_.counters);
+        sh.setArg(a + 3, b_.rays.pixel);
+        sh.setArg(a + 4, b_.rays.meta);
         for (const char* name : kShadeKernels) {
             cl::Kernel& k = f_.sceneKernel(name, s);
             at = QueueFrame::setRays(k, a, b_.rays);
@@ -297,7 +299,10 @@ private:
         limit_ = std::clamp(grown, std::min(b_.pool, kProbeRays / 4), b_.pool);
     }
 
-    static constexpr size_t kProbeRays = 4096;
+    // The first bounce of a workload: small, since one ray can cost a lot (the bunny without an
+    // acceleration structure: ~70 us per ray on PoCL, so 4096 rays were ~300 ms); it grows
+    // twofold per bounce from there. The floor keeps a slow bounce from starving the pool.
+    static constexpr size_t kProbeRays = 256;
     ClContext& cl_;
     QueueFrame& f_;
     const QueueBuffers& b_;
