@@ -164,6 +164,19 @@ TEST(QueueLaunch, SweepRunsBothSizings) {
     }
     EXPECT_GT(device, 0);
     EXPECT_EQ(device, readback);
+    // The PoCL file adds a pool that holds the frame, so device sizing runs one wave per sample.
+    bench::SweepConfig cpu = bench::loadSweep(bench::findSweep("queue-launch-cpu"));
+    int pooled = 0;
+    for (const bench::Cell& cell : bench::expandCells(cpu, [&](const std::string& name) -> const Scene& {
+             return scenes.try_emplace(name, load(name)).first->second;
+         })) {
+        EXPECT_EQ(cell.options.width, 640);
+        if (cell.options.pool) {
+            EXPECT_GE(cell.options.pool, size_t(640 * 360));
+            ++pooled;
+        }
+    }
+    EXPECT_EQ(pooled, 4);
     bench::SweepConfig bad;
     try {
         bench::parseSweep("[g]\nscenes = cornell\nqueue-launch = sideways\n", "bad");

@@ -88,9 +88,12 @@ kernel void Queue_Extend(RT_SCENE_PARAMS, QUEUE_RAYS_PARAMS(rays), int n, global
     local int count[RT_Q_CLASSES + 1], base[RT_Q_CLASSES + 1];
     local int histogram[(RT_Q_MAX_DEPTH + 1) * RT_Q_CLASSES];
     int lid = get_local_id(0), size = get_local_size(0), i = get_global_id(0);
+    n = Queue_Length(n, nWord, counters);
+    // A launch sized by a bound has whole groups past the queue: they skip the local setup (the
+    // test is the same for every work-item of a group, so no barrier is left half-reached).
+    if (get_group_id(0) * size >= n) return;
     for (int k = lid; k < RT_Q_CLASSES + 1; k += size) count[k] = 0;
     for (int k = lid; k < (RT_Q_MAX_DEPTH + 1) * RT_Q_CLASSES; k += size) histogram[k] = 0;
-    n = Queue_Length(n, nWord, counters);
     barrier(CLK_LOCAL_MEM_FENCE);
     int cls = -1, slot = 0, shadowSlot = -1;
     if (i < n) {

@@ -22,6 +22,7 @@ kernel void Queue_ScanBlocks(global const int* children, int n, global int* offs
     local int tmp[RT_QUEUE_GROUP];
     int i = get_global_id(0), lid = get_local_id(0);
     n = Queue_Length(n, nWord, counters);
+    if (get_group_id(0) * RT_QUEUE_GROUP >= n) return;  // past the queue: Queue_ScanSums skips it
     int v = i < n ? children[i] : 0;
     int inclusive = Queue_ScanLocal(tmp, lid, RT_QUEUE_GROUP, v);
     if (i < n) offsets[i] = inclusive - v;
@@ -36,6 +37,8 @@ kernel void Queue_ScanSums(global int* blockSums, int blocks, global int* counte
                            int pool) {
     local int tmp[RT_QUEUE_GROUP];
     int lid = get_local_id(0), carry = 0;
+    // Launches sized by a bound: the blocks past the queue's real length were not scanned.
+    if (liveWord >= 0) blocks = min(blocks, (counters[liveWord] + RT_QUEUE_GROUP - 1) / RT_QUEUE_GROUP);
     for (int b0 = 0; b0 < blocks; b0 += RT_QUEUE_GROUP) {
         int b = b0 + lid;
         int v = b < blocks ? blockSums[b] : 0;
