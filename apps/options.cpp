@@ -34,6 +34,10 @@ void SceneFlags::add(CLI::App& cmd) {
     cmd.add_option("--pool", pool,
                    "Queue pipeline: ray slots in the pool, 1..67108864 (memory does not grow with "
                    "--bounces) [from the device: 2M on GPUs, 64K on CPUs]");
+    cmd.add_option("--queue-launch", queueLaunch,
+                   "Queue pipeline: how launches are sized: readback (the host reads each "
+                   "bounce's counts) or device (all bounces enqueued at once, counts read on the "
+                   "device) [readback]");
     cmd.add_option("--accel", accel,
                    "How rays find spheres and triangles: none (per-mesh bounding sphere only), "
                    "bv (plus 7 slab pairs per mesh), grid (uniform grid), bvh (SAH BVH) or wide "
@@ -49,7 +53,7 @@ void SceneFlags::add(CLI::App& cmd) {
                    "the hit point's rounding error, scale-free), scaled (1e-4 max(1, |p|)) or "
                    "fixed (1e-4) [bound]");
     cmd.add_flag("--fixed-offset", fixedOffset, "Same as --offset fixed");
-    cmd.add_option("--max-launch-ms", maxLaunchMs,
+    maxLaunchOption = cmd.add_option("--max-launch-ms", maxLaunchMs,
                    "Split frames into row tiles so that no kernel launch runs longer than this "
                    "(display-driver watchdogs); 0 = one launch per frame")
         ->check(CLI::Range(0.0, 1e6))
@@ -108,6 +112,7 @@ RenderOptions SceneFlags::apply(RenderOptions o) const {
             throw Error("--pool " + std::to_string(*pool) + ": must be in 1..67108864");
         o.pool = size_t(*pool);
     }
+    if (!queueLaunch.empty()) o.queueLaunch = parseQueueLaunch(queueLaunch);
     if (!accel.empty()) o.accel = parseAccel(accel);
     if (plainSphere) o.robustSphere = false;
     if (mollerTrumbore) o.watertight = false;
@@ -118,6 +123,10 @@ RenderOptions SceneFlags::apply(RenderOptions o) const {
         o.offset = RenderOptions::Offset::Fixed;
     }
     o.maxLaunchMs = maxLaunchMs;
+    // The queue's device-sized launches learn no admission limit (that takes a read-back per
+    // bounce): the default cap gives way to them, a cap asked for is refused by the pipeline.
+    bool capGiven = maxLaunchOption && maxLaunchOption->count() > 0;
+    if (o.queueLaunch == RenderOptions::QueueLaunch::Device && !capGiven) o.maxLaunchMs = 0;
     auto range = [](const char* flag, int v, int lo, int hi) {
         if (v < lo || v > hi)
             throw Error(std::string(flag) + " " + std::to_string(v) + ": must be in " +

@@ -21,11 +21,13 @@ struct SceneFlags {
     std::string layout = "tree";
     std::string memoryBudget;  // bytes, with optional K/M/G suffix
     std::optional<long long> pool;  // queue pipeline: ray slots
+    std::string queueLaunch;        // queue pipeline: readback or device
     std::string accel;
     std::string offset;  // fixed, scaled or bound; empty = the scene's default
     bool plainSphere = false, mollerTrumbore = false, fixedOffset = false;
     std::string kernelDir;
     double maxLaunchMs = 100;
+    CLI::Option* maxLaunchOption = nullptr;  // given on the command line, or its default?
 
     void add(CLI::App& cmd);
     // The scene's defaults overridden by whatever was given; throws rt::Error naming the flag.

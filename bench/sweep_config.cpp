@@ -117,7 +117,8 @@ const std::set<std::string> kGroupKeys = {"scenes", "pipelines", "sizes",  "boun
                                           "shadow-samples", "aa", "accel", "layout",
                                           "memory-budget", "adaptive", "images",
                                           "repeats", "warmup", "count-rays",
-                                          "max-launch-ms", "stop-after-failure", "max-frame-s"};
+                                          "max-launch-ms", "stop-after-failure", "max-frame-s",
+                                          "queue-launch", "pool"};
 const std::set<std::string> kTopKeys = {"reference-bounces",
                                         "reference-shadow-samples", "reference-aa"};
 
@@ -168,6 +169,10 @@ void applyGroupKey(SweepGroup& g, const std::string& key, const std::string& val
         g.countRays = p.boolean(value) ? 1 : 0;
     } else if (key == "max-launch-ms") {
         g.maxLaunchMs = p.number(value, 0, 1e6);
+    } else if (key == "queue-launch") {
+        g.queueLaunch = p.wrap([&] { return parseQueueLaunch(value); });
+    } else if (key == "pool") {
+        g.pool = value == "default" ? 0 : size_t(p.integer(value, 1, 1 << 26));
     } else if (key == "stop-after-failure") {
         g.stopAfterFailure = p.boolean(value);
     } else if (key == "max-frame-s") {
@@ -259,6 +264,8 @@ std::string Cell::settingKey() const {
       << '|' << o.aa << '|' << (accelApplies ? accelName(o.accel) : "-") << '|' << int(o.layout)
       << '|' << o.memoryBudget << '|' << o.adaptiveAa;
     if (o.maxLaunchMs > 0) k << "|L" << o.maxLaunchMs;  // absent before max-launch-ms existed
+    if (o.queueLaunch != RenderOptions::QueueLaunch::Readback) k << "|Q" << queueLaunchName(o.queueLaunch);
+    if (o.pool) k << "|P" << o.pool;
     return k.str();
 }
 
@@ -267,7 +274,7 @@ std::string Cell::batchKey() const {
     std::ostringstream k;
     k << scene << '|' << o.bounces << '|' << o.shadowSamples << '|' << o.aa << '|' << int(o.layout)
       << '|' << o.memoryBudget << '|' << o.adaptiveAa << '|' << repeats << '|' << warmup << '|'
-      << countRays << '|' << images << '|' << o.maxLaunchMs;
+      << countRays << '|' << images << '|' << o.maxLaunchMs << '|' << int(o.queueLaunch) << '|' << o.pool;
     // A cell that may be skipped depends on the smaller sizes' outcome: one size per batch.
     if (stopAfterFailure) k << '|' << o.width << 'x' << o.height;
     return k.str();
@@ -283,6 +290,9 @@ std::string Cell::label() const {
     if (accelApplies) l << ' ' << accelName(o.accel);
     if (o.layout == RenderOptions::Layout::Weighted) l << " weighted";
     if (o.adaptiveAa) l << " adaptive";
+    if (o.queueLaunch != RenderOptions::QueueLaunch::Readback)
+        l << ' ' << queueLaunchName(o.queueLaunch) << "-sized";
+    if (o.pool) l << " pool " << o.pool;
     if (o.memoryBudget)
         l << " budget "
           << (o.memoryBudget % (1 << 20) ? std::to_string(o.memoryBudget >> 10) + "K"
@@ -331,6 +341,8 @@ std::vector<Cell> expandCells(const SweepConfig& config,
                                     c.options.memoryBudget = g.memoryBudget;
                                     c.options.adaptiveAa = g.adaptive;
                                     c.options.maxLaunchMs = g.maxLaunchMs;
+                                    c.options.queueLaunch = g.queueLaunch;
+                                    c.options.pool = g.pool;
                                     c.accelApplies = prims;
                                     c.branching = scene.branching();
                                     c.groups = {g.name};

@@ -26,6 +26,16 @@ RenderOptions::Offset parseOffset(const std::string& name) {
     throw Error("--offset " + name + ": must be one of fixed, scaled, bound");
 }
 
+RenderOptions::QueueLaunch parseQueueLaunch(const std::string& name) {
+    if (name == "readback") return RenderOptions::QueueLaunch::Readback;
+    if (name == "device") return RenderOptions::QueueLaunch::Device;
+    throw Error("--queue-launch " + name + ": must be readback or device");
+}
+
+const char* queueLaunchName(RenderOptions::QueueLaunch launch) {
+    return launch == RenderOptions::QueueLaunch::Device ? "device" : "readback";
+}
+
 const char* offsetName(RenderOptions::Offset offset) {
     switch (offset) {
         case RenderOptions::Offset::Fixed: return "fixed";

@@ -40,6 +40,11 @@ struct RenderOptions {
     // Split frames into row tiles so no launch runs past this (display watchdogs); 0 = off.
     double maxLaunchMs = 0;
     size_t pool = 0;  // queue pipeline: ray slots in the pool (0 = chosen from the device)
+    // Queue pipeline: how each bounce's launches are sized. Readback: the host reads the counts
+    // once per bounce (blocking). Device: every bounce is enqueued at once over a bound the host
+    // knows, and each kernel reads its real count from the device (wavefront/queue/README.md).
+    enum class QueueLaunch { Readback, Device };
+    QueueLaunch queueLaunch = QueueLaunch::Readback;
     // Render only rows [rowBegin, rowEnd) of the frame (rowEnd 0: every row); the other rows of
     // the image returned are unspecified. Pipelines whose registry entry says supports.rowWindow
     // render just those rows (the viewer's progressive frames); the others render every row.

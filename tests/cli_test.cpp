@@ -118,6 +118,11 @@ INSTANTIATE_TEST_SUITE_P(
                 "--pool 0: must be in 1..67108864"},
         BadCase{"render scenes/spheres.json --pipeline queue --pool 8 --bounces 6 -o /tmp/x.png",
                 "use --pool 64 or more"},
+        BadCase{"render scenes/spheres.json --pipeline queue --queue-launch sideways -o /tmp/x.png",
+                "--queue-launch sideways: must be readback or device"},
+        BadCase{"render scenes/spheres.json --pipeline queue --queue-launch device "
+                "--max-launch-ms 5 -o /tmp/x.png",
+                "--queue-launch device does not go with --max-launch-ms"},
         BadCase{"render tests/data/bad_scenes/negative_radius.json -o /tmp/x.png",
                 "tests/data/bad_scenes/negative_radius.json: /spheres/"},
         BadCase{"render scenes/spheres.json --kernel-dir /no/such -o /tmp/x.png", "--kernel-dir"},

@@ -52,6 +52,9 @@ nlohmann::json settled(nlohmann::json row) {
                           "kernel_ms", "longest_launch_ms", "launches", "mrays_per_s",
                           "accel_build_ms", "kernel_resources"})
         row.erase(k);
+    // The queue pipeline's launch-sizing times (its read-back count stays).
+    if (row.contains("extras"))
+        for (const char* k : {"idle_ms", "span_ms"}) row["extras"].erase(k);
     return row;
 }
 

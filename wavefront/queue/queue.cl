@@ -39,6 +39,12 @@ typedef struct QueueRays {
     p.pixel = p##Pixel;          \
     p.meta = p##Meta
 
+// A launch's real length: the host's `n` (readback mode, word < 0), or, when launches are sized
+// on the device, the count in counters[word], never past the bound `n` the launch covers.
+inline int Queue_Length(int n, int word, global const int* counters) {
+    return word < 0 ? n : min(n, counters[word]);
+}
+
 inline Pending Queue_Load(const QueueRays* r, int i) {
     int meta = r->meta[i];
     return PathState_Make(makeRay(vload3(i, r->origin), vload3(i, r->dir)), vload3(i, r->weight),
@@ -74,14 +80,18 @@ inline int Queue_Class(const SceneData* sc, const Node* node) {
     return m.pattern != RT_PATTERN_NONE ? RT_Q_PROCEDURAL : RT_Q_DIFFUSE;
 }
 
-// From: pool [0, n) / To: nodes[i], class queues, shadow queue, per-bounce histogram.
+// From: pool [0, n) (n: see Queue_Length) / To: nodes[i], class queues, shadow queue, per-bounce histogram.
 // Pushes are aggregated per work-group in local memory: one global atomic per queue per group.
 kernel void Queue_Extend(RT_SCENE_PARAMS, QUEUE_RAYS_PARAMS(rays), int n, global Node* nodes,
                          global int* classQueues, int pool, global int* shadowQueue,
-                         global int* counters) {
+                         global int* counters, int nWord) {
     local int count[RT_Q_CLASSES + 1], base[RT_Q_CLASSES + 1];
     local int histogram[(RT_Q_MAX_DEPTH + 1) * RT_Q_CLASSES];
     int lid = get_local_id(0), size = get_local_size(0), i = get_global_id(0);
+    n = Queue_Length(n, nWord, counters);
+    // A launch sized by a bound has whole groups past the queue: they skip the local setup (the
+    // test is the same for every work-item of a group, so no barrier is left half-reached).
+    if (get_group_id(0) * size >= n) return;
     for (int k = lid; k < RT_Q_CLASSES + 1; k += size) count[k] = 0;
     for (int k = lid; k < (RT_Q_MAX_DEPTH + 1) * RT_Q_CLASSES; k += size) histogram[k] = 0;
     barrier(CLK_LOCAL_MEM_FENCE);

@@ -1,8 +1,12 @@
 // rtlab — the queue wavefront's frame loop: per AA sample, bounce after bounce over the pool until
-// every pixel's path has ended. Launches are sized by one read-back per bounce: the host reads the
-// counters after the prefix sum (children spawned, class-queue lengths) and sizes the next bounce
-// with them; the stage kernels within a bounce are launched over the queue's upper bound and read
-// their exact length from the device, so a bounce costs one host round trip, not one per queue.
+// every pixel's path has ended. Two ways to size the launches (--queue-launch):
+//  - readback (default): one read-back per bounce; the host reads the counters after the prefix
+//    sum (children spawned) and sizes the next bounce, and its refill of camera rays, with them;
+//  - device: no read-back until the frame ends. The pixels go through the pool in waves; each
+//    wave's B + 1 bounces are enqueued at once over a bound the host knows (min(pool, C x the
+//    last bound)), and every kernel reads its real length from the counters (Queue_Length).
+// Either way the stage kernels within a bounce are launched over the queue's upper bound and read
+// their exact length from the device, so a bounce costs at most one host round trip.
 #include <algorithm>
 #include <array>
 #include <cctype>
@@ -10,6 +14,7 @@
 #include <deque>
 #include <functional>
 #include <map>
+#include <tuple>
 
 #include "core/error.h"
 #include "core/pipeline_registry.h"
@@ -123,6 +128,7 @@ public:
     QueuePass(ClContext& cl, QueueFrame& f, const QueueBuffers& b, const RenderOptions& o,
               QueueStats& stats, size_t learned)
         : cl_(cl), f_(f), b_(b), o_(o), stats_(stats),
+          onDevice_(o.queueLaunch == RenderOptions::QueueLaunch::Device),
           // --max-launch-ms: start with a probe and learn what a ray costs (see adaptLimit).
           limit_(o.maxLaunchMs <= 0 ? b.pool
                  : learned         ? std::min(b.pool, learned)
@@ -138,6 +144,7 @@ public:
         bindKernels(settings);
         next_ = firstPixel();
         retry_.clear();
+        if (onDevice_) return runOnDevice(started);
         size_t n = admit(0);
         while (n > 0) {
             n = bounce(n);
@@ -162,6 +169,7 @@ private:
         ext.setArg(at + 3, cl_int(b_.pool));
         ext.setArg(at + 4, b_.shadowQueue);
         ext.setArg(at + 5, b_.counters);
+        ext.setArg(at + 6, cl_int(onDevice_ ? RT_Q_LIVE : -1));
         cl::Kernel& sh = f_.sceneKernel("Queue_Shadow", s);
         sh.setArg(a, b_.nodes);
         sh.setArg(a + 1, b_.shadowQueue);
@@ -188,9 +196,13 @@ private:
         scan.setArg(0, b_.children);
         scan.setArg(2, b_.offsets);
         scan.setArg(3, b_.blockSums);
+        scan.setArg(4, b_.counters);
+        scan.setArg(5, cl_int(onDevice_ ? RT_Q_LIVE : -1));
         cl::Kernel& sums = f_.kernel("Queue_ScanSums");
         sums.setArg(0, b_.blockSums);
         sums.setArg(2, b_.counters);
+        sums.setArg(3, cl_int(onDevice_ ? RT_Q_LIVE : -1));
+        sums.setArg(4, cl_int(b_.pool));
         cl::Kernel& cut = f_.kernel("Queue_FindCut");
         cut.setArg(0, b_.children);
         cut.setArg(1, b_.offsets);
@@ -203,12 +215,16 @@ private:
         acc.setArg(1, b_.rays.meta);
         acc.setArg(2, b_.contrib);
         acc.setArg(4, b_.sums);
+        acc.setArg(5, b_.counters);
+        acc.setArg(6, cl_int(onDevice_ ? RT_Q_CUT : -1));
         cl::Kernel& comp = f_.kernel("Queue_Compact");
         int at = QueueFrame::setRays(comp, 0, b_.staging);
         comp.setArg(at, b_.children);
         comp.setArg(at + 1, b_.offsets);
         comp.setArg(at + 2, b_.blockSums);
-        QueueFrame::setRays(comp, at + 4, b_.rays);
+        at = QueueFrame::setRays(comp, at + 4, b_.rays);
+        comp.setArg(at, b_.counters);
+        comp.setArg(at + 1, cl_int(onDevice_ ? RT_Q_CUT : -1));
     }
 
     // Camera rays into slots [first, ...): pixels cut earlier first, then new ones, as many as
@@ -222,6 +238,7 @@ private:
             std::vector<cl_int> ids(retry_.begin(), retry_.begin() + long(fromRetry));
             retry_.erase(retry_.begin(), retry_.begin() + long(fromRetry));
             cl_.queue().enqueueWriteBuffer(b_.retry, CL_TRUE, 0, ids.size() * 4, ids.data());
+            ++stats_.readbacks;  // a blocking write: the host waits for the queue as well
         }
         if (count == 0) return first;
         cl::Kernel& gen = f_.kernel("Queue_Generate");
@@ -235,12 +252,11 @@ private:
         return first + count;
     }
 
-    // One bounce of the n live rays; returns the live rays of the next one.
-    size_t bounce(size_t n) {
-        cl::CommandQueue& q = cl_.queue();
-        q.enqueueFillBuffer(b_.counters, cl_int(0), 0, RT_Q_PER_ITERATION * 4);
+    // The stages of one bounce up to the prefix sum, over n rays (readback mode: exactly the
+    // live rays; device mode: a bound on them, the kernels read the real count).
+    void enqueueStages(size_t n) {
+        cl_.queue().enqueueFillBuffer(b_.counters, cl_int(0), 0, RT_Q_PER_ITERATION * 4);
         f_.kernel("Queue_Extend").setArg(DeviceScene::kFirstKernelArg + 5, cl_int(n));
-        size_t firstEvent = f_.events().size();
         f_.launch("Queue_Extend", n);
         if (lights_ > 0) f_.launch("Queue_Shadow", n);
         for (int c = 0; c < RT_Q_CLASSES; ++c)
@@ -251,24 +267,56 @@ private:
         f_.launch("Queue_ScanBlocks", n);
         f_.kernel("Queue_ScanSums").setArg(1, cl_int(blocks));
         f_.launch("Queue_ScanSums", 1);
+        ++stats_.iterations;
+    }
+
+    // Sums of rays [0, cut) to their pixels, their children to the pool's front.
+    void enqueueAccumulate(size_t cut) {
+        f_.kernel("Queue_Accumulate").setArg(3, cl_int(cut));
+        f_.launch("Queue_Accumulate", cut);
+        f_.kernel("Queue_Compact").setArg(8, cl_int(cut));
+        f_.launch("Queue_Compact", cut);
+    }
+
+    // --queue-launch device: the pixels in waves of at most a pool of camera rays; each wave's
+    // B + 1 bounces are enqueued without waiting. A bounce's bound: the wave's camera rays, then
+    // C times the last bound, never past the pool. Paths are never cut: a bounce whose children
+    // outgrow the pool raises RT_Q_OVERFLOW and the frame is rendered again with read-backs.
+    void runOnDevice(const std::function<void(size_t started)>& started) {
+        const size_t C = size_t(b_.branching);
+        while (next_ < endPixel()) {
+            size_t bound = admit(0);
+            cl_.queue().enqueueFillBuffer(b_.counters, cl_int(bound), RT_Q_LIVE * 4, 4);
+            for (int depth = 0; depth <= o_.bounces; ++depth) {
+                enqueueStages(bound);
+                enqueueAccumulate(bound);
+                bound = std::min(b_.pool, bound * C);
+            }
+            started(next_ - firstPixel());
+        }
+    }
+
+    // One bounce of the n live rays; returns the live rays of the next one.
+    size_t bounce(size_t n) {
+        cl::CommandQueue& q = cl_.queue();
+        size_t firstEvent = f_.events().size();
+        enqueueStages(n);
         cl_int c[RT_Q_PER_ITERATION];
         q.enqueueReadBuffer(b_.counters, CL_TRUE, 0, sizeof c, c);
+        ++stats_.readbacks;
         size_t doneEvents = f_.events().size();  // complete now: their times can be read
-        ++stats_.iterations;
         size_t cut = n, kept = size_t(c[RT_Q_CHILDREN]);
         if (kept > b_.pool) {
             f_.kernel("Queue_FindCut").setArg(4, cl_int(n));
             f_.launch("Queue_FindCut", 1);
             q.enqueueReadBuffer(b_.counters, CL_TRUE, 0, sizeof c, c);
+            ++stats_.readbacks;
             cut = size_t(c[RT_Q_CUT]);
             kept = size_t(c[RT_Q_KEPT]);
             if (cut == 0) throw Error("queue pipeline: one path outgrew the pool (internal error)");
             reissue(cut, n);
         }
-        f_.kernel("Queue_Accumulate").setArg(3, cl_int(cut));
-        f_.launch("Queue_Accumulate", cut);
-        f_.kernel("Queue_Compact").setArg(8, cl_int(cut));
-        f_.launch("Queue_Compact", cut);
+        enqueueAccumulate(cut);
         if (o_.maxLaunchMs > 0) adaptLimit(n, firstEvent, doneEvents);
         return admit(kept);
     }
@@ -278,6 +326,7 @@ private:
         std::vector<cl_int> pixels(n - cut);
         cl_.queue().enqueueReadBuffer(b_.rays.pixel, CL_TRUE, cut * 4, pixels.size() * 4,
                                       pixels.data());
+        ++stats_.readbacks;
         for (size_t i = 0; i < pixels.size(); ++i)
             if (i == 0 || pixels[i] != pixels[i - 1]) {
                 retry_.push_back(pixels[i]);
@@ -308,11 +357,33 @@ private:
     const QueueBuffers& b_;
     const RenderOptions& o_;
     QueueStats& stats_;
+    bool onDevice_;
     size_t limit_, next_ = 0;
     int lights_ = 0;
     std::array<bool, RT_Q_CLASSES> classes_{};
     std::deque<cl_int> retry_;
 };
+
+// The device's busy and idle time over a frame's kernels: the span from the first start to the
+// last end, and the part of it covered by no kernel (the union of their intervals, so kernels
+// that a device runs side by side are not counted twice).
+std::pair<double, double> spanAndIdleMs(const std::vector<std::pair<std::string, cl::Event>>& events) {
+    std::vector<std::pair<cl_ulong, cl_ulong>> runs;
+    for (const auto& [name, e] : events)
+        runs.emplace_back(e.getProfilingInfo<CL_PROFILING_COMMAND_START>(),
+                          e.getProfilingInfo<CL_PROFILING_COMMAND_END>());
+    if (runs.empty()) return {0.0, 0.0};
+    std::sort(runs.begin(), runs.end());
+    cl_ulong busy = 0, reach = runs.front().first, last = 0;
+    for (auto [start, end] : runs) {
+        start = std::max(start, reach);
+        if (end > start) busy += end - start;
+        reach = std::max(reach, end);
+        last = std::max(last, end);
+    }
+    double span = double(last - runs.front().first) * 1e-6;
+    return {span, span - double(busy) * 1e-6};
+}
 
 }  // namespace
 
@@ -321,6 +392,11 @@ Image QueuePipeline::render(const Scene& scene, const RenderOptions& o) {
     checkOptions(scene, o);
     if (o.adaptiveAa && o.aa > 1)
         throw Error("--adaptive is not supported by the queue pipeline (use --pipeline mega)",
+                    FailureKind::InvalidOption);
+    const bool onDevice = o.queueLaunch == RenderOptions::QueueLaunch::Device;
+    if (onDevice && o.maxLaunchMs > 0)
+        throw Error("--queue-launch device does not go with --max-launch-ms: its admission is "
+                    "learned from each bounce's time, which needs --queue-launch readback",
                     FailureKind::InvalidOption);
     stats_ = {};
     queue_ = {};
@@ -365,6 +441,7 @@ Image QueuePipeline::render(const Scene& scene, const RenderOptions& o) {
                           std::to_string(o.height) + " B" + std::to_string(o.bounces) + " s" +
                           std::to_string(o.shadowSamples) + " " + scene.source.string();
         for (const std::string& d : programDefines(scene, o, group)) key += " " + d;
+        key += std::string(" ") + queueLaunchName(o.queueLaunch);
         if (key != learnedKey_) learnedLimit_ = 0;
         QueuePass pass(cl_, frame, buf_, o, queue_, learnedLimit_);
         // Progress in pixels started x AA samples, over the row window.
@@ -395,8 +472,22 @@ Image QueuePipeline::render(const Scene& scene, const RenderOptions& o) {
         }
         for (auto& [name, event] : frame.events()) stats_.addKernel(name, eventMs(event));
         stats_.launches = int(frame.events().size());
+        std::tie(queue_.spanMs, queue_.idleMs) = spanAndIdleMs(frame.events());
+        queue_.fellBack = words[RT_Q_OVERFLOW] != 0;
     } catch (const cl::Error& e) {
         throwClError(e, "queue-pipeline frame on " + dev.name, hint());
+    }
+    if (queue_.fellBack) {
+        // A bounce's children outgrew the pool, and device sizing does not cut paths: this
+        // frame's image is incomplete. Render it again with read-backs, which cut and restart.
+        RenderOptions again = o;
+        again.queueLaunch = RenderOptions::QueueLaunch::Readback;
+        Image image = render(scene, again);
+        queue_.fellBack = true;
+        stats_.extras["queue_launch"] = "device, fell back to readback";
+        stats_.hostMs = std::chrono::duration<double, std::milli>(
+                            std::chrono::steady_clock::now() - t0).count();
+        return image;
     }
     stats_.addBuffer("pool", queue_.poolBytes);
     stats_.addBuffer("image", buf_.imageBytes);
@@ -405,6 +496,10 @@ Image QueuePipeline::render(const Scene& scene, const RenderOptions& o) {
     stats_.extras["bounces_run"] = queue_.iterations;
     stats_.extras["restarted_paths"] = queue_.restartedPaths;
     stats_.extras["queue_lengths"] = queue_.queueLengths;  // [depth][miss, diffuse, mirror, glass]
+    stats_.extras["queue_launch"] = queueLaunchName(o.queueLaunch);
+    stats_.extras["readbacks"] = queue_.readbacks;
+    stats_.extras["span_ms"] = queue_.spanMs;
+    stats_.extras["idle_ms"] = queue_.idleMs;
     stats_.hostMs =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     return out;

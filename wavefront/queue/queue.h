@@ -45,6 +45,13 @@ struct QueueStats {
     size_t poolRays = 0, poolBytes = 0;
     int iterations = 0;
     long long restartedPaths = 0;
+    // Launch sizing (--queue-launch): blocking reads and writes the host waited on before the
+    // frame's last kernel was enqueued (one per bounce with read-backs, none on the device), the
+    // device's time from the first kernel's start to the last one's end, and the part of it in
+    // which no kernel ran: the most that sizing launches on the device could save.
+    int readbacks = 0;
+    double spanMs = 0, idleMs = 0;
+    bool fellBack = false;  // device sizing overflowed the pool: rendered again with read-backs
     std::vector<std::array<long long, 5>> queueLengths;  // RT_Q_CLASSES (queue_layout.h)
 };
 

@@ -19,8 +19,14 @@
 #define RT_Q_CUT (RT_Q_CHILDREN + 1)             // rays before the first path cut for room
 #define RT_Q_KEPT (RT_Q_CUT + 1)                 // children of the rays before the cut
 #define RT_Q_PER_ITERATION (RT_Q_KEPT + 1)
+// --queue-launch device: the live rays of the bounce now enqueued (set by the host for a wave's
+// camera rays, then by Queue_ScanSums for the next bounce; kept apart from the words cleared
+// per bounce so that it survives into the next bounce), and a flag for a bounce whose children
+// outgrew the pool (the host then renders the frame again with read-backs).
+#define RT_Q_LIVE RT_Q_PER_ITERATION
+#define RT_Q_OVERFLOW (RT_Q_LIVE + 1)
 // Then, for the whole frame, rays per bounce (depth 0..16) and class: [depth * CLASSES + class].
-#define RT_Q_HISTOGRAM RT_Q_PER_ITERATION
+#define RT_Q_HISTOGRAM (RT_Q_OVERFLOW + 1)
 #define RT_Q_MAX_DEPTH 16
 #define RT_Q_WORDS (RT_Q_HISTOGRAM + (RT_Q_MAX_DEPTH + 1) * RT_Q_CLASSES)
 

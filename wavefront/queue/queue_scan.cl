@@ -18,9 +18,11 @@ inline int Queue_ScanLocal(local int* tmp, int lid, int size, int v) {
 
 // From: children per ray / To: offsets within the work-group's block, and each block's total.
 kernel void Queue_ScanBlocks(global const int* children, int n, global int* offsets,
-                             global int* blockSums) {
+                             global int* blockSums, global const int* counters, int nWord) {
     local int tmp[RT_QUEUE_GROUP];
     int i = get_global_id(0), lid = get_local_id(0);
+    n = Queue_Length(n, nWord, counters);
+    if (get_group_id(0) * RT_QUEUE_GROUP >= n) return;  // past the queue: Queue_ScanSums skips it
     int v = i < n ? children[i] : 0;
     int inclusive = Queue_ScanLocal(tmp, lid, RT_QUEUE_GROUP, v);
     if (i < n) offsets[i] = inclusive - v;
@@ -28,9 +30,15 @@ kernel void Queue_ScanBlocks(global const int* children, int n, global int* offs
 }
 
 // One work-group: block totals to exclusive block offsets, and the grand total to the counters.
-kernel void Queue_ScanSums(global int* blockSums, int blocks, global int* counters) {
+// liveWord >= 0 (launches sized on the device): the total also becomes the next bounce's length,
+// and the rays to accumulate and compact (RT_Q_CUT) are all of this bounce's, unless the children
+// outgrow the pool: then nothing more of this wave runs and RT_Q_OVERFLOW tells the host.
+kernel void Queue_ScanSums(global int* blockSums, int blocks, global int* counters, int liveWord,
+                           int pool) {
     local int tmp[RT_QUEUE_GROUP];
     int lid = get_local_id(0), carry = 0;
+    // Launches sized by a bound: the blocks past the queue's real length were not scanned.
+    if (liveWord >= 0) blocks = min(blocks, (counters[liveWord] + RT_QUEUE_GROUP - 1) / RT_QUEUE_GROUP);
     for (int b0 = 0; b0 < blocks; b0 += RT_QUEUE_GROUP) {
         int b = b0 + lid;
         int v = b < blocks ? blockSums[b] : 0;
@@ -40,6 +48,12 @@ kernel void Queue_ScanSums(global int* blockSums, int blocks, global int* counte
         barrier(CLK_LOCAL_MEM_FENCE);  // tmp is rewritten by the next chunk
     }
     if (lid == 0) counters[RT_Q_CHILDREN] = carry;
+    if (lid == 0 && liveWord >= 0) {
+        bool fits = carry <= pool;
+        counters[RT_Q_CUT] = fits ? counters[liveWord] : 0;
+        counters[liveWord] = fits ? carry : 0;
+        if (!fits) counters[RT_Q_OVERFLOW] = 1;
+    }
 }
 
 inline int Queue_Offset(global const int* offsets, global const int* blockSums, int i) {
@@ -66,12 +80,14 @@ kernel void Queue_FindCut(global const int* children, global const int* offsets,
     counters[RT_Q_KEPT] = cut > 0 ? Queue_Offset(offsets, blockSums, cut) : 0;
 }
 
-// From: contrib of rays [0, cut) / To: the pixel's running sum of this AA sample. The first ray
+// From: contrib of rays [0, cut) (cut: see Queue_Length) / To: the pixel's running sum of this AA sample. The first ray
 // of each path's run adds the run in pool order; a path's first bounce starts the sum from zero,
 // as the megakernel's colour does.
 kernel void Queue_Accumulate(global const int* pixels, global const int* meta,
-                             global const float* contrib, int cut, global float* sums) {
+                             global const float* contrib, int cut, global float* sums,
+                             global const int* counters, int cutWord) {
     int i = get_global_id(0);
+    cut = Queue_Length(cut, cutWord, counters);
     if (i >= cut) return;
     int pixel = pixels[i];
     if (i > 0 && pixels[i - 1] == pixel) return;
@@ -83,8 +99,9 @@ kernel void Queue_Accumulate(global const int* pixels, global const int* meta,
 // From: staging slots of rays [0, cut) / To: the pool's front, at the prefix-sum offsets.
 kernel void Queue_Compact(QUEUE_RAYS_PARAMS(staging), global const int* children,
                           global const int* offsets, global const int* blockSums, int cut,
-                          QUEUE_RAYS_PARAMS(rays)) {
+                          QUEUE_RAYS_PARAMS(rays), global const int* counters, int cutWord) {
     int i = get_global_id(0);
+    cut = Queue_Length(cut, cutWord, counters);
     if (i >= cut || children[i] == 0) return;
     QUEUE_RAYS_INIT(staging);
     QUEUE_RAYS_INIT(rays);
