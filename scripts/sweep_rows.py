@@ -14,7 +14,7 @@ import zlib
 PALETTE = ["#9467bd", "#2ca02c", "#8c564b", "#1f77b4", "#17becf",
            "#ff7f0e", "#e377c2", "#d62728", "#bcbd22", "#7f7f7f"]
 LINESTYLES = ["-", "--", "-.", ":"]
-FAILURES = {"private_tree": "private ray tree over the per-work-item limit",
+FAILURES = {"private_tree": "private ray tree over rtlab's 256 KiB cap",
             "tree_row": "one row of the wavefront ray tree over the memory budget",
             "out_of_memory": "out of device memory",
             "opencl": "OpenCL error",
