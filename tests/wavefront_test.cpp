@@ -77,6 +77,29 @@ TEST(Wavefront, TiledFrameEqualsUntiled) {
     EXPECT_EQ(std::memcmp(whole.rgb.data(), tiled.rgb.data(), whole.rgb.size() * 4), 0);
 }
 
+// A row that alone takes longer than --max-launch-ms is launched in pieces of columns (issue 19):
+// with a cap no launch can meet, every row after the first probe goes in work-group-wide pieces,
+// with 2x2 AA (the image kernel adds samples, so a column traced twice would show), and the
+// frame keeps its bits. Three column steps of a CPU device's work-group (64) and a ragged end.
+TEST(Wavefront, RowCostlierThanTheCapGoesInColumnPieces) {
+    Scene scene = load("spheres");
+    RenderOptions o = scene.defaults;
+    o.width = 3 * 64 + 17;
+    o.height = 3;
+    o.bounces = 3;
+    o.aa = 2;
+    WavefrontPipeline wave(test::device());
+    o.maxLaunchMs = 0;
+    Image whole = wave.render(scene, o);
+    EXPECT_EQ(wave.stats().tiles, 1);
+    o.maxLaunchMs = 1e-6;
+    wave.render(scene, o);  // the first frame probes
+    Image pieces = wave.render(scene, o);
+    EXPECT_GT(wave.stats().tiles, o.height) << "no row was split into columns";
+    EXPECT_EQ(wave.stats().launches, 3 * o.aa * o.aa * wave.stats().tiles);
+    EXPECT_EQ(std::memcmp(whole.rgb.data(), pieces.rgb.data(), whole.rgb.size() * 4), 0);
+}
+
 TEST(Wavefront, BudgetBelowOneRowNamesABounceLimitThatFits) {
     Scene scene = load("spheres");
     RenderOptions o = scene.defaults;

@@ -166,16 +166,30 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
         // A row window has a profile of its own: the planner's is by row from the first one rendered.
         if (first != 0 || end != o.height)
             key += " rows " + std::to_string(first) + "-" + std::to_string(end);
-        planner_.begin(o.maxLaunchMs, key);
+        // A row costlier than --max-launch-ms alone is launched in pieces of columns, in steps
+        // of the work-group width (one work-group row high), as the megakernel does.
+        const Launch rowShape = launch2d(dev, 1, 1);
+        const int colStep = int(rowShape.local[0]);
+        planner_.begin(o.maxLaunchMs, key, o.width, colStep);
         stats_.tiles = 0;
-        // Progress in rows x AA passes, reported after each pass of each tile.
+        // Progress in rows x AA passes, reported after each pass of each tile (a piece of a row
+        // counts once the row is done).
         const long long total = (long long)(end - first) * samples;
         for (int row0 = first, tile = 0; row0 < end; row0 += tile) {
             // Rows bounded by the tree buffer and, when asked, by the time one launch may take.
-            tile = std::min(rows, planner_.nextRows(end - row0));
+            LaunchTile plan = planner_.next(end - row0);
+            if (!plan.partialRow()) plan.rows = std::clamp(plan.rows, 1, rows);
+            tile = plan.partialRow() ? 1 : plan.rows;
             ++stats_.tiles;
             size_t firstEvent = events.size();
             Launch range = launch2d(dev, o.width, tile);
+            cl::NDRange offset = cl::NullRange;
+            if (plan.partialRow()) {  // the global offset shifts get_global_id(0) to col0
+                range.global = cl::NDRange(size_t((plan.cols + colStep - 1) / colStep * colStep), 1);
+                range.local = cl::NDRange(size_t(colStep), 1);
+                offset = cl::NDRange(size_t(plan.col0), 0);
+            }
+            const bool rowDone = !plan.partialRow() || plan.col0 + plan.cols >= o.width;
             settings.rowOffset = row0;
             // AA in passes: one tree per pixel, reused by every sample; image accumulates. The
             // tile's P = width x tile pixels set the stride of the slot-major buffers.
@@ -193,13 +207,15 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
                 cl::Event et, ei, er;
                 std::vector<cl::Event> waitTrace;
                 if (haveLast) waitTrace.push_back(last);
-                cl_.queue().enqueueNDRangeKernel(trace, cl::NullRange, range.global, range.local,
+                cl_.queue().enqueueNDRangeKernel(trace, offset, range.global, range.local,
                                                  waitTrace.empty() ? nullptr : &waitTrace, &et);
                 std::vector<cl::Event> waitImage{et};
-                cl_.queue().enqueueNDRangeKernel(image, cl::NullRange, range.global, range.local,
+                cl_.queue().enqueueNDRangeKernel(image, offset, range.global, range.local,
                                                  &waitImage, &ei);
                 // Only this tile's flags were set (its pixels' words come first in the buffer),
-                // so only they need clearing; payloads are never cleared.
+                // so only they need clearing; payloads are never cleared. A piece of a row clears
+                // the whole row's words: the others are clear already, and the row's words are
+                // strided by slot, so its own are not one range.
                 size_t tileWords = size_t(o.width) * size_t(tile) * flagWords;
                 reset.setArg(1, cl_ulong(tileWords));
                 std::vector<cl::Event> waitReset{ei};
@@ -211,7 +227,8 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
                 // setArg copies the settings, so the next pass may change them right away.
                 if (progress_) {
                     er.wait();
-                    reportProgress((long long)(row0 - first) * samples + (long long)(tile) * (s + 1),
+                    reportProgress((long long)(row0 - first) * samples +
+                                       (rowDone ? (long long)(tile) * (s + 1) : 0),
                                    total);
                 }
             }
@@ -221,8 +238,9 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
                 double slowest = 0;
                 for (size_t i = firstEvent; i < events.size(); ++i)
                     slowest = std::max(slowest, eventMs(events[i]));
-                planner_.record(tile, slowest);
+                planner_.record(plan, slowest);
             }
+            if (!rowDone) tile = 0;  // the row goes on in its next piece
         }
         // Only the window's rows: the others of the image buffer may hold an earlier frame's.
         const size_t rowBytes = size_t(o.width) * 3 * sizeof(float);
