@@ -83,10 +83,10 @@ int runCompare() {
     double cpuMs = cpu->stats().hostMs;
     if (!a.outputPrefix.empty()) writeImage(reference, a.outputPrefix + "-" + ref.name + ".png");
 
-    std::printf("%-6s %12s %12s %14s %12s %12s\n", "pipe", "device ms", "host ms", "within 2/255",
-                "mean |err|", "max |err|");
-    std::printf("%-6s %12s %12.2f %14s %12s %12s\n", ref.name.c_str(), "-", cpuMs, "reference",
-                "-", "-");
+    std::printf("%-6s %12s %12s %14s %12s %12s %12s %10s %9s\n", "pipe", "device ms", "host ms",
+                "within 2/255", "mean |err|", "max |err|", "rays", "Mrays/s", "launches");
+    std::printf("%-6s %12s %12.2f %14s %12s %12s %12s %10s %9s\n", ref.name.c_str(), "-", cpuMs,
+                "reference", "-", "-", "-", "-", "-");
     const std::vector<std::string> names = registry.names(true);
     std::vector<Image> images;
     long long nonfinite = countNonFinite(reference);
@@ -105,11 +105,20 @@ int runCompare() {
             dev.push_back(p->stats().deviceMs);
             host.push_back(p->stats().hostMs);
         }
+        const int launches = p->stats().launches;
+        // Rays counted in one more frame, untimed: the device counters cost time of their own.
+        RenderOptions counted = o;
+        counted.countRays = true;
+        p->render(scene, counted);
+        unsigned long long rays = 0;
+        if (p->stats().raysCounted)
+            for (int t = 0; t < RT_RAY_TYPES; ++t) rays += p->stats().rays[t];
         ImageDiff d = compareImages(img, reference, 2.0 / 255.0);
         nonfinite += countNonFinite(img);
-        std::printf("%-6s %12.3f %12.3f %13.3f%% %10.3f/255 %8.2f/255\n", name.c_str(),
-                    median(dev), median(host), 100.0 * d.fractionWithin, d.meanAbs * 255.0,
-                    d.maxAbs * 255.0);
+        std::printf("%-6s %12.3f %12.3f %13.3f%% %10.3f/255 %8.2f/255 %12llu %10.1f %9d\n",
+                    name.c_str(), median(dev), median(host), 100.0 * d.fractionWithin,
+                    d.meanAbs * 255.0, d.maxAbs * 255.0, rays,
+                    median(dev) > 0 ? double(rays) / (median(dev) * 1e3) : 0.0, launches);
         if (!a.outputPrefix.empty())
             writeImage(img, a.outputPrefix + "-" + name + ".png");
         images.push_back(std::move(img));

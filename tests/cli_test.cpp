@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <fstream>
 #include <filesystem>
+#include <sstream>
 #include <string>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -168,6 +169,27 @@ TEST(Cli, PipelineHelpListsTheRegistry) {
     Result c = run("compare --help");
     for (const std::string& name : rt::pipelineRegistry().names(true))
         EXPECT_NE(c.out.find(name), std::string::npos) << name << "\n" << c.out;
+}
+
+// compare prints each pipeline's rays (counted in an untimed frame), Mrays/s and launches beside
+// its times and errors: at least one primary ray a pixel, and at least one launch.
+TEST(Cli, CompareShowsRaysRateAndLaunches) {
+    Result r = run("compare scenes/shadows.json --size 32x18 --repeats 1");
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_NE(r.out.find("Mrays/s"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("launches"), std::string::npos) << r.out;
+    for (const std::string& name : rt::pipelineRegistry().names(true)) {
+        if (rt::pipelineRegistry().get(name).reference) continue;
+        size_t at = r.out.find("\n" + name + " ");
+        ASSERT_NE(at, std::string::npos) << name << "\n" << r.out;
+        std::istringstream line(r.out.substr(at + 1, r.out.find('\n', at + 1) - at - 1));
+        std::vector<std::string> cols;
+        for (std::string c; line >> c;) cols.push_back(c);
+        ASSERT_EQ(cols.size(), 9u) << line.str();
+        EXPECT_GE(std::stoll(cols[6]), 32 * 18) << name << ": rays";  // primary rays at least
+        EXPECT_GT(std::stod(cols[7]), 0.0) << name << ": Mrays/s";
+        EXPECT_GE(std::stoi(cols[8]), 1) << name << ": launches";
+    }
 }
 
 // --stats prints ray counts and rays/s; --stats-json writes them for scripts.
