@@ -333,6 +333,11 @@ void renderBenchmark(benchmark::State& state, const std::string& name, ClContext
     state.counters["private_bytes"] = double(s.privateBytes);
     state.counters["tree_nodes"] = double(treeNodeCount(scene->branching(), o.bounces));
     state.counters["tiles"] = s.tiles;
+    // Numeric extras of the last timed frame (the wavefront's tree_used, the queue's span_ms and
+    // idle_ms, ...): timings must not come from the ray-counting frame, whose atomics slow it.
+    const nlohmann::json timedExtras = s.extras;
+    for (const auto& [key, value] : timedExtras.items())
+        if (value.is_number()) state.counters[key] = value.get<double>();
     if (countRays) {
         Measurement m;
         m.deviceMs = state.iterations() ? devSum / double(state.iterations()) : 0;
@@ -351,9 +356,9 @@ void renderBenchmark(benchmark::State& state, const std::string& name, ClContext
                 state.counters[std::string("rays_") + rayTypeName(i)] = double(m.rays[size_t(i)]);
             state.counters["Mrays_per_s"] = m.mrays;
         }
-        // Numeric extras (the wavefront's tree_used, ...) as they are.
+        // What only the counting frame knows (the share of tree slots used, ...).
         for (const auto& [key, value] : m.extras.items())
-            if (value.is_number())
+            if (value.is_number() && !timedExtras.contains(key))
                 state.counters[key] = value.get<double>();
     }
 }

@@ -154,7 +154,10 @@ std::vector<Measurement> measureCells(ClContext& cl, const Scene& scene,
                 pipelines[k]->render(scene, counting);
                 m.rays = pipelines[k]->stats().rays;
                 m.raysCounted = pipelines[k]->stats().raysCounted;
-                m.extras.update(pipelines[k]->stats().extras);  // what needs the counts
+                // What needs the counts; the timed frames' extras (span_ms, idle_ms) stay,
+                // since the counting frame's atomics slow it.
+                for (const auto& [key, value] : pipelines[k]->stats().extras.items())
+                    if (!m.extras.contains(key)) m.extras[key] = value;
             });
             if (error.empty()) deriveRayCounters(m);
         }

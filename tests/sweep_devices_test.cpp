@@ -169,5 +169,26 @@ TEST(SweepDevices, DeviceListsAreResolvedOrRefusedByName) {
     }
 }
 
+// A row's timing extras come from its timed frames, not from the untimed ray-counting frame that
+// follows them (its atomics slow it): the queue's span less its idle time is the last timed
+// frame's kernel time, while the rays are counted.
+TEST(SweepRows, TimingExtrasComeFromTheTimedFrames) {
+    bench::SweepConfig config = bench::parseSweep(
+        "repeats = 3\nwarmup = 1\ncount-rays = yes\n[q]\nscenes = cornell\npipelines = queue\n"
+        "sizes = 64x36\nbounces = 4\n", "extras-test");
+    bench::SweepRunOptions o;
+    o.device = std::to_string(test::device().device().index);
+    std::vector<nlohmann::json> rows;
+    bench::runSweep(config, o, nullptr,
+                    [&](const nlohmann::json& row, const Image*) { rows.push_back(row); });
+    ASSERT_EQ(rows.size(), 1u);
+    const nlohmann::json& r = rows[0];
+    ASSERT_EQ(r["status"], "ok") << r.dump();
+    EXPECT_EQ(r["rays"]["primary"].get<long long>(), 64 * 36);
+    double busy = r["extras"]["span_ms"].get<double>() - r["extras"]["idle_ms"].get<double>();
+    double last = r["frame_ms"].back().get<double>();
+    EXPECT_NEAR(busy, last, 1e-6 * std::max(1.0, last)) << r["frame_ms"].dump();
+}
+
 }  // namespace
 }  // namespace rt
