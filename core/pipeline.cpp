@@ -236,4 +236,16 @@ Launch launch2d(const DeviceInfo& device, int width, int rows) {
     return {cl::NDRange((width + lx - 1) / lx * lx, (rows + ly - 1) / ly * ly), cl::NDRange(lx, ly)};
 }
 
+int columnStep(const DeviceInfo& device) { return int(launch2d(device, 1, 1).local[0]); }
+
+TileRange tileRange(const DeviceInfo& device, int width, const LaunchTile& tile) {
+    if (!tile.partialRow()) {
+        Launch rows = launch2d(device, width, tile.rows);
+        return {cl::NullRange, rows.global, rows.local};
+    }
+    const size_t step = size_t(columnStep(device));
+    return {cl::NDRange(size_t(tile.col0), 0), cl::NDRange((size_t(tile.cols) + step - 1) / step * step, 1),
+            cl::NDRange(step, 1)};
+}
+
 }  // namespace rt

@@ -17,6 +17,7 @@
 #include "core/accel.h"
 #include "core/cl_runtime.h"
 #include "core/image.h"
+#include "core/launch_planner.h"
 #include "core/scene.h"
 
 namespace rt {
@@ -140,5 +141,16 @@ struct Launch {
     cl::NDRange global, local;
 };
 Launch launch2d(const DeviceInfo& device, int width, int rows);
+
+// Part of a row is launched in steps of launch2d's work-group width, one work-group row high.
+int columnStep(const DeviceInfo& device);
+
+// The NDRange of one tile the LaunchPlanner planned: whole rows as launch2d shapes them, or
+// columns [col0, col0 + cols) of one row, placed by the global offset so that get_global_id(0)
+// is the pixel's x (kernels drop x >= width).
+struct TileRange {
+    cl::NDRange offset, global, local;
+};
+TileRange tileRange(const DeviceInfo& device, int width, const LaunchTile& tile);
 
 }  // namespace rt

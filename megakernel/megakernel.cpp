@@ -62,10 +62,8 @@ Image MegakernelPipeline::render(const Scene& scene, const RenderOptions& o) {
     const int first = o.rowBegin, last = o.lastRow();
     if (first != 0 || last != o.height)
         key += " rows " + std::to_string(first) + "-" + std::to_string(last);
-    // Part of a row is launched in steps of the work-group width, one work-group row high.
-    const Launch rowShape = launch2d(cl_.device(), 1, 1);
-    const int colStep = int(rowShape.local[0]);
-    planner_.begin(o.maxLaunchMs, key + (o.adaptiveAa ? " adaptive" : ""), o.width, colStep);
+    planner_.begin(o.maxLaunchMs, key + (o.adaptiveAa ? " adaptive" : ""), o.width,
+                   columnStep(cl_.device()));
     const bool adaptive = o.adaptiveAa && o.aa > 1;
     // Progress in rows x passes; the adaptive centres cover one row more on each side.
     const int centreFirst = std::max(0, first - 1), centreLast = std::min(o.height, last + 1);
@@ -79,16 +77,9 @@ Image MegakernelPipeline::render(const Scene& scene, const RenderOptions& o) {
             settings.rowOffset = row0;
             scene_->setArgs(kernel, settings);
             cl::Event e;
-            if (tile.partialRow()) {  // the global offset shifts get_global_id(0) to col0
-                size_t cols = size_t((tile.cols + colStep - 1) / colStep * colStep);
-                cl_.queue().enqueueNDRangeKernel(kernel, cl::NDRange(size_t(tile.col0), 0),
-                                                 cl::NDRange(cols, 1),
-                                                 cl::NDRange(size_t(colStep), 1), nullptr, &e);
-            } else {
-                Launch range = launch2d(cl_.device(), o.width, tile.rows);
-                cl_.queue().enqueueNDRangeKernel(kernel, cl::NullRange, range.global,
-                                                 range.local, nullptr, &e);
-            }
+            TileRange range = tileRange(cl_.device(), o.width, tile);
+            cl_.queue().enqueueNDRangeKernel(kernel, range.offset, range.global, range.local,
+                                             nullptr, &e);
             e.wait();
             double ms = eventMs(e);
             planner_.record(tile, ms);

@@ -168,9 +168,7 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
             key += " rows " + std::to_string(first) + "-" + std::to_string(end);
         // A row costlier than --max-launch-ms alone is launched in pieces of columns, in steps
         // of the work-group width (one work-group row high), as the megakernel does.
-        const Launch rowShape = launch2d(dev, 1, 1);
-        const int colStep = int(rowShape.local[0]);
-        planner_.begin(o.maxLaunchMs, key, o.width, colStep);
+        planner_.begin(o.maxLaunchMs, key, o.width, columnStep(dev));
         stats_.tiles = 0;
         // Progress in rows x AA passes, reported after each pass of each tile (a piece of a row
         // counts once the row is done).
@@ -182,13 +180,7 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
             tile = plan.partialRow() ? 1 : plan.rows;
             ++stats_.tiles;
             size_t firstEvent = events.size();
-            Launch range = launch2d(dev, o.width, tile);
-            cl::NDRange offset = cl::NullRange;
-            if (plan.partialRow()) {  // the global offset shifts get_global_id(0) to col0
-                range.global = cl::NDRange(size_t((plan.cols + colStep - 1) / colStep * colStep), 1);
-                range.local = cl::NDRange(size_t(colStep), 1);
-                offset = cl::NDRange(size_t(plan.col0), 0);
-            }
+            const TileRange range = tileRange(dev, o.width, plan);
             const bool rowDone = !plan.partialRow() || plan.col0 + plan.cols >= o.width;
             settings.rowOffset = row0;
             // AA in passes: one tree per pixel, reused by every sample; image accumulates. The
@@ -207,10 +199,10 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
                 cl::Event et, ei, er;
                 std::vector<cl::Event> waitTrace;
                 if (haveLast) waitTrace.push_back(last);
-                cl_.queue().enqueueNDRangeKernel(trace, offset, range.global, range.local,
+                cl_.queue().enqueueNDRangeKernel(trace, range.offset, range.global, range.local,
                                                  waitTrace.empty() ? nullptr : &waitTrace, &et);
                 std::vector<cl::Event> waitImage{et};
-                cl_.queue().enqueueNDRangeKernel(image, offset, range.global, range.local,
+                cl_.queue().enqueueNDRangeKernel(image, range.offset, range.global, range.local,
                                                  &waitImage, &ei);
                 // Only this tile's flags were set (its pixels' words come first in the buffer),
                 // so only they need clearing; payloads are never cleared. A piece of a row clears
