@@ -16,6 +16,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <thread>
 
 #include "bench/embree_peer.h"
@@ -24,6 +25,7 @@
 #include "core/accel.h"
 #include "core/cl_runtime.h"
 #include "core/error.h"
+#include "core/kernel_resources.h"
 #include "core/pipeline.h"
 #include "core/scene_loader.h"
 
@@ -137,6 +139,7 @@ struct PeerResult {
     std::vector<double> primaryS, shadowS;
     std::vector<double> primaryDevS, shadowDevS;  // rtlab: the kernels' profiling-event time
     long long hits = 0, blocked = 0, primaryMismatch = 0, shadowMismatch = 0;
+    std::map<std::string, double> resources;  // rtlab: registers, spills, private bytes per kernel
 };
 
 struct Args {
@@ -224,10 +227,18 @@ bool report(const Args& a, const Scene& scene, const RenderOptions& o, ClContext
                         {"primary_vs_reference", ep > 0 ? mp / ep : 0},
                         {"shadow_vs_reference", es > 0 ? ms / es : 0},
                         {"primary_mismatch", p.primaryMismatch},
-                        {"shadow_mismatch", p.shadowMismatch}});
+                        {"shadow_mismatch", p.shadowMismatch},
+                        {"kernel_resources", p.resources}});
     }
     std::printf("kernel time only (profiling events), primary / shadow Mray/s:%s\n",
                 kernelOnly.c_str());
+    // What each kernel costs the device per work-item: on a GPU, registers bound occupancy.
+    for (const PeerResult& p : peers) {
+        if (p.resources.empty()) continue;
+        std::printf("%s kernels:", p.name.c_str());
+        for (const auto& [key, value] : p.resources) std::printf(" %s %g;", key.c_str(), value);
+        std::printf("\n");
+    }
     // The work behind the figures: what a ray does in each BVH, and the time per node visit
     // that rtlab's rays/s implies on the cores both peers share. The wide build keeps the binary
     // tree it collapses, over the same triangle order.
@@ -305,6 +316,7 @@ int run(const Args& a) {
         o.accel = parseAccel(list.substr(p, q - p));
         rtlab.push_back(std::make_unique<RtlabPeer>(cl, scene, o));
         peers.push_back({std::string("rtlab ") + accelName(o.accel), rtlab.back()->device.accelStats().buildMs});
+        peers.back().resources = kernelResources(rtlab.back()->program, cl.device().device);
         p = q + 1;
     }
 
