@@ -251,6 +251,8 @@ cl::Program ClContext::program(const std::string& mainFile, const std::vector<st
     // measurable cost.
     if (device_.correctlyRoundedDivSqrt) options += " -cl-fp32-correctly-rounded-divide-sqrt";
     for (const std::string& d : defines) options += " -D" + d;
+    // Kernels pick the cheaper form of a few operations per kind of device (core/cl/accel.cl).
+    if (device_.type == "CPU") options += " -DRT_DEVICE_CPU";
     // Registers and spills per kernel in the build log (core/kernel_resources.h, issue 15).
     if (device_.vendor.find("NVIDIA") != std::string::npos) options += " -cl-nv-verbose";
     // Extra compiler options for experiments (e.g. -cl-fast-relaxed-math); part of the cache key.
