@@ -14,12 +14,14 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <thread>
 
 #include "bench/embree_peer.h"
 #include "bench/measure.h"
+#include "bench/ray_batch.h"
 #include "bench/trace_visits.h"
 #include "core/accel.h"
 #include "core/cl_runtime.h"
@@ -80,45 +82,6 @@ std::vector<BatchRay> shadowRays(const Scene& s, const std::vector<BatchRay>& pr
     return rays;
 }
 
-// rtlab's side: one --accel structure on the device, and the two batch kernels bound to it.
-struct RtlabPeer {
-    RtlabPeer(ClContext& cl, const Scene& s, const RenderOptions& o)
-        : device(cl, s, o.accel),
-          program(cl.program("trace_rays.cl", featureDefines(s, o))),
-          closest(program, "Rays_Closest"),
-          occluded(program, "Rays_Occluded") {
-        device.setArgs(closest, makeSettings(s, o));
-        device.setArgs(occluded, makeSettings(s, o));
-    }
-    // Wall seconds from the launch to the end of the kernel (the read-back is not timed); the
-    // kernel's own time (profiling event) goes to lastDeviceS, for a GPU where launches count.
-    double run(ClContext& cl, cl::Kernel& k, const cl::Buffer& in, const cl::Buffer& out,
-               size_t n, size_t local) {
-        k.setArg(DeviceScene::kFirstKernelArg, in);
-        k.setArg(DeviceScene::kFirstKernelArg + 1, out);
-        k.setArg(DeviceScene::kFirstKernelArg + 2, cl_int(n));
-        auto t0 = std::chrono::steady_clock::now();
-        // A local size must divide the global one: round up; the kernels skip the padding.
-        size_t global = local ? (n + local - 1) / local * local : n;
-        cl::Event done;
-        cl.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(global),
-                                        local ? cl::NDRange(local) : cl::NullRange, nullptr, &done);
-        cl.queue().finish();
-        lastDeviceS = 1e-3 * eventMs(done);
-        return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    }
-    double lastDeviceS = 0;
-    DeviceScene device;
-    cl::Program program;
-    cl::Kernel closest, occluded;
-};
-
-template <typename T>
-cl::Buffer upload(ClContext& cl, const std::vector<T>& v) {
-    return cl::Buffer(cl.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR,
-                      std::max<size_t>(v.size() * sizeof(T), 16), const_cast<T*>(v.data()));
-}
-
 template <typename T>
 std::vector<T> download(ClContext& cl, const cl::Buffer& b, size_t n) {
     std::vector<T> v(n);
@@ -137,7 +100,24 @@ struct PeerResult {
     std::vector<double> primaryS, shadowS;
     std::vector<double> primaryDevS, shadowDevS;  // rtlab: the kernels' profiling-event time
     long long hits = 0, blocked = 0, primaryMismatch = 0, shadowMismatch = 0;
+    // A packet peer: the single-ray peer of its structure, and the rays whose t (bit for bit) or
+    // occlusion differs from it; -1 without one.
+    std::string single;
+    long long primaryVsSingle = -1, shadowVsSingle = -1;
 };
+
+// One --accels entry: a structure name (one ray per work-item) or wide-p8 / wide-p16 (packets
+// of 8 or 16 rays per work-item, BatchTracer refuses other structures).
+RenderOptions::Accel parsePeerEntry(const std::string& entry, int& packet) {
+    size_t dash = entry.rfind("-p");
+    packet = 0;
+    if (dash == std::string::npos) return parseAccel(entry);
+    std::string n = entry.substr(dash + 2);
+    if (n.empty() || n.find_first_not_of("0123456789") != std::string::npos || n.size() > 3)
+        throw Error("--accels " + entry + ": expected a structure, or wide-p8 / wide-p16");
+    packet = std::stoi(n);
+    return parseAccel(entry.substr(0, dash));
+}
 
 struct Args {
     std::string scene, size, accels = "bvh,wide", device = "cpu", out;
@@ -194,10 +174,10 @@ bool report(const Args& a, const Scene& scene, const RenderOptions& o, ClContext
                           " threads").c_str()
                        : "built without Embree: ratios against the first structure");
     std::string versus = "x " + peers[0].name.substr(peers[0].name.find(' ') + 1);
-    std::printf("%-12s %10s %14s %14s %10s %10s %9s %9s\n", "peer", "build ms", "primary Mray/s",
+    std::printf("%-15s %10s %14s %14s %10s %10s %9s %9s\n", "peer", "build ms", "primary Mray/s",
                 "shadow Mray/s", "hits", "occluded", versus.c_str(), "mismatch");
     bool agree = true;
-    std::string kernelOnly;
+    std::string kernelOnly, sameAsSingle;
     nlohmann::json rows = nlohmann::json::array();
     double ep = mrays(primary.size(), peers[0].primaryS), es = mrays(shadow.size(), peers[0].shadowS);
     for (const PeerResult& p : peers) {
@@ -205,7 +185,7 @@ bool report(const Args& a, const Scene& scene, const RenderOptions& o, ClContext
         bool ok = p.primaryMismatch <= allowed(primary.size()) &&
                   p.shadowMismatch <= allowed(shadow.size());
         agree = agree && ok;
-        std::printf("%-12s %10.1f %14.2f %14.2f %10lld %10lld %4.2f/%4.2f %4lld/%lld%s\n",
+        std::printf("%-15s %10.1f %14.2f %14.2f %10lld %10lld %4.2f/%4.2f %4lld/%lld%s\n",
                     p.name.c_str(), p.buildMs, mp, ms, p.hits, p.blocked, ep > 0 ? mp / ep : 0,
                     es > 0 ? ms / es : 0, p.primaryMismatch, p.shadowMismatch, ok ? "" : "  DISAGREE");
         if (!p.primaryDevS.empty())
@@ -225,9 +205,20 @@ bool report(const Args& a, const Scene& scene, const RenderOptions& o, ClContext
                         {"shadow_vs_reference", es > 0 ? ms / es : 0},
                         {"primary_mismatch", p.primaryMismatch},
                         {"shadow_mismatch", p.shadowMismatch}});
+        if (!p.single.empty()) {
+            rows.back()["single_ray_peer"] = p.single;
+            rows.back()["primary_t_differs_from_single_ray"] = p.primaryVsSingle;
+            rows.back()["shadow_differs_from_single_ray"] = p.shadowVsSingle;
+            sameAsSingle += " " + p.name + " vs " + p.single + ": " +
+                            std::to_string(p.primaryVsSingle) + " primary t / " +
+                            std::to_string(p.shadowVsSingle) + " shadow;";
+        }
     }
     std::printf("kernel time only (profiling events), primary / shadow Mray/s:%s\n",
                 kernelOnly.c_str());
+    if (!sameAsSingle.empty())
+        std::printf("rays whose result differs from the single-ray kernels:%s\n",
+                    sameAsSingle.c_str());
     // The work behind the figures: what a ray does in each BVH, and the time per node visit
     // that rtlab's rays/s implies on the cores both peers share. The wide build keeps the binary
     // tree it collapses, over the same triangle order.
@@ -298,61 +289,69 @@ int run(const Args& a) {
         peers.push_back({"embree", embree->buildMs()});
     }
     const size_t off = peers.size();  // rtlab structure k is peers[off + k]
-    std::vector<std::unique_ptr<RtlabPeer>> rtlab;
+    std::vector<std::unique_ptr<BatchTracer>> rtlab;
+    std::vector<RenderOptions::Accel> accels;
     std::string list = a.accels;
     for (size_t p = 0; p <= list.size();) {
         size_t q = std::min(list.find(',', p), list.size());
-        o.accel = parseAccel(list.substr(p, q - p));
-        rtlab.push_back(std::make_unique<RtlabPeer>(cl, scene, o));
-        peers.push_back({std::string("rtlab ") + accelName(o.accel), rtlab.back()->device.accelStats().buildMs});
+        std::string entry = list.substr(p, q - p);
+        int packet = 0;
+        o.accel = parsePeerEntry(entry, packet);
+        rtlab.push_back(std::make_unique<BatchTracer>(cl, scene, o, packet, entry));
+        accels.push_back(o.accel);
+        std::string name = std::string("rtlab ") + accelName(o.accel);
+        if (packet) name += "-p" + std::to_string(packet);
+        peers.push_back({name, rtlab.back()->device().accelStats().buildMs});
         p = q + 1;
     }
 
     // The reference hits (Embree's, else the first structure's) give the shadow rays.
     std::vector<BatchRay> primary = primaryRays(scene, o.width, o.height);
-    cl::Buffer primaryIn = upload(cl, primary);
+    cl::Buffer primaryIn = uploadRays(cl, primary);
     cl::Buffer tOut(cl.context(), CL_MEM_WRITE_ONLY, primary.size() * 4);
     std::vector<float> t;
     std::vector<dev::Float3> normal;
     if (embree) {
         embree->intersect(primary, t, normal);
     } else {
-        rtlab[0]->run(cl, rtlab[0]->closest, primaryIn, tOut, primary.size(), a.local);
+        rtlab[0]->closest(primaryIn, tOut, primary.size(), a.local);
         t = download<float>(cl, tOut, primary.size());
     }
     std::vector<BatchRay> shadow = shadowRays(scene, primary, t, normal, sceneSize);
-    cl::Buffer shadowIn = upload(cl, shadow);
+    cl::Buffer shadowIn = uploadRays(cl, shadow);
     cl::Buffer occOut(cl.context(), CL_MEM_WRITE_ONLY, std::max<size_t>(shadow.size(), 4) * 4);
 
     std::vector<int> blocked;
+    std::vector<std::vector<float>> firstT(rtlab.size());  // round -1's results, peer by peer
+    std::vector<std::vector<int>> firstBlocked(rtlab.size());
     for (int round = -1; round < a.rounds; ++round) {  // round -1 warms up and checks the hits
         double s = 0;
         if (embree) s = embree->intersect(primary, t, normal);
         if (embree && round >= 0) peers[0].primaryS.push_back(s);
         for (size_t k = 0; k < rtlab.size(); ++k) {
-            s = rtlab[k]->run(cl, rtlab[k]->closest, primaryIn, tOut, primary.size(), a.local);
+            s = rtlab[k]->closest(primaryIn, tOut, primary.size(), a.local);
             if (round >= 0) peers[off + k].primaryS.push_back(s);
-            if (round >= 0) peers[off + k].primaryDevS.push_back(rtlab[k]->lastDeviceS);
+            if (round >= 0) peers[off + k].primaryDevS.push_back(rtlab[k]->lastDeviceS());
             if (round >= 0) continue;
-            std::vector<float> mine = download<float>(cl, tOut, primary.size());
+            firstT[k] = download<float>(cl, tOut, primary.size());
             for (size_t i = 0; i < primary.size(); ++i) {
-                peers[off + k].hits += mine[i] >= 0.f;
-                peers[off + k].primaryMismatch += (mine[i] >= 0.f) != (t[i] >= 0.f);
+                peers[off + k].hits += firstT[k][i] >= 0.f;
+                peers[off + k].primaryMismatch += (firstT[k][i] >= 0.f) != (t[i] >= 0.f);
             }
         }
         if (embree) s = embree->occluded(shadow, blocked);
         if (embree && round >= 0) peers[0].shadowS.push_back(s);
         for (size_t k = 0; k < rtlab.size(); ++k) {
             if (shadow.empty()) break;
-            s = rtlab[k]->run(cl, rtlab[k]->occluded, shadowIn, occOut, shadow.size(), a.local);
+            s = rtlab[k]->occluded(shadowIn, occOut, shadow.size(), a.local);
             if (round >= 0) peers[off + k].shadowS.push_back(s);
-            if (round >= 0) peers[off + k].shadowDevS.push_back(rtlab[k]->lastDeviceS);
+            if (round >= 0) peers[off + k].shadowDevS.push_back(rtlab[k]->lastDeviceS());
             if (round >= 0) continue;
-            std::vector<int> mine = download<int>(cl, occOut, shadow.size());
-            if (!embree && k == 0) blocked = mine;  // the reference
+            firstBlocked[k] = download<int>(cl, occOut, shadow.size());
+            if (!embree && k == 0) blocked = firstBlocked[k];  // the reference
             for (size_t i = 0; i < shadow.size(); ++i) {
-                peers[off + k].blocked += mine[i];
-                peers[off + k].shadowMismatch += mine[i] != blocked[i];
+                peers[off + k].blocked += firstBlocked[k][i];
+                peers[off + k].shadowMismatch += firstBlocked[k][i] != blocked[i];
             }
         }
         if (embree && round < 0) {
@@ -360,6 +359,20 @@ int run(const Args& a) {
             for (int b : blocked) peers[0].blocked += b;
         }
     }
+    // A packet peer against the single-ray kernels of its structure, ray by ray: the same t
+    // (bit for bit) and the same occlusion are expected.
+    for (size_t k = 0; k < rtlab.size(); ++k)
+        for (size_t j = 0; j < rtlab.size(); ++j) {
+            if (!rtlab[k]->packet() || rtlab[j]->packet() || accels[j] != accels[k]) continue;
+            PeerResult& p = peers[off + k];
+            p.single = peers[off + j].name;
+            p.primaryVsSingle = p.shadowVsSingle = 0;
+            for (size_t i = 0; i < primary.size(); ++i)
+                p.primaryVsSingle += std::memcmp(&firstT[k][i], &firstT[j][i], 4) != 0;
+            for (size_t i = 0; i < firstBlocked[k].size(); ++i)
+                p.shadowVsSingle += firstBlocked[k][i] != firstBlocked[j][i];
+            break;
+        }
 
     if (!report(a, scene, o, cl, embree.get(), peers, primary, shadow)) {
         std::fprintf(stderr, "rtlab-trace-bench: hit counts disagree beyond 0.01%% of the rays\n");
