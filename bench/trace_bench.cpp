@@ -241,6 +241,35 @@ bool report(const Args& a, const Scene& scene, const RenderOptions& o, ClContext
                                       binaryTraversalCost(wide, shadow, true));
     nlohmann::json cost = costJson("wide BVH", wideTraversalCost(wide, primary, false),
                                    wideTraversalCost(wide, shadow, true));
+    // What a packet of rays does instead (the packet peers' sizes), and how many of its rays
+    // each node and triangle serves.
+    nlohmann::json packetCost = nlohmann::json::object();
+    std::vector<int> sizes;
+    for (const PeerResult& p : peers)
+        if (size_t at = p.name.rfind("-p"); at != std::string::npos)
+            sizes.push_back(std::stoi(p.name.substr(at + 2)));
+    std::sort(sizes.begin(), sizes.end());
+    sizes.erase(std::unique(sizes.begin(), sizes.end()), sizes.end());
+    for (int size : sizes) {
+        PacketCost pc = widePacketTraversalCost(wide, primary, false, size);
+        PacketCost sc = widePacketTraversalCost(wide, shadow, true, size);
+        std::printf("wide BVH, packets of %d (host count over %zu + %zu packets): primary %.1f "
+                    "nodes, %.1f triangles per packet, %.0f%% / %.0f%% of its rays served per node "
+                    "/ triangle; shadow %.1f nodes, %.1f triangles, %.0f%% / %.0f%%\n",
+                    size, pc.packets, sc.packets, pc.nodes, pc.triangles, 100 * pc.nodeLanes,
+                    100 * pc.triangleLanes, sc.nodes, sc.triangles, 100 * sc.nodeLanes,
+                    100 * sc.triangleLanes);
+        packetCost["p" + std::to_string(size)] = {
+            {"primary_nodes_per_packet", pc.nodes},
+            {"primary_triangles_per_packet", pc.triangles},
+            {"primary_node_lane_use", pc.nodeLanes},
+            {"primary_triangle_lane_use", pc.triangleLanes},
+            {"shadow_nodes_per_packet", sc.nodes},
+            {"shadow_triangles_per_packet", sc.triangles},
+            {"shadow_node_lane_use", sc.nodeLanes},
+            {"shadow_triangle_lane_use", sc.triangleLanes},
+            {"packets_sampled", pc.packets + sc.packets}};
+    }
     if (!a.out.empty()) {
         nlohmann::json doc = bench::deviceJson(cl.device());
         doc.update({{"bench", "trace-peer"},
@@ -261,7 +290,8 @@ bool report(const Args& a, const Scene& scene, const RenderOptions& o, ClContext
                     {"agree", agree},
                     {"peers", rows},
                     {"bvh_cost", bvhCost},
-                    {"wide_cost", cost}});
+                    {"wide_cost", cost},
+                    {"wide_packet_cost", packetCost}});
         std::filesystem::create_directories(a.out);
         char radii[32] = "";
         if (a.distance > 0) std::snprintf(radii, sizeof radii, "-r%g", a.distance);

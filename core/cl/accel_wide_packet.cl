@@ -42,7 +42,7 @@ typedef int8 intP;
 
 // A packet of rays, one vector per component; i is Ray_InvDir's 1/d per ray. With
 // RT_WATERTIGHT, also each ray's shear of Triangle_Intersect (Woop, Benthin and Wald): the
-// axes kx, ky, kz as masks (k == 1, k == 2; axis 0 is neither) and sx, sy, sz.
+// axes kx, ky, kz as masks (k == 1, k == 2; axis 0 is neither), sx, sy, sz (Packet_Shear).
 typedef struct RayPacket {
     floatP ox, oy, oz;
     floatP dx, dy, dz;
@@ -50,6 +50,8 @@ typedef struct RayPacket {
 #ifdef RT_WATERTIGHT
     intP kx1, kx2, ky1, ky2, kz1, kz2;
     floatP sx, sy, sz;
+    floatP okx, oky, okz;  // the origin on axes kx, ky, kz
+    int kx, ky, kz;        // the axes when every ray has the same, else kx = -1
 #endif
 } RayPacket;
 
@@ -64,7 +66,7 @@ inline floatP Packet_InvDir(floatP d) {
 }
 
 // Smallest and largest lane, by halving (no NaN fix-ups: the inputs are never NaN).
-inline float Packet_Min(floatP v) {
+inline float Packet_Smallest(floatP v) {
 #if RT_PACKET == 16
     float8 a = select(v.hi, v.lo, v.lo < v.hi);
 #else
@@ -75,7 +77,7 @@ inline float Packet_Min(floatP v) {
     return c.x < c.y ? c.x : c.y;
 }
 
-inline float Packet_Max(floatP v) {
+inline float Packet_Largest(floatP v) {
 #if RT_PACKET == 16
     float8 a = select(v.hi, v.lo, v.lo > v.hi);
 #else
@@ -103,6 +105,11 @@ inline PacketSlabs Packet_Slabs(global const WideNode* n, const RayPacket* r) {
     return s;
 }
 
+// Minimum and maximum as compare-and-select (Min3_Fast in accel.cl): one instruction each,
+// where fmin/fmax add a NaN fix-up. No slab distance is NaN (Packet_InvDir keeps 1/d finite).
+inline floatP Lanes_Min(floatP a, floatP b) { return select(b, a, a < b); }
+inline floatP Lanes_Max(floatP a, floatP b) { return select(b, a, a > b); }
+
 // Entry distance of child k for every ray, INFINITY where the ray does not enter its box
 // before its current hit (Wide_Enter's test, then Wide_Query's t < hit).
 inline floatP Packet_Enter(global const WideNode* n, int k, const PacketSlabs* s, floatP hitT) {
@@ -112,13 +119,17 @@ inline floatP Packet_Enter(global const WideNode* n, int k, const PacketSlabs* s
     floatP y1 = mad((floatP)(float)n->hiY[k], s->scaleY, s->baseY);
     floatP z0 = mad((floatP)(float)n->loZ[k], s->scaleZ, s->baseZ);
     floatP z1 = mad((floatP)(float)n->hiZ[k], s->scaleZ, s->baseZ);
-    floatP enter = fmax(fmax(fmin(x0, x1), fmin(y0, y1)), fmax(fmin(z0, z1), 0.0f));
-    floatP leave = fmin(fmin(fmax(x0, x1), fmax(y0, y1)), fmin(fmax(z0, z1), hitT));
+    floatP enter = Lanes_Max(Lanes_Max(Lanes_Min(x0, x1), Lanes_Min(y0, y1)),
+                             Lanes_Max(Lanes_Min(z0, z1), (floatP)(0.0f)));
+    floatP leave = Lanes_Min(Lanes_Min(Lanes_Max(x0, x1), Lanes_Max(y0, y1)),
+                             Lanes_Min(Lanes_Max(z0, z1), hitT));
     return select((floatP)(INFINITY), enter, (enter <= leave) & (enter < hitT));
 }
 
 #ifdef RT_WATERTIGHT
-// The shear of Triangle_Intersect's watertight test, per ray (its first lines).
+// The shear of Triangle_Intersect's watertight test, per ray (its first lines), and the
+// origin's components on its axes. Coherent rays mostly share their axes: then kx, ky, kz
+// hold them and a triangle's vertices are permuted once for all rays, not lane by lane.
 inline void Packet_Shear(RayPacket* r) {
     floatP ax = fabs(r->dx), ay = fabs(r->dy), az = fabs(r->dz);
     intP kz = select(select((intP)(2), (intP)(1), ay >= az), select((intP)(2), (intP)(0), ax >= az),
@@ -139,25 +150,44 @@ inline void Packet_Shear(RayPacket* r) {
     r->sx = Packet_Component(r->dx, r->dy, r->dz, r->kx1, r->kx2) / dz;
     r->sy = Packet_Component(r->dx, r->dy, r->dz, r->ky1, r->ky2) / dz;
     r->sz = 1.0f / dz;
+    r->okx = Packet_Component(r->ox, r->oy, r->oz, r->kx1, r->kx2);
+    r->oky = Packet_Component(r->ox, r->oy, r->oz, r->ky1, r->ky2);
+    r->okz = Packet_Component(r->ox, r->oy, r->oz, r->kz1, r->kz2);
+    bool same = !any((kx != kx.s0) | (ky != ky.s0) | (kz != kz.s0));
+    r->kx = same ? kx.s0 : -1;
+    r->ky = ky.s0;
+    r->kz = kz.s0;
+}
+
+// A vertex's components on each ray's axes kx, ky, kz.
+inline void Packet_Permute(float3 v, const RayPacket* r, floatP* x, floatP* y, floatP* z) {
+    if (r->kx >= 0) {
+        *x = (floatP)(component(v, r->kx));
+        *y = (floatP)(component(v, r->ky));
+        *z = (floatP)(component(v, r->kz));
+        return;
+    }
+    floatP vx = (floatP)(v.x), vy = (floatP)(v.y), vz = (floatP)(v.z);
+    *x = Packet_Component(vx, vy, vz, r->kx1, r->kx2);
+    *y = Packet_Component(vx, vy, vz, r->ky1, r->ky2);
+    *z = Packet_Component(vx, vy, vz, r->kz1, r->kz2);
 }
 
 // Triangle_Intersect's watertight test (Woop, Benthin and Wald 2013) for every ray against
-// one triangle, in its order of operations; the lanes where it hits with 0 < t < hitT.
+// one triangle, in its order of operations (component(v - o, k) is v[k] - o[k]); the lanes
+// where it hits with 0 < t < hitT.
 inline intP Packet_Triangle(global const Triangle* tri, const RayPacket* r, floatP hitT,
                             floatP* tOut) {
-    float3 v0 = f3(tri->v0), v1 = f3(tri->v1), v2 = f3(tri->v2);
-    floatP Ax = v0.x - r->ox, Ay = v0.y - r->oy, Az = v0.z - r->oz;
-    floatP Bx = v1.x - r->ox, By = v1.y - r->oy, Bz = v1.z - r->oz;
-    floatP Cx = v2.x - r->ox, Cy = v2.y - r->oy, Cz = v2.z - r->oz;
-    floatP Ak = Packet_Component(Ax, Ay, Az, r->kz1, r->kz2);
-    floatP Bk = Packet_Component(Bx, By, Bz, r->kz1, r->kz2);
-    floatP Ck = Packet_Component(Cx, Cy, Cz, r->kz1, r->kz2);
-    floatP ax = Packet_Component(Ax, Ay, Az, r->kx1, r->kx2) - r->sx * Ak;
-    floatP ay = Packet_Component(Ax, Ay, Az, r->ky1, r->ky2) - r->sy * Ak;
-    floatP bx = Packet_Component(Bx, By, Bz, r->kx1, r->kx2) - r->sx * Bk;
-    floatP by = Packet_Component(Bx, By, Bz, r->ky1, r->ky2) - r->sy * Bk;
-    floatP cx = Packet_Component(Cx, Cy, Cz, r->kx1, r->kx2) - r->sx * Ck;
-    floatP cy = Packet_Component(Cx, Cy, Cz, r->ky1, r->ky2) - r->sy * Ck;
+    floatP px, py, pz;
+    Packet_Permute(f3(tri->v0), r, &px, &py, &pz);
+    floatP Ak = pz - r->okz;
+    floatP ax = (px - r->okx) - r->sx * Ak, ay = (py - r->oky) - r->sy * Ak;
+    Packet_Permute(f3(tri->v1), r, &px, &py, &pz);
+    floatP Bk = pz - r->okz;
+    floatP bx = (px - r->okx) - r->sx * Bk, by = (py - r->oky) - r->sy * Bk;
+    Packet_Permute(f3(tri->v2), r, &px, &py, &pz);
+    floatP Ck = pz - r->okz;
+    floatP cx = (px - r->okx) - r->sx * Ck, cy = (py - r->oky) - r->sy * Ck;
     floatP U = cx * by - cy * bx, V = ax * cy - ay * cx, W = bx * ay - by * ax;
     intP miss = ((U < 0.0f) | (V < 0.0f) | (W < 0.0f)) & ((U > 0.0f) | (V > 0.0f) | (W > 0.0f));
     floatP det = U + V + W;
@@ -237,7 +267,7 @@ inline void Wide_QueryPacket(const SceneData* sc, const RayPacket* r, floatP* hi
         for (int k = 0; k < 4; ++k) {
             if (n->count[k] != 0) continue;
             floatP tk = select((floatP)(INFINITY), t[k], t[k] < *hitT);
-            float key = Packet_Min(tk);
+            float key = Packet_Smallest(tk);
             if (key == INFINITY) continue;
             int j = m++;
             while (j > 0 && nearT[j - 1] > key) {
