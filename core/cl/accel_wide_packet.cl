@@ -251,8 +251,11 @@ inline void Wide_QueryPacket(const SceneData* sc, const RayPacket* r, floatP* hi
     for (;;) {
         global const WideNode* n = nodes + index;
         PacketSlabs slabs = Packet_Slabs(n, r);
+        // An empty slot (child -1; its box is the point at the origin) is neither tested nor
+        // visited.
         floatP t[4];
-        for (int k = 0; k < 4; ++k) t[k] = Packet_Enter(n, k, &slabs, *hitT);
+        for (int k = 0; k < 4; ++k) t[k] = n->child[k] == -1 ? (floatP)(INFINITY)
+                                                             : Packet_Enter(n, k, &slabs, *hitT);
         // Leaves first: hits there shorten the rays before the inner children are ordered.
         for (int k = 0; k < 4; ++k) {
             if (n->count[k] == 0 || !any(t[k] < *hitT)) continue;
@@ -265,7 +268,7 @@ inline void Wide_QueryPacket(const SceneData* sc, const RayPacket* r, floatP* hi
         floatP nearAll[4];
         int m = 0;
         for (int k = 0; k < 4; ++k) {
-            if (n->count[k] != 0) continue;
+            if (n->count[k] != 0 || n->child[k] == -1) continue;
             floatP tk = select((floatP)(INFINITY), t[k], t[k] < *hitT);
             float key = Packet_Smallest(tk);
             if (key == INFINITY) continue;
