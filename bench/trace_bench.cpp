@@ -58,27 +58,27 @@ std::vector<BatchRay> primaryRays(const Scene& s, int W, int H) {
 
 // One shadow ray per hit and light, from the hit point lifted off the surface along the
 // geometric normal (towards the viewer) by a millionth of the scene's size; back along the
-// primary ray when there is no normal (no Embree).
+// primary ray when there is no normal (no Embree). Light by light, each in the primary rays'
+// tile order, so that consecutive rays (a packet, for Embree and rtlab alike) share a light.
 std::vector<BatchRay> shadowRays(const Scene& s, const std::vector<BatchRay>& primary,
                                  const std::vector<float>& t,
                                  const std::vector<dev::Float3>& normal, float sceneSize) {
     std::vector<BatchRay> rays;
     float lift = 1e-6f * sceneSize;
-    for (size_t i = 0; i < primary.size(); ++i) {
-        if (t[i] < 0.f) continue;
-        const BatchRay& r = primary[i];
-        dev::Float3 n = normal.empty() ? dev::Float3{-r.dx, -r.dy, -r.dz} : normal[i];
-        float nl = std::sqrt(n.x * n.x + n.y * n.y + n.z * n.z);
-        float side = n.x * r.dx + n.y * r.dy + n.z * r.dz > 0.f ? -1.f : 1.f;
-        float k = nl > 0.f ? side * lift / nl : 0.f;
-        float px = r.ox + t[i] * r.dx + k * n.x, py = r.oy + t[i] * r.dy + k * n.y,
-              pz = r.oz + t[i] * r.dz + k * n.z;
-        for (const dev::Light& l : s.lights) {
+    for (const dev::Light& l : s.lights)
+        for (size_t i = 0; i < primary.size(); ++i) {
+            if (t[i] < 0.f) continue;
+            const BatchRay& r = primary[i];
+            dev::Float3 n = normal.empty() ? dev::Float3{-r.dx, -r.dy, -r.dz} : normal[i];
+            float nl = std::sqrt(n.x * n.x + n.y * n.y + n.z * n.z);
+            float side = n.x * r.dx + n.y * r.dy + n.z * r.dz > 0.f ? -1.f : 1.f;
+            float k = nl > 0.f ? side * lift / nl : 0.f;
+            float px = r.ox + t[i] * r.dx + k * n.x, py = r.oy + t[i] * r.dy + k * n.y,
+                  pz = r.oz + t[i] * r.dz + k * n.z;
             float dx = l.position.x - px, dy = l.position.y - py, dz = l.position.z - pz;
             float d = std::sqrt(dx * dx + dy * dy + dz * dz);
             if (d > 0.f) rays.push_back({px, py, pz, d, dx / d, dy / d, dz / d, 0.f});
         }
-    }
     return rays;
 }
 

@@ -88,10 +88,12 @@ inline float Packet_Largest(floatP v) {
     return c.x > c.y ? c.x : c.y;
 }
 
-// Per-node terms of Wide_Enter's slab distances: t = q * scale + base on each axis.
+// A node's slab distances for every ray, t = q * scale + base on each axis, with its quantised
+// child bounds q converted once per node (four children at a time).
 typedef struct PacketSlabs {
     floatP baseX, baseY, baseZ;
     floatP scaleX, scaleY, scaleZ;
+    float lo[3][4], hi[3][4];  // [axis][child]
 } PacketSlabs;
 
 inline PacketSlabs Packet_Slabs(global const WideNode* n, const RayPacket* r) {
@@ -102,6 +104,12 @@ inline PacketSlabs Packet_Slabs(global const WideNode* n, const RayPacket* r) {
     s.scaleX = Wide_Step(n->exponent[0]) * r->ix;
     s.scaleY = Wide_Step(n->exponent[1]) * r->iy;
     s.scaleZ = Wide_Step(n->exponent[2]) * r->iz;
+    vstore4(convert_float4(vload4(0, n->loX)), 0, s.lo[0]);
+    vstore4(convert_float4(vload4(0, n->loY)), 0, s.lo[1]);
+    vstore4(convert_float4(vload4(0, n->loZ)), 0, s.lo[2]);
+    vstore4(convert_float4(vload4(0, n->hiX)), 0, s.hi[0]);
+    vstore4(convert_float4(vload4(0, n->hiY)), 0, s.hi[1]);
+    vstore4(convert_float4(vload4(0, n->hiZ)), 0, s.hi[2]);
     return s;
 }
 
@@ -110,15 +118,18 @@ inline PacketSlabs Packet_Slabs(global const WideNode* n, const RayPacket* r) {
 inline floatP Lanes_Min(floatP a, floatP b) { return select(b, a, a < b); }
 inline floatP Lanes_Max(floatP a, floatP b) { return select(b, a, a > b); }
 
-// Entry distance of child k for every ray, INFINITY where the ray does not enter its box
-// before its current hit (Wide_Enter's test, then Wide_Query's t < hit).
-inline floatP Packet_Enter(global const WideNode* n, int k, const PacketSlabs* s, floatP hitT) {
-    floatP x0 = mad((floatP)(float)n->loX[k], s->scaleX, s->baseX);
-    floatP x1 = mad((floatP)(float)n->hiX[k], s->scaleX, s->baseX);
-    floatP y0 = mad((floatP)(float)n->loY[k], s->scaleY, s->baseY);
-    floatP y1 = mad((floatP)(float)n->hiY[k], s->scaleY, s->baseY);
-    floatP z0 = mad((floatP)(float)n->loZ[k], s->scaleZ, s->baseZ);
-    floatP z1 = mad((floatP)(float)n->hiZ[k], s->scaleZ, s->baseZ);
+// Entry distance of child k (lo and hi: its quantised bounds) for every ray, INFINITY where the
+// ray does not enter its box before its current hit (Wide_Enter's test, then Wide_Query's
+// t < hit). fma, where Wide_Enter has mad: the boxes are padded far beyond either's rounding,
+// so this decides only which nodes are visited, never a ray's hit.
+inline floatP Packet_Enter(const PacketSlabs* s, float loX, float loY, float loZ, float hiX,
+                           float hiY, float hiZ, floatP hitT) {
+    floatP x0 = fma((floatP)(loX), s->scaleX, s->baseX);
+    floatP x1 = fma((floatP)(hiX), s->scaleX, s->baseX);
+    floatP y0 = fma((floatP)(loY), s->scaleY, s->baseY);
+    floatP y1 = fma((floatP)(hiY), s->scaleY, s->baseY);
+    floatP z0 = fma((floatP)(loZ), s->scaleZ, s->baseZ);
+    floatP z1 = fma((floatP)(hiZ), s->scaleZ, s->baseZ);
     floatP enter = Lanes_Max(Lanes_Max(Lanes_Min(x0, x1), Lanes_Min(y0, y1)),
                              Lanes_Max(Lanes_Min(z0, z1), (floatP)(0.0f)));
     floatP leave = Lanes_Min(Lanes_Min(Lanes_Max(x0, x1), Lanes_Max(y0, y1)),
@@ -254,8 +265,11 @@ inline void Wide_QueryPacket(const SceneData* sc, const RayPacket* r, floatP* hi
         // An empty slot (child -1; its box is the point at the origin) is neither tested nor
         // visited.
         floatP t[4];
-        for (int k = 0; k < 4; ++k) t[k] = n->child[k] == -1 ? (floatP)(INFINITY)
-                                                             : Packet_Enter(n, k, &slabs, *hitT);
+        for (int k = 0; k < 4; ++k)
+            t[k] = n->child[k] == -1 ? (floatP)(INFINITY)
+                                     : Packet_Enter(&slabs, slabs.lo[0][k], slabs.lo[1][k],
+                                                    slabs.lo[2][k], slabs.hi[0][k],
+                                                    slabs.hi[1][k], slabs.hi[2][k], *hitT);
         // Leaves first: hits there shorten the rays before the inner children are ordered.
         for (int k = 0; k < 4; ++k) {
             if (n->count[k] == 0 || !any(t[k] < *hitT)) continue;
