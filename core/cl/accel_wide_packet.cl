@@ -65,6 +65,19 @@ inline floatP Packet_InvDir(floatP d) {
     return 1.0f / select(d, tiny, fabs(d) < (floatP)(1e-20f));
 }
 
+// Whether some lane is set: an OR of halves and one test. PoCL's any() tests the lanes one
+// pair at a time, a chain of branches that the CPU mispredicts.
+inline bool Packet_Any(intP m) {
+#if RT_PACKET == 16
+    int8 a = m.lo | m.hi;
+#else
+    int8 a = m;
+#endif
+    int4 b = a.lo | a.hi;
+    int2 c = b.lo | b.hi;
+    return (c.x | c.y) < 0;
+}
+
 // Smallest and largest lane, by halving (no NaN fix-ups: the inputs are never NaN).
 inline float Packet_Smallest(floatP v) {
 #if RT_PACKET == 16
@@ -164,7 +177,7 @@ inline void Packet_Shear(RayPacket* r) {
     r->okx = Packet_Component(r->ox, r->oy, r->oz, r->kx1, r->kx2);
     r->oky = Packet_Component(r->ox, r->oy, r->oz, r->ky1, r->ky2);
     r->okz = Packet_Component(r->ox, r->oy, r->oz, r->kz1, r->kz2);
-    bool same = !any((kx != kx.s0) | (ky != ky.s0) | (kz != kz.s0));
+    bool same = !Packet_Any((kx != kx.s0) | (ky != ky.s0) | (kz != kz.s0));
     r->kx = same ? kx.s0 : -1;
     r->ky = ky.s0;
     r->kz = kz.s0;
@@ -243,10 +256,10 @@ inline void Packet_Leaf(const SceneData* sc, int first, int count, const RayPack
     for (int i = first; i < first + count; ++i) {
         floatP t;
         intP hit = Packet_Triangle(sc->triangles + i, r, *hitT, &t);
-        if (!any(hit)) continue;
+        if (!Packet_Any(hit)) continue;
         *found |= hit;
         *hitT = select(*hitT, anyHit ? (floatP)(0.0f) : t, hit);
-        if (anyHit && !any(*hitT > 0.0f)) return;
+        if (anyHit && !Packet_Any(*hitT > 0.0f)) return;
     }
 }
 
@@ -272,9 +285,9 @@ inline void Wide_QueryPacket(const SceneData* sc, const RayPacket* r, floatP* hi
                                                     slabs.hi[1][k], slabs.hi[2][k], *hitT);
         // Leaves first: hits there shorten the rays before the inner children are ordered.
         for (int k = 0; k < 4; ++k) {
-            if (n->count[k] == 0 || !any(t[k] < *hitT)) continue;
+            if (n->count[k] == 0 || !Packet_Any(t[k] < *hitT)) continue;
             Packet_Leaf(sc, n->child[k], n->count[k], r, hitT, found, anyHit);
-            if (anyHit && !any(*hitT > 0.0f)) return;
+            if (anyHit && !Packet_Any(*hitT > 0.0f)) return;
         }
         // Inner children some ray enters before its hit, by the packet's nearest entry.
         int near[4];
@@ -307,7 +320,7 @@ inline void Wide_QueryPacket(const SceneData* sc, const RayPacket* r, floatP* hi
             continue;
         }
         // Next: the most recently deferred node that some ray enters before its current hit.
-        while (top > 0 && !any(stackT[top - 1] < *hitT)) --top;
+        while (top > 0 && !Packet_Any(stackT[top - 1] < *hitT)) --top;
         if (top == 0) return;
         index = stack[--top];
     }
