@@ -7,6 +7,9 @@
 // triangle test), so up to 0.01% of the rays of a batch (at least 2) may disagree; more ends in
 // exit status 1. Both peers see the scene's triangles only (planes and spheres are dropped).
 // Built without Embree (a GPU host), it times rtlab's structures alone, against the first one.
+// An --accels entry wide-p8 or wide-p16 traces the wide BVH in packets of 8 or 16 rays per
+// work-item (core/cl/accel_wide_packet.cl, for CPU devices); its results are also compared ray
+// by ray with the single-ray wide kernels, which they must equal.
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
@@ -120,7 +123,7 @@ RenderOptions::Accel parsePeerEntry(const std::string& entry, int& packet) {
 }
 
 struct Args {
-    std::string scene, size, accels = "bvh,wide", device = "cpu", out;
+    std::string scene, size, accels = "bvh,wide,wide-p16", device = "cpu", out;
     int rounds = 5;
     int local = 0;
     unsigned threads = std::max(1u, std::thread::hardware_concurrency());
@@ -419,7 +422,9 @@ int main(int argc, char** argv) {
     CLI::App app{"Embree as a peer: the same camera and shadow rays through Embree and rtlab"};
     app.add_option("scene", a.scene, "Scene file (.json) or a bare .obj")->required();
     app.add_option("--size", a.size, "Frame WxH [scene default]");
-    app.add_option("--accels", a.accels, "rtlab structures, comma-separated [bvh,wide]");
+    app.add_option("--accels", a.accels,
+                   "rtlab structures, comma-separated; wide-p8 / wide-p16: the wide BVH in "
+                   "packets of 8 / 16 rays per work-item [bvh,wide,wide-p16]");
     app.add_option("--device", a.device, "OpenCL device for rtlab [cpu]");
     app.add_option("--rounds", a.rounds, "Timed rounds after one warm-up [5]")
         ->check(CLI::Range(1, 1000));
