@@ -7,6 +7,9 @@
 // triangle test), so up to 0.01% of the rays of a batch (at least 2) may disagree; more ends in
 // exit status 1. Both peers see the scene's triangles only (planes and spheres are dropped).
 // Built without Embree (a GPU host), it times rtlab's structures alone, against the first one.
+// An --accels entry wide-p8 or wide-p16 traces the wide BVH in packets of 8 or 16 rays per
+// work-item (core/cl/accel_wide_packet.cl, for CPU devices); its results are also compared ray
+// by ray with the single-ray wide kernels, which they must equal.
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
@@ -14,6 +17,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -21,6 +25,7 @@
 
 #include "bench/embree_peer.h"
 #include "bench/measure.h"
+#include "bench/ray_batch.h"
 #include "bench/trace_visits.h"
 #include "core/accel.h"
 #include "core/cl_runtime.h"
@@ -58,67 +63,28 @@ std::vector<BatchRay> primaryRays(const Scene& s, int W, int H) {
 
 // One shadow ray per hit and light, from the hit point lifted off the surface along the
 // geometric normal (towards the viewer) by a millionth of the scene's size; back along the
-// primary ray when there is no normal (no Embree).
+// primary ray when there is no normal (no Embree). Light by light, each in the primary rays'
+// tile order, so that consecutive rays (a packet, for Embree and rtlab alike) share a light.
 std::vector<BatchRay> shadowRays(const Scene& s, const std::vector<BatchRay>& primary,
                                  const std::vector<float>& t,
                                  const std::vector<dev::Float3>& normal, float sceneSize) {
     std::vector<BatchRay> rays;
     float lift = 1e-6f * sceneSize;
-    for (size_t i = 0; i < primary.size(); ++i) {
-        if (t[i] < 0.f) continue;
-        const BatchRay& r = primary[i];
-        dev::Float3 n = normal.empty() ? dev::Float3{-r.dx, -r.dy, -r.dz} : normal[i];
-        float nl = std::sqrt(n.x * n.x + n.y * n.y + n.z * n.z);
-        float side = n.x * r.dx + n.y * r.dy + n.z * r.dz > 0.f ? -1.f : 1.f;
-        float k = nl > 0.f ? side * lift / nl : 0.f;
-        float px = r.ox + t[i] * r.dx + k * n.x, py = r.oy + t[i] * r.dy + k * n.y,
-              pz = r.oz + t[i] * r.dz + k * n.z;
-        for (const dev::Light& l : s.lights) {
+    for (const dev::Light& l : s.lights)
+        for (size_t i = 0; i < primary.size(); ++i) {
+            if (t[i] < 0.f) continue;
+            const BatchRay& r = primary[i];
+            dev::Float3 n = normal.empty() ? dev::Float3{-r.dx, -r.dy, -r.dz} : normal[i];
+            float nl = std::sqrt(n.x * n.x + n.y * n.y + n.z * n.z);
+            float side = n.x * r.dx + n.y * r.dy + n.z * r.dz > 0.f ? -1.f : 1.f;
+            float k = nl > 0.f ? side * lift / nl : 0.f;
+            float px = r.ox + t[i] * r.dx + k * n.x, py = r.oy + t[i] * r.dy + k * n.y,
+                  pz = r.oz + t[i] * r.dz + k * n.z;
             float dx = l.position.x - px, dy = l.position.y - py, dz = l.position.z - pz;
             float d = std::sqrt(dx * dx + dy * dy + dz * dz);
             if (d > 0.f) rays.push_back({px, py, pz, d, dx / d, dy / d, dz / d, 0.f});
         }
-    }
     return rays;
-}
-
-// rtlab's side: one --accel structure on the device, and the two batch kernels bound to it.
-struct RtlabPeer {
-    RtlabPeer(ClContext& cl, const Scene& s, const RenderOptions& o)
-        : device(cl, s, o.accel),
-          program(cl.program("trace_rays.cl", featureDefines(s, o))),
-          closest(program, "Rays_Closest"),
-          occluded(program, "Rays_Occluded") {
-        device.setArgs(closest, makeSettings(s, o));
-        device.setArgs(occluded, makeSettings(s, o));
-    }
-    // Wall seconds from the launch to the end of the kernel (the read-back is not timed); the
-    // kernel's own time (profiling event) goes to lastDeviceS, for a GPU where launches count.
-    double run(ClContext& cl, cl::Kernel& k, const cl::Buffer& in, const cl::Buffer& out,
-               size_t n, size_t local) {
-        k.setArg(DeviceScene::kFirstKernelArg, in);
-        k.setArg(DeviceScene::kFirstKernelArg + 1, out);
-        k.setArg(DeviceScene::kFirstKernelArg + 2, cl_int(n));
-        auto t0 = std::chrono::steady_clock::now();
-        // A local size must divide the global one: round up; the kernels skip the padding.
-        size_t global = local ? (n + local - 1) / local * local : n;
-        cl::Event done;
-        cl.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(global),
-                                        local ? cl::NDRange(local) : cl::NullRange, nullptr, &done);
-        cl.queue().finish();
-        lastDeviceS = 1e-3 * eventMs(done);
-        return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    }
-    double lastDeviceS = 0;
-    DeviceScene device;
-    cl::Program program;
-    cl::Kernel closest, occluded;
-};
-
-template <typename T>
-cl::Buffer upload(ClContext& cl, const std::vector<T>& v) {
-    return cl::Buffer(cl.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR,
-                      std::max<size_t>(v.size() * sizeof(T), 16), const_cast<T*>(v.data()));
 }
 
 template <typename T>
@@ -140,10 +106,27 @@ struct PeerResult {
     std::vector<double> primaryDevS, shadowDevS;  // rtlab: the kernels' profiling-event time
     long long hits = 0, blocked = 0, primaryMismatch = 0, shadowMismatch = 0;
     std::map<std::string, double> resources;  // rtlab: registers, spills, private bytes per kernel
+    // A packet peer: the single-ray peer of its structure, and the rays whose t (bit for bit) or
+    // occlusion differs from it; -1 without one.
+    std::string single;
+    long long primaryVsSingle = -1, shadowVsSingle = -1;
 };
 
+// One --accels entry: a structure name (one ray per work-item) or wide-p8 / wide-p16 (packets
+// of 8 or 16 rays per work-item, BatchTracer refuses other structures).
+RenderOptions::Accel parsePeerEntry(const std::string& entry, int& packet) {
+    size_t dash = entry.rfind("-p");
+    packet = 0;
+    if (dash == std::string::npos) return parseAccel(entry);
+    std::string n = entry.substr(dash + 2);
+    if (n.empty() || n.find_first_not_of("0123456789") != std::string::npos || n.size() > 3)
+        throw Error("--accels " + entry + ": expected a structure, or wide-p8 / wide-p16");
+    packet = std::stoi(n);
+    return parseAccel(entry.substr(0, dash));
+}
+
 struct Args {
-    std::string scene, size, accels = "bvh,wide", device = "cpu", out;
+    std::string scene, size, accels = "bvh,wide,wide-p16", device = "cpu", out;
     int rounds = 5;
     int local = 0;
     unsigned threads = std::max(1u, std::thread::hardware_concurrency());
@@ -197,10 +180,10 @@ bool report(const Args& a, const Scene& scene, const RenderOptions& o, ClContext
                           " threads").c_str()
                        : "built without Embree: ratios against the first structure");
     std::string versus = "x " + peers[0].name.substr(peers[0].name.find(' ') + 1);
-    std::printf("%-12s %10s %14s %14s %10s %10s %9s %9s\n", "peer", "build ms", "primary Mray/s",
+    std::printf("%-15s %10s %14s %14s %10s %10s %9s %9s\n", "peer", "build ms", "primary Mray/s",
                 "shadow Mray/s", "hits", "occluded", versus.c_str(), "mismatch");
     bool agree = true;
-    std::string kernelOnly;
+    std::string kernelOnly, sameAsSingle;
     nlohmann::json rows = nlohmann::json::array();
     double ep = mrays(primary.size(), peers[0].primaryS), es = mrays(shadow.size(), peers[0].shadowS);
     for (const PeerResult& p : peers) {
@@ -208,7 +191,7 @@ bool report(const Args& a, const Scene& scene, const RenderOptions& o, ClContext
         bool ok = p.primaryMismatch <= allowed(primary.size()) &&
                   p.shadowMismatch <= allowed(shadow.size());
         agree = agree && ok;
-        std::printf("%-12s %10.1f %14.2f %14.2f %10lld %10lld %4.2f/%4.2f %4lld/%lld%s\n",
+        std::printf("%-15s %10.1f %14.2f %14.2f %10lld %10lld %4.2f/%4.2f %4lld/%lld%s\n",
                     p.name.c_str(), p.buildMs, mp, ms, p.hits, p.blocked, ep > 0 ? mp / ep : 0,
                     es > 0 ? ms / es : 0, p.primaryMismatch, p.shadowMismatch, ok ? "" : "  DISAGREE");
         if (!p.primaryDevS.empty())
@@ -229,9 +212,20 @@ bool report(const Args& a, const Scene& scene, const RenderOptions& o, ClContext
                         {"primary_mismatch", p.primaryMismatch},
                         {"shadow_mismatch", p.shadowMismatch},
                         {"kernel_resources", p.resources}});
+        if (!p.single.empty()) {
+            rows.back()["single_ray_peer"] = p.single;
+            rows.back()["primary_t_differs_from_single_ray"] = p.primaryVsSingle;
+            rows.back()["shadow_differs_from_single_ray"] = p.shadowVsSingle;
+            sameAsSingle += " " + p.name + " vs " + p.single + ": " +
+                            std::to_string(p.primaryVsSingle) + " primary t / " +
+                            std::to_string(p.shadowVsSingle) + " shadow;";
+        }
     }
     std::printf("kernel time only (profiling events), primary / shadow Mray/s:%s\n",
                 kernelOnly.c_str());
+    if (!sameAsSingle.empty())
+        std::printf("rays whose result differs from the single-ray kernels:%s\n",
+                    sameAsSingle.c_str());
     // What each kernel costs the device per work-item: on a GPU, registers bound occupancy.
     for (const PeerResult& p : peers) {
         if (p.resources.empty()) continue;
@@ -261,6 +255,35 @@ bool report(const Args& a, const Scene& scene, const RenderOptions& o, ClContext
                                       binaryTraversalCost(wide, shadow, true));
     nlohmann::json cost = costJson("wide BVH", wideTraversalCost(wide, primary, false),
                                    wideTraversalCost(wide, shadow, true));
+    // What a packet of rays does instead (the packet peers' sizes), and how many of its rays
+    // each node and triangle serves.
+    nlohmann::json packetCost = nlohmann::json::object();
+    std::vector<int> sizes;
+    for (const PeerResult& p : peers)
+        if (size_t at = p.name.rfind("-p"); at != std::string::npos)
+            sizes.push_back(std::stoi(p.name.substr(at + 2)));
+    std::sort(sizes.begin(), sizes.end());
+    sizes.erase(std::unique(sizes.begin(), sizes.end()), sizes.end());
+    for (int size : sizes) {
+        PacketCost pc = widePacketTraversalCost(wide, primary, false, size);
+        PacketCost sc = widePacketTraversalCost(wide, shadow, true, size);
+        std::printf("wide BVH, packets of %d (host count over %zu + %zu packets): primary %.1f "
+                    "nodes, %.1f triangles per packet, %.0f%% / %.0f%% of its rays served per node "
+                    "/ triangle; shadow %.1f nodes, %.1f triangles, %.0f%% / %.0f%%\n",
+                    size, pc.packets, sc.packets, pc.nodes, pc.triangles, 100 * pc.nodeLanes,
+                    100 * pc.triangleLanes, sc.nodes, sc.triangles, 100 * sc.nodeLanes,
+                    100 * sc.triangleLanes);
+        packetCost["p" + std::to_string(size)] = {
+            {"primary_nodes_per_packet", pc.nodes},
+            {"primary_triangles_per_packet", pc.triangles},
+            {"primary_node_lane_use", pc.nodeLanes},
+            {"primary_triangle_lane_use", pc.triangleLanes},
+            {"shadow_nodes_per_packet", sc.nodes},
+            {"shadow_triangles_per_packet", sc.triangles},
+            {"shadow_node_lane_use", sc.nodeLanes},
+            {"shadow_triangle_lane_use", sc.triangleLanes},
+            {"packets_sampled", pc.packets + sc.packets}};
+    }
     if (!a.out.empty()) {
         nlohmann::json doc = bench::deviceJson(cl.device());
         doc.update({{"bench", "trace-peer"},
@@ -281,7 +304,8 @@ bool report(const Args& a, const Scene& scene, const RenderOptions& o, ClContext
                     {"agree", agree},
                     {"peers", rows},
                     {"bvh_cost", bvhCost},
-                    {"wide_cost", cost}});
+                    {"wide_cost", cost},
+                    {"wide_packet_cost", packetCost}});
         std::filesystem::create_directories(a.out);
         char radii[32] = "";
         if (a.distance > 0) std::snprintf(radii, sizeof radii, "-r%g", a.distance);
@@ -309,62 +333,70 @@ int run(const Args& a) {
         peers.push_back({"embree", embree->buildMs()});
     }
     const size_t off = peers.size();  // rtlab structure k is peers[off + k]
-    std::vector<std::unique_ptr<RtlabPeer>> rtlab;
+    std::vector<std::unique_ptr<BatchTracer>> rtlab;
+    std::vector<RenderOptions::Accel> accels;
     std::string list = a.accels;
     for (size_t p = 0; p <= list.size();) {
         size_t q = std::min(list.find(',', p), list.size());
-        o.accel = parseAccel(list.substr(p, q - p));
-        rtlab.push_back(std::make_unique<RtlabPeer>(cl, scene, o));
-        peers.push_back({std::string("rtlab ") + accelName(o.accel), rtlab.back()->device.accelStats().buildMs});
-        peers.back().resources = kernelResources(rtlab.back()->program, cl.device().device);
+        std::string entry = list.substr(p, q - p);
+        int packet = 0;
+        o.accel = parsePeerEntry(entry, packet);
+        rtlab.push_back(std::make_unique<BatchTracer>(cl, scene, o, packet, entry));
+        accels.push_back(o.accel);
+        std::string name = std::string("rtlab ") + accelName(o.accel);
+        if (packet) name += "-p" + std::to_string(packet);
+        peers.push_back({name, rtlab.back()->device().accelStats().buildMs});
+        peers.back().resources = kernelResources(rtlab.back()->program(), cl.device().device);
         p = q + 1;
     }
 
     // The reference hits (Embree's, else the first structure's) give the shadow rays.
     std::vector<BatchRay> primary = primaryRays(scene, o.width, o.height);
-    cl::Buffer primaryIn = upload(cl, primary);
+    cl::Buffer primaryIn = uploadRays(cl, primary);
     cl::Buffer tOut(cl.context(), CL_MEM_WRITE_ONLY, primary.size() * 4);
     std::vector<float> t;
     std::vector<dev::Float3> normal;
     if (embree) {
         embree->intersect(primary, t, normal);
     } else {
-        rtlab[0]->run(cl, rtlab[0]->closest, primaryIn, tOut, primary.size(), a.local);
+        rtlab[0]->closest(primaryIn, tOut, primary.size(), a.local);
         t = download<float>(cl, tOut, primary.size());
     }
     std::vector<BatchRay> shadow = shadowRays(scene, primary, t, normal, sceneSize);
-    cl::Buffer shadowIn = upload(cl, shadow);
+    cl::Buffer shadowIn = uploadRays(cl, shadow);
     cl::Buffer occOut(cl.context(), CL_MEM_WRITE_ONLY, std::max<size_t>(shadow.size(), 4) * 4);
 
     std::vector<int> blocked;
+    std::vector<std::vector<float>> firstT(rtlab.size());  // round -1's results, peer by peer
+    std::vector<std::vector<int>> firstBlocked(rtlab.size());
     for (int round = -1; round < a.rounds; ++round) {  // round -1 warms up and checks the hits
         double s = 0;
         if (embree) s = embree->intersect(primary, t, normal);
         if (embree && round >= 0) peers[0].primaryS.push_back(s);
         for (size_t k = 0; k < rtlab.size(); ++k) {
-            s = rtlab[k]->run(cl, rtlab[k]->closest, primaryIn, tOut, primary.size(), a.local);
+            s = rtlab[k]->closest(primaryIn, tOut, primary.size(), a.local);
             if (round >= 0) peers[off + k].primaryS.push_back(s);
-            if (round >= 0) peers[off + k].primaryDevS.push_back(rtlab[k]->lastDeviceS);
+            if (round >= 0) peers[off + k].primaryDevS.push_back(rtlab[k]->lastDeviceS());
             if (round >= 0) continue;
-            std::vector<float> mine = download<float>(cl, tOut, primary.size());
+            firstT[k] = download<float>(cl, tOut, primary.size());
             for (size_t i = 0; i < primary.size(); ++i) {
-                peers[off + k].hits += mine[i] >= 0.f;
-                peers[off + k].primaryMismatch += (mine[i] >= 0.f) != (t[i] >= 0.f);
+                peers[off + k].hits += firstT[k][i] >= 0.f;
+                peers[off + k].primaryMismatch += (firstT[k][i] >= 0.f) != (t[i] >= 0.f);
             }
         }
         if (embree) s = embree->occluded(shadow, blocked);
         if (embree && round >= 0) peers[0].shadowS.push_back(s);
         for (size_t k = 0; k < rtlab.size(); ++k) {
             if (shadow.empty()) break;
-            s = rtlab[k]->run(cl, rtlab[k]->occluded, shadowIn, occOut, shadow.size(), a.local);
+            s = rtlab[k]->occluded(shadowIn, occOut, shadow.size(), a.local);
             if (round >= 0) peers[off + k].shadowS.push_back(s);
-            if (round >= 0) peers[off + k].shadowDevS.push_back(rtlab[k]->lastDeviceS);
+            if (round >= 0) peers[off + k].shadowDevS.push_back(rtlab[k]->lastDeviceS());
             if (round >= 0) continue;
-            std::vector<int> mine = download<int>(cl, occOut, shadow.size());
-            if (!embree && k == 0) blocked = mine;  // the reference
+            firstBlocked[k] = download<int>(cl, occOut, shadow.size());
+            if (!embree && k == 0) blocked = firstBlocked[k];  // the reference
             for (size_t i = 0; i < shadow.size(); ++i) {
-                peers[off + k].blocked += mine[i];
-                peers[off + k].shadowMismatch += mine[i] != blocked[i];
+                peers[off + k].blocked += firstBlocked[k][i];
+                peers[off + k].shadowMismatch += firstBlocked[k][i] != blocked[i];
             }
         }
         if (embree && round < 0) {
@@ -372,6 +404,20 @@ int run(const Args& a) {
             for (int b : blocked) peers[0].blocked += b;
         }
     }
+    // A packet peer against the single-ray kernels of its structure, ray by ray: the same t
+    // (bit for bit) and the same occlusion are expected.
+    for (size_t k = 0; k < rtlab.size(); ++k)
+        for (size_t j = 0; j < rtlab.size(); ++j) {
+            if (!rtlab[k]->packet() || rtlab[j]->packet() || accels[j] != accels[k]) continue;
+            PeerResult& p = peers[off + k];
+            p.single = peers[off + j].name;
+            p.primaryVsSingle = p.shadowVsSingle = 0;
+            for (size_t i = 0; i < primary.size(); ++i)
+                p.primaryVsSingle += std::memcmp(&firstT[k][i], &firstT[j][i], 4) != 0;
+            for (size_t i = 0; i < firstBlocked[k].size(); ++i)
+                p.shadowVsSingle += firstBlocked[k][i] != firstBlocked[j][i];
+            break;
+        }
 
     if (!report(a, scene, o, cl, embree.get(), peers, primary, shadow)) {
         std::fprintf(stderr, "rtlab-trace-bench: hit counts disagree beyond 0.01%% of the rays\n");
@@ -388,7 +434,9 @@ int main(int argc, char** argv) {
     CLI::App app{"Embree as a peer: the same camera and shadow rays through Embree and rtlab"};
     app.add_option("scene", a.scene, "Scene file (.json) or a bare .obj")->required();
     app.add_option("--size", a.size, "Frame WxH [scene default]");
-    app.add_option("--accels", a.accels, "rtlab structures, comma-separated [bvh,wide]");
+    app.add_option("--accels", a.accels,
+                   "rtlab structures, comma-separated; wide-p8 / wide-p16: the wide BVH in "
+                   "packets of 8 / 16 rays per work-item [bvh,wide,wide-p16]");
     app.add_option("--device", a.device, "OpenCL device for rtlab [cpu]");
     app.add_option("--rounds", a.rounds, "Timed rounds after one warm-up [5]")
         ->check(CLI::Range(1, 1000));

@@ -181,4 +181,100 @@ TraversalCost wideTraversalCost(const AccelData& data, const std::vector<BatchRa
     return cost;
 }
 
+PacketCost widePacketTraversalCost(const AccelData& data, const std::vector<BatchRay>& rays,
+                                   bool anyHit, int P, size_t maxRays) {
+    PacketCost cost;
+    cost.size = P;
+    if (data.wide.empty() || rays.empty() || P < 1 || P > 16) return cost;
+    size_t packets = (rays.size() + size_t(P) - 1) / size_t(P);
+    size_t stride = std::max<size_t>(1, packets / std::max<size_t>(1, maxRays / size_t(P)));
+    long long nodes = 0, triangles = 0;
+    double nodeLanes = 0, triangleLanes = 0;
+    for (size_t pk = 0; pk < packets; pk += stride) {
+        ++cost.packets;
+        float inv[16][3], best[16];
+        int lanes = 0;
+        const BatchRay* r = rays.data() + pk * size_t(P);
+        for (; lanes < P && pk * size_t(P) + size_t(lanes) < rays.size(); ++lanes) {
+            invDir(r[lanes], inv[lanes]);
+            best[lanes] = r[lanes].tMax;
+        }
+        auto live = [&] {
+            for (int j = 0; j < lanes; ++j)
+                if (best[j] > 0.f) return true;
+            return false;
+        };
+        int stack[64], top = 0, index = 0;
+        float stackT[64][16];
+        for (;;) {
+            const dev::WideNode& n = data.wide[index];
+            ++nodes;
+            float t[16][4];
+            for (int j = 0; j < lanes; ++j) enter(n, r[j], inv[j], best[j], t[j]);
+            for (int k = 0; k < 4 && live(); ++k) {
+                int in = 0;  // rays that enter the leaf before their hit so far
+                for (int j = 0; j < lanes; ++j) in += t[j][k] < best[j];
+                if (n.count[k] == 0 || in == 0 || (n.sphereMask >> k & 1)) continue;
+                for (int p = n.child[k]; p < n.child[k] + n.count[k] && live(); ++p) {
+                    ++triangles;
+                    triangleLanes += double(in) / P;
+                    for (int j = 0; j < lanes; ++j) {
+                        double h = hitTriangle(data.triangles[p], r[j]);
+                        if (h > 0 && h < best[j]) best[j] = anyHit ? 0.f : float(h);
+                    }
+                }
+            }
+            if (!live()) break;
+            int near[4], m = 0;
+            float nearT[4], nearAll[4][16];
+            for (int k = 0; k < 4; ++k) {
+                if (n.count[k] != 0) continue;
+                float key = INFINITY, all[16];
+                for (int j = 0; j < lanes; ++j) {
+                    all[j] = t[j][k] < best[j] ? t[j][k] : INFINITY;
+                    key = std::min(key, all[j]);
+                }
+                if (key == INFINITY) continue;
+                int j = m++;
+                for (; j > 0 && nearT[j - 1] > key; --j) {
+                    near[j] = near[j - 1], nearT[j] = nearT[j - 1];
+                    std::copy(nearAll[j - 1], nearAll[j - 1] + lanes, nearAll[j]);
+                }
+                near[j] = n.child[k], nearT[j] = key;
+                std::copy(all, all + lanes, nearAll[j]);
+            }
+            auto share = [&](const float* all) {
+                int in = 0;
+                for (int j = 0; j < lanes; ++j) in += all[j] < best[j];
+                return double(in) / P;
+            };
+            if (m > 0) {
+                for (int j = m - 1; j > 0; --j) {
+                    stack[top] = near[j];
+                    std::copy(nearAll[j], nearAll[j] + lanes, stackT[top++]);
+                }
+                index = near[0];
+                nodeLanes += share(nearAll[0]);
+                continue;
+            }
+            auto needed = [&](const float* all) {
+                for (int j = 0; j < lanes; ++j)
+                    if (all[j] < best[j]) return true;
+                return false;
+            };
+            while (top > 0 && !needed(stackT[top - 1])) --top;
+            if (top == 0) break;
+            index = stack[--top];
+            nodeLanes += share(stackT[top]);
+        }
+        nodeLanes += double(lanes) / P;  // the root: every ray of the packet
+    }
+    double n = double(cost.packets);
+    cost.nodes = double(nodes) / n;
+    cost.triangles = double(triangles) / n;
+    cost.nodeLanes = nodes ? nodeLanes / double(nodes) : 0;
+    cost.triangleLanes = triangles ? triangleLanes / double(triangles) : 0;
+    return cost;
+}
+
 }  // namespace rt

@@ -1,6 +1,7 @@
 // rtlab — the work one ray does in the binary and the wide BVH (issue 18), counted on the host:
 // node visits, triangles tested and bytes fetched per ray, in the traversal order of
-// core/cl/accel.cl (Bvh_Query) and core/cl/accel_wide.cl.
+// core/cl/accel.cl (Bvh_Query) and core/cl/accel_wide.cl; and per packet of rays in that of
+// core/cl/accel_wide_packet.cl, with the share of its rays each node and triangle serves.
 // rtlab-trace-bench prints it beside the rays/s, so that a missed figure names its bound.
 #pragma once
 
@@ -26,5 +27,20 @@ TraversalCost binaryTraversalCost(const AccelData& bvh, const std::vector<BatchR
 
 TraversalCost wideTraversalCost(const AccelData& wide, const std::vector<BatchRay>& rays,
                                 bool anyHit, size_t maxRays = 65536);
+
+// The packet traversal of core/cl/accel_wide_packet.cl (Wide_QueryPacket), `packet` consecutive
+// rays at a time: what a packet does, and how many of its rays each step serves.
+struct PacketCost {
+    double nodes = 0;      // nodes visited per packet
+    double triangles = 0;  // triangles tested per packet (each against every ray of it)
+    double nodeLanes = 0;  // of a visited node: the share of the packet's rays that enter it
+                           // before their current hit (the rest of the lanes ride along)
+    double triangleLanes = 0;  // of a tested triangle: the share of rays that enter its leaf
+    size_t packets = 0;        // how many packets were followed (an even sample of the batch)
+    int size = 0;              // rays per packet
+};
+
+PacketCost widePacketTraversalCost(const AccelData& wide, const std::vector<BatchRay>& rays,
+                                   bool anyHit, int packet, size_t maxRays = 65536);
 
 }  // namespace rt

@@ -75,5 +75,33 @@ TEST(TraversalCost, APoppedNodeIsLoadedAgain) {
     EXPECT_EQ(b.bytes, 32.0 + 64.0 + 36.0);
 }
 
+// A packet of 8 over one triangle: the four rays that come down through it hit, the four that
+// run sideways miss the scene. The packet visits the one node once, tests the triangle once
+// for all eight, and half its rays are in the leaf that test serves.
+TEST(TraversalCost, APacketCountsItsVisitsOnceAndTheRaysEachServes) {
+    AccelData d = buildAccel(triangles({flat(-1, -1, 1, -1, 0, 1, 0)}), RenderOptions::Accel::Wide);
+    std::vector<BatchRay> rays;
+    for (int i = 0; i < 8; ++i)
+        rays.push_back(i % 2 ? BatchRay{0.f, 0.f, 5.f, INFINITY, 1.f, 0.f, 0.f, 0.f}
+                             : down(0.1f * float(i) - 0.3f, 0.f));
+    PacketCost c = widePacketTraversalCost(d, rays, false, 8);
+    EXPECT_EQ(c.packets, 1u);
+    EXPECT_EQ(c.size, 8);
+    EXPECT_EQ(c.nodes, 1.0);
+    EXPECT_EQ(c.triangles, 1.0);
+    EXPECT_EQ(c.triangleLanes, 0.5);
+    EXPECT_EQ(c.nodeLanes, 1.0);  // the root serves every ray
+    // Packets of 4 split them into two packets with the same work each.
+    PacketCost four = widePacketTraversalCost(d, rays, false, 4);
+    EXPECT_EQ(four.packets, 2u);
+    EXPECT_EQ(four.triangles, 1.0);
+    EXPECT_EQ(four.triangleLanes, 0.5);
+    // The single-ray count of the same rays: each ray visits the node, only those through the
+    // leaf's box test the triangle.
+    TraversalCost single = wideTraversalCost(d, rays, false);
+    EXPECT_EQ(single.nodes, 1.0);
+    EXPECT_EQ(single.triangles, 0.5);
+}
+
 }  // namespace
 }  // namespace rt

@@ -1,7 +1,8 @@
 // rtlab — batches of given rays through the scene queries of both pipelines (Scene_Intersect,
 // Scene_Occluded, and so the --accel structure), for the Embree peer benchmark
 // (bench/trace_bench.cpp, issue 18). A ray is 8 floats: origin, tMax, direction, unused.
-// Built with a scene's featureDefines and bound with DeviceScene::setArgs.
+// Built with a scene's featureDefines and bound with DeviceScene::setArgs. With RT_ACCEL_WIDE
+// and triangles alone, the packet kernels trace RT_PACKET rays per work-item (CPU devices).
 #include "scene.cl"
 
 // From: rays. To: t of the closest hit below tMax, -1 on a miss.
@@ -24,3 +25,38 @@ kernel void Rays_Occluded(RT_SCENE_PARAMS, global const float8* rays,
     float8 r = rays[i];
     occluded[i] = Scene_Occluded(&sc, makeRay(r.s012, r.s456), r.s3) ? 1 : 0;
 }
+
+#if defined(RT_ACCEL_WIDE) && defined(RT_HAS_TRIANGLES) && !defined(RT_HAS_SPHERES) && \
+    !defined(RT_HAS_PLANES)
+#include "accel_wide_packet.cl"
+
+// From: rays, RT_PACKET per work-item. To: as Rays_Closest, ray by ray.
+kernel void Rays_ClosestPacket(RT_SCENE_PARAMS, global const float8* rays, global float* t,
+                               int count) {
+    int first = (int)get_global_id(0) * RT_PACKET;
+    if (first >= count) return;  // the work-group padding
+    RT_SCENE_INIT(sc);
+    floatP hitT;
+    intP found;
+    RayPacket r = Packet_Load(rays, first, count, &hitT);
+    Wide_QueryPacket(&sc, &r, &hitT, &found, false);
+    float out[RT_PACKET];
+    vstoreP(select((floatP)(-1.0f), hitT, found), 0, out);
+    for (int j = 0; j < RT_PACKET && first + j < count; ++j) t[first + j] = out[j];
+}
+
+// From: rays, RT_PACKET per work-item. To: as Rays_Occluded, ray by ray.
+kernel void Rays_OccludedPacket(RT_SCENE_PARAMS, global const float8* rays,
+                                global int* occluded, int count) {
+    int first = (int)get_global_id(0) * RT_PACKET;
+    if (first >= count) return;  // the work-group padding
+    RT_SCENE_INIT(sc);
+    floatP hitT;
+    intP found;
+    RayPacket r = Packet_Load(rays, first, count, &hitT);
+    Wide_QueryPacket(&sc, &r, &hitT, &found, true);
+    int out[RT_PACKET];
+    vstoreP(found & 1, 0, out);
+    for (int j = 0; j < RT_PACKET && first + j < count; ++j) occluded[first + j] = out[j];
+}
+#endif
