@@ -55,6 +55,29 @@ TEST_P(WaveVsMega, SameImageAtEveryBounceLimit) {
 
 INSTANTIATE_TEST_SUITE_P(StandardScenes, WaveVsMega, ::testing::ValuesIn(kScenes));
 
+// From B = 14 the trace kernel steps over the rest of a word of untraced parents at once
+// (wavefront/tree/wavefront.cl, compiled only for such deep trees). The glass scene at B = 14
+// and 15, against the weighted megakernel, which walks the same rays depth first: a traced
+// parent skipped by mistake would lose its subtree and show far beyond the summation order's
+// last-bit differences.
+TEST(Wavefront, DeepTreeStepsOverEmptyWordsWithTheSameImage) {
+    Scene scene = load("spheres");
+    ASSERT_EQ(scene.branching(), 2);
+    MegakernelPipeline mega(test::device());
+    WavefrontPipeline wave(test::device());
+    for (int b : {14, 15}) {
+        RenderOptions o = scene.defaults;
+        o.width = 12;
+        o.height = 8;
+        o.bounces = b;
+        o.layout = RenderOptions::Layout::Weighted;
+        Image m = mega.render(scene, o), w = wave.render(scene, o);
+        for (float v : w.rgb) ASSERT_TRUE(std::isfinite(v)) << "B=" << b;
+        ImageDiff d = compareImages(m, w, 1e-5, false);
+        EXPECT_LE(d.maxAbs, 1e-5) << "B=" << b;
+    }
+}
+
 TEST(Wavefront, TiledFrameEqualsUntiled) {
     Scene scene = load("spheres");
     RenderOptions o = scene.defaults;

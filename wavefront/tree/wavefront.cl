@@ -35,7 +35,8 @@ inline bool Wavefront_IsTraced(global const uint* traced, WaveTree t, int slot) 
 // settings.sampleIndex, in heap order. A slot is traced when its parent was: the parent's bit
 // comes from the word being built (same word) or from a stored one (earlier words; a word with
 // no bit set is never stored, and reset has left it zero). A level with no traced slot ends the
-// walk: nothing below it can be reached; a word of parents with no bit set is stepped over.
+// walk: nothing below it can be reached. In a deep tree the rest of a word of parents with no
+// bit set is stepped over at once.
 kernel void Wavefront_Trace(RT_SCENE_PARAMS, global Node* tree, global uint* traced, int rowEnd) {
     int x = get_global_id(0), y = get_global_id(1) + settings.rowOffset;
     if (x >= settings.width || y >= rowEnd) return;
@@ -73,11 +74,14 @@ kernel void Wavefront_Trace(RT_SCENE_PARAMS, global Node* tree, global uint* tra
             bits = parentWord;
         }
         if (!((bits >> (p & 31)) & 1u)) {
-            // No parent from p to the end of its word was traced: skip to the first child of the
-            // next word's parents (or the level's end), so that a deep level costs one step per
-            // word of parents rather than one per slot (at B = 16 a pixel has 65,536 slots in its
-            // last level; the H200 took 193 ms for a launch of three rows there, issue 19).
+#if RT_TREE_NODES > 16383
+            // A deep tree (B >= 14 at C = 2): when no parent from p to the end of its word was
+            // traced, skip to the first child of the next word's parents (or the level's end),
+            // so that a level costs one step per word of parents rather than one per slot. On
+            // an H200 (spheres 640x360) this took 15-22% off the frame at B = 15 and 16, but
+            // added 5-16% at B = 8..12, where the test costs more than the slots it skips.
             if ((bits >> (p & 31)) == 0u) i = min((((p >> 5) + 1) << 5) * RT_BRANCH + 1, levelEnd) - 1;
+#endif
             continue;
         }
         if (p != parentSlot) {
