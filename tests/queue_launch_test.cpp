@@ -131,15 +131,32 @@ TEST(QueueLaunch, StagePiecesFitTheCapFromTheMeasuredCostPerItem) {
     EXPECT_EQ(costs.piece("extend", 100000, 0, 64), 100000u) << "no cap: one launch";
     EXPECT_EQ(costs.piece("extend", 100000, 100, 64), StageCosts::kProbeItems) << "probe first";
     EXPECT_EQ(costs.piece("extend", 100, 100, 64), 100u) << "a short queue is its own probe";
-    costs.learn("extend", 1024, 8.0);  // 1/128 ms an item: 10240 fit 80 ms
+    costs.learn("extend", 1024, 8.0, 100);  // 1/128 ms an item: 10240 fit 80 ms
     EXPECT_EQ(costs.piece("extend", 100000, 100, 64), 10240u);  // 160 whole groups of 64
     EXPECT_EQ(costs.piece("extend", 100000, 100, 384), 9984u);  // 26 whole groups of 384
     EXPECT_EQ(costs.piece("extend", 10000, 100, 384), 10000u) << "fits: not cut to groups";
     EXPECT_EQ(costs.piece("shadow", 100000, 100, 64), StageCosts::kProbeItems) << "by stage";
-    costs.learn("extend", 10, 1000.0);  // 100 ms an item: still one work-group at least
+    costs.learn("extend", 10, 1000.0, 100);  // 100 ms an item: still one work-group at least
     EXPECT_EQ(costs.piece("extend", 100000, 100, 64), 64u);
-    costs.learn("extend", 0, 5.0);  // an empty launch: nothing learned
+    costs.learn("extend", 0, 5.0, 100);  // an empty launch: nothing learned
     EXPECT_EQ(costs.piece("extend", 100000, 100, 64), 64u);
+}
+
+// A shared machine: the same stage takes twice as long from one bounce to the next. The pieces
+// shrink by that spread, and a short launch (mostly launch overhead) does not move it.
+TEST(QueueLaunch, StagePiecesShrinkWithTheSpreadOfLongLaunches) {
+    StageCosts costs;
+    costs.learn("extend", 1024, 16.0, 100);  // 1/64 ms an item
+    EXPECT_EQ(costs.piece("extend", 100000, 100, 64), 5120u);
+    EXPECT_DOUBLE_EQ(costs.slack(), 1.0);
+    costs.learn("extend", 1024, 32.0, 100);  // twice as long: 1/32 ms an item, spread 2
+    EXPECT_DOUBLE_EQ(costs.slack(), 2.0);
+    EXPECT_EQ(costs.piece("extend", 100000, 100, 64), 1280u);  // 80 / (2 / 32)
+    costs.learn("shadow", 64, 0.5, 100);
+    costs.learn("shadow", 64, 5.0, 100);  // 10x, but 5 ms of a 100 ms cap: overhead, not told
+    EXPECT_DOUBLE_EQ(costs.slack(), 2.0);
+    costs.learn("shadow", 1024, 80.0, 100);  // as the last: the spread decays towards 1
+    EXPECT_DOUBLE_EQ(costs.slack(), 1.9);
 }
 
 // --max-launch-ms bounds every launch, not only how many new paths a bounce admits: on the

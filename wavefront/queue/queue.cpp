@@ -123,7 +123,7 @@ public:
             if (done < items && !costs_.known(name)) {
                 QueueLaunch& probe = launches_.back();
                 probe.event.wait();
-                costs_.learn(name, piece, ms(probe));
+                costs_.learn(name, piece, ms(probe), targetMs_);
             }
         }
     }
@@ -151,7 +151,7 @@ public:
             s.items += l.items;
             s.ms += ms(l);
         }
-        for (const auto& [kernel, s] : sums) costs_.learn(kernel, s.items, s.ms);
+        for (const auto& [kernel, s] : sums) costs_.learn(kernel, s.items, s.ms, targetMs_);
         learned_ = launches_.size();
     }
     // The longest stage among launches [first, end): its pieces' times summed, which is what

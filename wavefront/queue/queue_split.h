@@ -26,7 +26,7 @@ public:
         auto it = stages_.find(kernel);
         // Never measured: a probe, which the caller times before it sizes the rest.
         double fit = it == stages_.end() ? double(kProbeItems)
-                                         : kHeadroom * targetMs / it->second;
+                                         : kHeadroom * targetMs / (slack() * it->second);
         if (fit >= double(left)) return left;
         size_t items = std::max(size_t(fit) / step * step, step);
         return std::min(items, left);
@@ -36,16 +36,33 @@ public:
     // `items` of `kernel` took `ms` in all (the pieces of one stage in one bounce, pooled, so
     // that a small piece's launch overhead does not stand for the cost of an item). Launches
     // that had no item teach nothing.
-    void learn(const std::string& kernel, size_t items, double ms) {
-        if (items > 0) stages_[kernel] = std::max(ms, 1e-9) / double(items);
+    //
+    // How far the new cost per item strays from the last one, either way, is the slack that
+    // divides the budget, as core/launch_planner.h does with rows: on 2 shared PoCL cores the
+    // same stage over the same rays takes up to twice as long from one bounce to the next, and
+    // a deeper bounce's rays cost more. Only launches long enough to matter for the cap
+    // (kTellingShare of it) count: a short one's time is mostly launch overhead.
+    void learn(const std::string& kernel, size_t items, double ms, double targetMs) {
+        if (items == 0) return;
+        double perItem = std::max(ms, 1e-9) / double(items);
+        auto it = stages_.find(kernel);
+        if (it != stages_.end() && ms >= kTellingShare * targetMs) {
+            double ratio = std::clamp(perItem / it->second, 1.0 / kMaxSlack, kMaxSlack);
+            slow_ = std::max(1.0 + (slow_ - 1.0) * kSlackDecay, ratio);
+            fast_ = std::min(1.0 - (1.0 - fast_) * kSlackDecay, ratio);
+        }
+        stages_[kernel] = perItem;
     }
-    void clear() { stages_.clear(); }
+    double slack() const { return std::min(slow_ / fast_, kMaxSlack); }
+    void clear() { stages_.clear(); }  // a new workload; the slack is the machine's: kept
 
     static constexpr size_t kProbeItems = 256;  // the first launch of a stage, as kProbeRays
     static constexpr double kHeadroom = 0.8;    // aim below the cap: bounces differ in cost
+    static constexpr double kTellingShare = 0.1, kMaxSlack = 4.0, kSlackDecay = 0.9;
 
 private:
     std::map<std::string, double> stages_;  // ms per item, by kernel
+    double slow_ = 1.0, fast_ = 1.0;  // the highest and lowest recent ratio, decaying to 1
 };
 
 }  // namespace rt
