@@ -55,8 +55,9 @@ void SceneFlags::add(CLI::App& cmd) {
     cmd.add_flag("--fixed-offset", fixedOffset, "Same as --offset fixed");
     maxLaunchOption = cmd.add_option("--max-launch-ms", maxLaunchMs,
                    "Split frames into row tiles (and a costly row into column pieces; the queue "
-                   "wavefront admits fewer rays) so that no kernel launch runs longer than this "
-                   "(display-driver watchdogs); 0 = one launch per frame")
+                   "wavefront admits fewer rays and runs a long stage in pieces) so that no kernel "
+                   "launch runs longer than this (display-driver watchdogs); 0 = one launch per "
+                   "frame")
         ->check(CLI::Range(0.0, 1e6))
         ->capture_default_str();
     cmd.add_option("--kernel-dir", kernelDir,

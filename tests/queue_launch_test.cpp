@@ -2,7 +2,8 @@
 // bounce enqueued at once, each kernel reading its real length from the counters) give the same
 // bits as launches sized by a read-back per bounce, on every standard scene, at B 0..8 and with
 // anti-aliasing; a pool too small for a bounce falls back to read-backs with the same bits; the
-// frame reports its idle time and its read-backs; bad values are refused in one line.
+// frame reports its idle time and its read-backs; bad values are refused in one line; under
+// --max-launch-ms a stage launch over more items than fit the cap goes in pieces (issue 19).
 #include <gtest/gtest.h>
 
 #include <cstring>
@@ -12,6 +13,7 @@
 #include "test_device.h"
 #include "test_scenes.h"
 #include "wavefront/queue/queue.h"
+#include "wavefront/queue/queue_split.h"
 
 namespace rt {
 namespace {
@@ -118,6 +120,68 @@ TEST(QueueLaunch, FrameReportsIdleTimeAndReadbacks) {
         EXPECT_EQ(s.extras.at("queue_launch"), what);
         EXPECT_EQ(s.extras.at("readbacks"), queue.queueStats().readbacks);
         if (launch == Launch::Readback) EXPECT_GT(queue.queueStats().readbacks, 0);
+    }
+}
+
+// StageCosts, on fake costs: a stage never measured gets a probe; then a piece is as many whole
+// work-groups as fit 0.8 of the cap at the cost per item its last launches measured (pooled, so
+// that launch overhead on a few items does not inflate it), and all of the queue when it fits.
+TEST(QueueLaunch, StagePiecesFitTheCapFromTheMeasuredCostPerItem) {
+    StageCosts costs;
+    EXPECT_EQ(costs.piece("extend", 100000, 0, 64), 100000u) << "no cap: one launch";
+    EXPECT_EQ(costs.piece("extend", 100000, 100, 64), StageCosts::kProbeItems) << "probe first";
+    EXPECT_EQ(costs.piece("extend", 100, 100, 64), 100u) << "a short queue is its own probe";
+    costs.learn("extend", 1024, 8.0, 100);  // 1/128 ms an item: 10240 fit 80 ms
+    EXPECT_EQ(costs.piece("extend", 100000, 100, 64), 10240u);  // 160 whole groups of 64
+    EXPECT_EQ(costs.piece("extend", 100000, 100, 384), 9984u);  // 26 whole groups of 384
+    EXPECT_EQ(costs.piece("extend", 10000, 100, 384), 10000u) << "fits: not cut to groups";
+    EXPECT_EQ(costs.piece("shadow", 100000, 100, 64), StageCosts::kProbeItems) << "by stage";
+    costs.learn("extend", 10, 1000.0, 100);  // 100 ms an item: still one work-group at least
+    EXPECT_EQ(costs.piece("extend", 100000, 100, 64), 64u);
+    costs.learn("extend", 0, 5.0, 100);  // an empty launch: nothing learned
+    EXPECT_EQ(costs.piece("extend", 100000, 100, 64), 64u);
+}
+
+// A shared machine: the same stage takes twice as long from one bounce to the next. The pieces
+// shrink by that spread, and a short launch (mostly launch overhead) does not move it.
+TEST(QueueLaunch, StagePiecesShrinkWithTheSpreadOfLongLaunches) {
+    StageCosts costs;
+    costs.learn("extend", 1024, 16.0, 100);  // 1/64 ms an item
+    EXPECT_EQ(costs.piece("extend", 100000, 100, 64), 5120u);
+    EXPECT_DOUBLE_EQ(costs.slack(), 1.0);
+    costs.learn("extend", 1024, 32.0, 100);  // twice as long: 1/32 ms an item, spread 2
+    EXPECT_DOUBLE_EQ(costs.slack(), 2.0);
+    EXPECT_EQ(costs.piece("extend", 100000, 100, 64), 1280u);  // 80 / (2 / 32)
+    costs.learn("shadow", 64, 0.5, 100);
+    costs.learn("shadow", 64, 5.0, 100);  // 10x, but 5 ms of a 100 ms cap: overhead, not told
+    EXPECT_DOUBLE_EQ(costs.slack(), 2.0);
+    costs.learn("shadow", 1024, 80.0, 100);  // as the last: the spread decays towards 1
+    EXPECT_DOUBLE_EQ(costs.slack(), 1.9);
+}
+
+// --max-launch-ms bounds every launch, not only how many new paths a bounce admits: on the
+// spheres (glass: a bounce can hold twice the rays of the last) the children of admitted paths
+// and the resolve over every pixel are more items than fit the cap, and go in pieces over
+// sub-ranges. A fake cost per item makes the pieces the same on any device; the image keeps the
+// bits of one launch per stage.
+TEST(QueueLaunch, StageLaunchesOverTheCapGoInPiecesWithTheSameBits) {
+    Scene scene = load("spheres");
+    RenderOptions o = tiny(scene, 6, 1);
+    o.width = 64;
+    o.height = 48;
+    QueuePipeline queue(test::device());
+    Image whole = queue.render(scene, o);
+    const int wholeLaunches = queue.stats().launches;
+    // 0.8 ms of the 1 ms cap fits 512 items (CPU groups of 64) or more, and the 256-item probes
+    // stay under the cap; 3072 pixels and the glass children do not fit one launch.
+    const size_t group = size_t(QueuePipeline::groupSize(test::device().device()));
+    o.maxLaunchMs = 1.0;
+    queue.setFakeItemMsForTest(1.0 / (2.5 * double(std::max<size_t>(group, 256))));
+    for (int frame = 0; frame < 2; ++frame) {  // the second is sized from what the first learned
+        Image split = queue.render(scene, o);
+        EXPECT_TRUE(sameBits(whole, split)) << "frame " << frame;
+        EXPECT_LE(queue.stats().longestLaunchMs, o.maxLaunchMs) << "frame " << frame;
+        EXPECT_GT(queue.stats().launches, wholeLaunches) << "frame " << frame;
     }
 }
 

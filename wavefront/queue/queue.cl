@@ -91,7 +91,8 @@ kernel void Queue_Extend(RT_SCENE_PARAMS, QUEUE_RAYS_PARAMS(rays), int n, global
     n = Queue_Length(n, nWord, counters);
     // A launch sized by a bound has whole groups past the queue: they skip the local setup (the
     // test is the same for every work-item of a group, so no barrier is left half-reached).
-    if (get_group_id(0) * size >= n) return;
+    // The group's first index counts the global offset of a launch split into pieces.
+    if (i - lid >= n) return;
     for (int k = lid; k < RT_Q_CLASSES + 1; k += size) count[k] = 0;
     for (int k = lid; k < (RT_Q_MAX_DEPTH + 1) * RT_Q_CLASSES; k += size) histogram[k] = 0;
     barrier(CLK_LOCAL_MEM_FENCE);

@@ -21,6 +21,7 @@
 #include "core/kernel_resources.h"
 #include "wavefront/queue/queue.h"
 #include "wavefront/queue/queue_layout.h"
+#include "wavefront/queue/queue_split.h"
 
 namespace rt {
 
@@ -62,13 +63,26 @@ std::array<bool, RT_Q_CLASSES> sceneClasses(const Scene& scene) {
     return c;
 }
 
-// One frame's launches, named for --stats: kernels, their local sizes, the events to time.
+// One launch of a frame: the kernel, the part of its queue it covered (a global work offset),
+// and its event. `items` is exact, or, with countWord >= 0, a bound whose real length the kernel
+// reads from counters[countWord]; QueueFrame::learn puts the real one in from a read-back.
+struct QueueLaunch {
+    std::string kernel;
+    cl::Event event;
+    size_t offset = 0, items = 0;
+    int countWord = -1;
+};
+
+// One frame's launches, named for --stats: kernels, their local sizes, the events to time, and
+// (--max-launch-ms) each launch split into pieces that fit the cap (wavefront/queue/queue_split.h).
 class QueueFrame {
 public:
+    // targetMs: --max-launch-ms (0: one launch per stage); fakeItemMs > 0 (tests only) prices
+    // every launch at its items times that instead of its profiling event.
     QueueFrame(ClContext& cl, cl::Program& program, const DeviceScene& scene, int group,
-               QueueKernels& kernels)
+               QueueKernels& kernels, StageCosts& costs, double targetMs, double fakeItemMs)
         : cl_(cl), program_(program), scene_(scene), group_(group), kernels_(kernels.kernels),
-          locals_(kernels.locals) {}
+          locals_(kernels.locals), costs_(costs), targetMs_(targetMs), fakeItemMs_(fakeItemMs) {}
 
     cl::Kernel& kernel(const std::string& name) {
         auto it = kernels_.find(name);
@@ -96,25 +110,83 @@ public:
             k.setArg(at++, *field);
         return at;
     }
-    // A 1D launch over `items` work-items (none when zero), timed under the kernel's name.
-    void launch(const std::string& name, size_t items) {
-        if (items == 0) return;
-        size_t local = locals_.at(name), global = (items + local - 1) / local * local;
-        cl::Event e;
-        cl_.queue().enqueueNDRangeKernel(kernels_.at(name), cl::NullRange, cl::NDRange(global),
-                                         cl::NDRange(local), nullptr, &e);
-        events_.emplace_back(stageName(name), e);
+    // 1D launches over work-items [0, items) (none when zero): one, or pieces in whole
+    // work-groups when the stage's measured cost per item says one would run past the cap. A
+    // stage never measured starts with a probe that is timed before the rest is sized. With a
+    // bound (countWord >= 0) the caller has made sure that one launch fits (wouldSplit).
+    void launch(const std::string& name, size_t items, int countWord = -1) {
+        const size_t local = locals_.at(name);
+        for (size_t done = 0; done < items;) {
+            size_t piece = costs_.piece(name, items - done, targetMs_, local);
+            enqueue(name, done, piece, countWord);
+            done += piece;
+            if (done < items && !costs_.known(name)) {
+                QueueLaunch& probe = launches_.back();
+                probe.event.wait();
+                costs_.learn(name, piece, ms(probe), targetMs_);
+            }
+        }
     }
-    std::vector<std::pair<std::string, cl::Event>>& events() { return events_; }
+    // Whether a launch of `name` over `items` would be split (it is over the cap).
+    bool wouldSplit(const std::string& name, size_t items) const {
+        return costs_.piece(name, items, targetMs_, locals_.at(name)) < items;
+    }
+    // What the launches since the last call cost per item, stage by stage, for the pieces to
+    // come; their events must be complete (the caller just waited on a read-back). `counters`
+    // (the words just read, or null) gives the real length of launches made over a bound.
+    void learn(const cl_int* counters) {
+        struct Sum {
+            size_t items = 0;
+            double ms = 0;
+        };
+        std::map<std::string, Sum> sums;
+        for (size_t i = learned_; i < launches_.size(); ++i) {
+            QueueLaunch& l = launches_[i];
+            if (l.countWord >= 0) {
+                if (!counters) continue;
+                l.items = std::min(l.items, size_t(std::max(counters[l.countWord], 0)));
+                l.countWord = -1;
+            }
+            Sum& s = sums[l.kernel];
+            s.items += l.items;
+            s.ms += ms(l);
+        }
+        for (const auto& [kernel, s] : sums) costs_.learn(kernel, s.items, s.ms, targetMs_);
+        learned_ = launches_.size();
+    }
+    // The longest stage among launches [first, end): its pieces' times summed, which is what
+    // the whole queue took, as the admission limit needs it.
+    double slowestStageMs(size_t first, size_t end) const {
+        std::map<std::string, double> stages;
+        for (size_t i = first; i < end; ++i) stages[launches_[i].kernel] += ms(launches_[i]);
+        double most = 0;
+        for (const auto& [kernel, t] : stages) most = std::max(most, t);
+        return most;
+    }
+    double ms(const QueueLaunch& l) const {
+        return fakeItemMs_ > 0 ? fakeItemMs_ * double(l.items) : eventMs(l.event);
+    }
+    std::vector<QueueLaunch>& launches() { return launches_; }
 
 private:
+    void enqueue(const std::string& name, size_t offset, size_t items, int countWord) {
+        size_t local = locals_.at(name), global = (items + local - 1) / local * local;
+        cl::Event e;
+        cl_.queue().enqueueNDRangeKernel(kernels_.at(name), cl::NDRange(offset),
+                                         cl::NDRange(global), cl::NDRange(local), nullptr, &e);
+        launches_.push_back({name, e, offset, items, countWord});
+    }
+
     ClContext& cl_;
     cl::Program& program_;
     const DeviceScene& scene_;
     int group_;
     std::map<std::string, cl::Kernel>& kernels_;
     std::map<std::string, size_t>& locals_;
-    std::vector<std::pair<std::string, cl::Event>> events_;
+    StageCosts& costs_;
+    double targetMs_, fakeItemMs_;
+    std::vector<QueueLaunch> launches_;
+    size_t learned_ = 0;  // launches_ before it were learned from
 };
 
 const char* const kShadeKernels[RT_Q_CLASSES] = {"Queue_ShadeMiss", "Queue_ShadeDiffuse",
@@ -258,9 +330,25 @@ private:
         cl_.queue().enqueueFillBuffer(b_.counters, cl_int(0), 0, RT_Q_PER_ITERATION * 4);
         f_.kernel("Queue_Extend").setArg(DeviceScene::kFirstKernelArg + 5, cl_int(n));
         f_.launch("Queue_Extend", n);
-        if (lights_ > 0) f_.launch("Queue_Shadow", n);
+        // Shadow and shade run over queues that extend fills: over the bound n, each kernel
+        // reads its queue's length. When one launch that long could run past --max-launch-ms,
+        // the host reads the lengths first and launches each queue in pieces over them.
+        bool split = !onDevice_ && lights_ > 0 && f_.wouldSplit("Queue_Shadow", n);
         for (int c = 0; c < RT_Q_CLASSES; ++c)
-            if (classes_[c]) f_.launch(kShadeKernels[c], n);
+            split = split || (!onDevice_ && classes_[c] && f_.wouldSplit(kShadeKernels[c], n));
+        cl_int len[RT_Q_PER_ITERATION] = {};
+        if (split) {
+            cl_.queue().enqueueReadBuffer(b_.counters, CL_TRUE, 0, sizeof len, len);
+            ++stats_.readbacks;
+            f_.learn(len);
+        }
+        auto queueLaunch = [&](const char* kernel, int word) {
+            if (split) f_.launch(kernel, size_t(len[word]));
+            else f_.launch(kernel, n, onDevice_ ? -1 : word);
+        };
+        if (lights_ > 0) queueLaunch("Queue_Shadow", RT_Q_SHADOW);
+        for (int c = 0; c < RT_Q_CLASSES; ++c)
+            if (classes_[c]) queueLaunch(kShadeKernels[c], RT_Q_COUNT + c);
         size_t group = size_t(QueuePipeline::groupSize(cl_.device()));
         size_t blocks = (n + group - 1) / group;
         f_.kernel("Queue_ScanBlocks").setArg(1, cl_int(n));
@@ -299,12 +387,13 @@ private:
     // One bounce of the n live rays; returns the live rays of the next one.
     size_t bounce(size_t n) {
         cl::CommandQueue& q = cl_.queue();
-        size_t firstEvent = f_.events().size();
+        size_t firstEvent = f_.launches().size();
         enqueueStages(n);
         cl_int c[RT_Q_PER_ITERATION];
         q.enqueueReadBuffer(b_.counters, CL_TRUE, 0, sizeof c, c);
         ++stats_.readbacks;
-        size_t doneEvents = f_.events().size();  // complete now: their times can be read
+        size_t doneEvents = f_.launches().size();  // complete now: their times can be read
+        if (o_.maxLaunchMs > 0) f_.learn(c);
         size_t cut = n, kept = size_t(c[RT_Q_CHILDREN]);
         if (kept > b_.pool) {
             f_.kernel("Queue_FindCut").setArg(4, cl_int(n));
@@ -335,11 +424,10 @@ private:
     }
 
     // --max-launch-ms: admit no more rays than the slowest stage of this bounce (extend or
-    // shadow, as a rule) handles in that time.
+    // shadow, as a rule) handles in that time, all its pieces together. Launches keep under
+    // the cap by their pieces (QueueFrame::launch); this keeps a bounce from needing many.
     void adaptLimit(size_t n, size_t firstEvent, size_t endEvent) {
-        double ms = 0;
-        for (size_t e = firstEvent; e < endEvent; ++e)
-            ms = std::max(ms, eventMs(f_.events()[e].second));
+        double ms = f_.slowestStageMs(firstEvent, endEvent);
         if (ms <= 0) return;
         // 0.8: aim below the target, bounces differ in cost; grow at most twofold per bounce,
         // as core/launch_planner.h does with rows it has not seen.
@@ -367,11 +455,11 @@ private:
 // The device's busy and idle time over a frame's kernels: the span from the first start to the
 // last end, and the part of it covered by no kernel (the union of their intervals, so kernels
 // that a device runs side by side are not counted twice).
-std::pair<double, double> spanAndIdleMs(const std::vector<std::pair<std::string, cl::Event>>& events) {
+std::pair<double, double> spanAndIdleMs(const std::vector<QueueLaunch>& launches) {
     std::vector<std::pair<cl_ulong, cl_ulong>> runs;
-    for (const auto& [name, e] : events)
-        runs.emplace_back(e.getProfilingInfo<CL_PROFILING_COMMAND_START>(),
-                          e.getProfilingInfo<CL_PROFILING_COMMAND_END>());
+    for (const QueueLaunch& l : launches)
+        runs.emplace_back(l.event.getProfilingInfo<CL_PROFILING_COMMAND_START>(),
+                          l.event.getProfilingInfo<CL_PROFILING_COMMAND_END>());
     if (runs.empty()) return {0.0, 0.0};
     std::sort(runs.begin(), runs.end());
     cl_ulong busy = 0, reach = runs.front().first, last = 0;
@@ -427,7 +515,19 @@ Image QueuePipeline::render(const Scene& scene, const RenderOptions& o) {
     dev::RenderSettings settings = makeSettings(scene, o);
     Image out(o.width, o.height);
     if (kernels_.program != program()) kernels_ = QueueKernels{program(), {}, {}};
-    QueueFrame frame(cl_, program, *scene_, group, kernels_);
+    // What --max-launch-ms learned (the admission limit, each stage's cost per item) is kept
+    // while the workload stays the same.
+    std::string key = std::to_string(o.maxLaunchMs) + " " + std::to_string(o.width) + "x" +
+                      std::to_string(o.height) + " B" + std::to_string(o.bounces) + " s" +
+                      std::to_string(o.shadowSamples) + " " + scene.source.string();
+    for (const std::string& d : programDefines(scene, o, group)) key += " " + d;
+    key += std::string(" ") + queueLaunchName(o.queueLaunch);
+    if (key != learnedKey_) {
+        learnedLimit_ = 0;
+        stageCosts_.clear();
+    }
+    QueueFrame frame(cl_, program, *scene_, group, kernels_, stageCosts_,
+                     onDevice ? 0.0 : o.maxLaunchMs, fakeItemMs_);
     try {
         if (o.countRays) scene_->resetRayCounts(cl_.queue());
         cl_.queue().enqueueFillBuffer(buf_.counters, cl_int(0), 0, RT_Q_WORDS * 4);
@@ -436,13 +536,6 @@ Image QueuePipeline::render(const Scene& scene, const RenderOptions& o) {
         resolve.setArg(1, buf_.image);
         resolve.setArg(2, cl_int(pixels));
         resolve.setArg(4, cl_int(o.aa * o.aa));
-        // What --max-launch-ms learned is kept while the workload stays the same.
-        std::string key = std::to_string(o.maxLaunchMs) + " " + std::to_string(o.width) + "x" +
-                          std::to_string(o.height) + " B" + std::to_string(o.bounces) + " s" +
-                          std::to_string(o.shadowSamples) + " " + scene.source.string();
-        for (const std::string& d : programDefines(scene, o, group)) key += " " + d;
-        key += std::string(" ") + queueLaunchName(o.queueLaunch);
-        if (key != learnedKey_) learnedLimit_ = 0;
         QueuePass pass(cl_, frame, buf_, o, queue_, learnedLimit_);
         // Progress in pixels started x AA samples, over the row window.
         const size_t first = pass.firstPixel(), window = pass.endPixel() - first;
@@ -470,9 +563,10 @@ Image QueuePipeline::render(const Scene& scene, const RenderOptions& o) {
             stats_.rays = scene_->readRayCounts(cl_.queue());
             stats_.raysCounted = true;
         }
-        for (auto& [name, event] : frame.events()) stats_.addKernel(name, eventMs(event));
-        stats_.launches = int(frame.events().size());
-        std::tie(queue_.spanMs, queue_.idleMs) = spanAndIdleMs(frame.events());
+        if (o.maxLaunchMs > 0) frame.learn(nullptr);  // the last bounce's and resolve's
+        for (const QueueLaunch& l : frame.launches()) stats_.addKernel(stageName(l.kernel), frame.ms(l));
+        stats_.launches = int(frame.launches().size());
+        std::tie(queue_.spanMs, queue_.idleMs) = spanAndIdleMs(frame.launches());
         queue_.fellBack = words[RT_Q_OVERFLOW] != 0;
     } catch (const cl::Error& e) {
         throwClError(e, "queue-pipeline frame on " + dev.name, hint());

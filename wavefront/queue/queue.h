@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "core/pipeline.h"
+#include "wavefront/queue/queue_split.h"
 
 namespace rt {
 
@@ -73,6 +74,9 @@ public:
     static size_t bytesPerRay(int branching);
     // Work-group size of the scan (and the most any queue kernel uses): a power of two.
     static int groupSize(const DeviceInfo& device);
+    // Tests only: price every launch at its items times `ms` instead of its profiling event, so
+    // that --max-launch-ms splits the stages the same way on any device (0: real timings).
+    void setFakeItemMsForTest(double ms) { fakeItemMs_ = ms; }
 
 private:
     void prepareBuffers(size_t pool, int branching, size_t pixels);
@@ -83,9 +87,12 @@ private:
     QueueBuffers buf_;
     QueueKernels kernels_;
     QueueStats queue_;
-    // --max-launch-ms: the rays a bounce may admit, learned by the last frame of this workload.
+    // --max-launch-ms: the rays a bounce may admit and what an item of each stage costs (for
+    // the pieces a launch is split into), learned by the frames of this workload so far.
     std::string learnedKey_;
     size_t learnedLimit_ = 0;
+    StageCosts stageCosts_;
+    double fakeItemMs_ = 0;
 };
 
 }  // namespace rt

@@ -22,11 +22,14 @@ kernel void Queue_ScanBlocks(global const int* children, int n, global int* offs
     local int tmp[RT_QUEUE_GROUP];
     int i = get_global_id(0), lid = get_local_id(0);
     n = Queue_Length(n, nWord, counters);
-    if (get_group_id(0) * RT_QUEUE_GROUP >= n) return;  // past the queue: Queue_ScanSums skips it
+    // The block is counted from the global index, not get_group_id, which restarts at 0 in each
+    // piece of a launch split by --max-launch-ms (pieces start at a global offset).
+    int block = (i - lid) / RT_QUEUE_GROUP;
+    if (block * RT_QUEUE_GROUP >= n) return;  // past the queue: Queue_ScanSums skips it
     int v = i < n ? children[i] : 0;
     int inclusive = Queue_ScanLocal(tmp, lid, RT_QUEUE_GROUP, v);
     if (i < n) offsets[i] = inclusive - v;
-    if (lid == RT_QUEUE_GROUP - 1) blockSums[get_group_id(0)] = inclusive;
+    if (lid == RT_QUEUE_GROUP - 1) blockSums[block] = inclusive;
 }
 
 // One work-group: block totals to exclusive block offsets, and the grand total to the counters.
