@@ -298,6 +298,11 @@ bool report(const Args& a, const Scene& scene, const RenderOptions& o, ClContext
                     {"shadow_rays", shadow.size()},
                     {"rounds", a.rounds},
                     {"local_size", a.local},
+                    // Which kernel sources ran: the embedded ones, or a tree ($RTLAB_KERNEL_DIR),
+                    // and any extra compiler options ($RTLAB_CL_OPTIONS), for A/B runs.
+                    {"kernel_sources", std::getenv("RTLAB_KERNEL_DIR") ? std::getenv("RTLAB_KERNEL_DIR")
+                                                                      : "embedded"},
+                    {"cl_options", std::getenv("RTLAB_CL_OPTIONS") ? std::getenv("RTLAB_CL_OPTIONS") : ""},
                     {"reference", peers[0].name},
                     {"embree_version", embree ? embree->version() : "none"},
                     {"embree_threads", embree ? a.threads : 0},
