@@ -120,11 +120,14 @@ def limits_section(data, json_rel, chart_exists):
                        f"{ms(worst['longest_launch_ms'])} ms, {series.label(series.key(worst))} "
                        f"{size_label(worst)} B={worst['bounces']}). Tiles are "
                        "planned from each row's cost measured in the earlier frames of the same "
-                       "setting, aiming at 80% of the target; a launch runs over when its rows "
-                       "cost more than they did a frame before (other load on the machine: host "
-                       f"load average {meta.get('host_load_start', '?')} at the start, "
-                       f"{meta.get('host_load_end', '?')} at the end) or when a single row costs "
-                       "more than the target.")
+                       "setting, aiming at 80% of the target. A launch runs over when its rows "
+                       "cost more than the planner predicted from the frames before (other load "
+                       f"on the machine: host load average {meta.get('host_load_start', '?')} at "
+                       f"the start, {meta.get('host_load_end', '?')} at the end; or, before "
+                       "commit ed93f1e, a planning error: a measured tile cut at an even share "
+                       "per row or column), or when one pixel's work alone exceeds the target: "
+                       "the megakernel and the tree wavefront trace a pixel's whole ray tree in "
+                       "one work-item, so no launch ends before its costliest pixel.")
         doc.append("")
     if chart_exists:
         doc += ["![Limits: time, memory and longest launch against bounce limit and resolution]"
