@@ -8,7 +8,10 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <map>
+#include <set>
 
+#include "bench/sweep_config.h"
 #include "core/error.h"
 #include "core/scene_loader.h"
 #include "test_device.h"
@@ -181,6 +184,40 @@ TEST(QueuePackets, NamesRoundTripAndABadNameIsOneLine) {
         FAIL() << "a bad value must be refused";
     } catch (const Error& e) {
         EXPECT_STREQ(e.what(), "--queue-packets sometimes: must be auto, on or off");
+    }
+}
+
+// Sweep files choose too: `queue-packets = on off` gives one cell of each, apart in their keys
+// and labels; a bad value is refused naming it.
+TEST(QueuePackets, SweepGroupsChooseThem) {
+    bench::SweepConfig c = bench::parseSweep(
+        "[g]\nscenes = mesh\npipelines = queue\nsizes = 32x24\naccel = wide\n"
+        "queue-packets = off\n[h]\nscenes = mesh\npipelines = queue\nsizes = 32x24\n"
+        "accel = wide\nqueue-packets = on\n",
+        "packets");
+    std::map<std::string, Scene> scenes;
+    std::vector<bench::Cell> cells =
+        bench::expandCells(c, [&](const std::string& name) -> const Scene& {
+            return scenes.try_emplace(name, test::load(name)).first->second;
+        });
+    ASSERT_EQ(cells.size(), 2u);
+    std::set<Packets> seen;
+    for (const bench::Cell& cell : cells) {
+        seen.insert(cell.options.queuePackets);
+        EXPECT_NE(cell.label().find(std::string("packets ") +
+                                    queuePacketsName(cell.options.queuePackets)),
+                  std::string::npos)
+            << cell.label();
+    }
+    EXPECT_EQ(seen, (std::set<Packets>{Packets::On, Packets::Off}));
+    EXPECT_NE(cells[0].settingKey(), cells[1].settingKey());
+    try {
+        bench::parseSweep("[g]\nscenes = mesh\nqueue-packets = sometimes\n", "bad");
+        FAIL() << "a bad queue-packets value must be refused";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("--queue-packets sometimes: must be auto, on or off"),
+                  std::string::npos)
+            << e.what();
     }
 }
 
