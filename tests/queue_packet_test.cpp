@@ -4,7 +4,8 @@
 // ground plane), the knot (mirror-like gold, two lights), the Cornell box (spheres in the BVH's
 // leaves, glass, an area light with several shadow samples), with launches sized on the device
 // and with launches split under --max-launch-ms. A frame that loses one lane's hit must differ
-// (the comparison sees every lane). Impossible choices are refused in one line.
+// (the comparison sees every lane). Impossible choices are refused in one line; sweep files
+// choose packets per group.
 #include <gtest/gtest.h>
 
 #include <cstring>
