@@ -38,6 +38,10 @@ void SceneFlags::add(CLI::App& cmd) {
                    "Queue pipeline: how launches are sized: readback (the host reads each "
                    "bounce's counts) or device (all bounces enqueued at once, counts read on the "
                    "device) [readback]");
+    cmd.add_option("--queue-packets", queuePackets,
+                   "Queue pipeline: trace the extend and shadow queues 16 rays per work-item "
+                   "through the wide BVH: auto (on a CPU device with --accel wide), on or off "
+                   "[auto]");
     cmd.add_option("--accel", accel,
                    "How rays find spheres and triangles: none (per-mesh bounding sphere only), "
                    "bv (plus 7 slab pairs per mesh), grid (uniform grid), bvh (SAH BVH) or wide "
@@ -115,6 +119,7 @@ RenderOptions SceneFlags::apply(RenderOptions o) const {
         o.pool = size_t(*pool);
     }
     if (!queueLaunch.empty()) o.queueLaunch = parseQueueLaunch(queueLaunch);
+    if (!queuePackets.empty()) o.queuePackets = parseQueuePackets(queuePackets);
     if (!accel.empty()) o.accel = parseAccel(accel);
     if (plainSphere) o.robustSphere = false;
     if (mollerTrumbore) o.watertight = false;

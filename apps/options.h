@@ -22,6 +22,7 @@ struct SceneFlags {
     std::string memoryBudget;  // bytes, with optional K/M/G suffix
     std::optional<long long> pool;  // queue pipeline: ray slots
     std::string queueLaunch;        // queue pipeline: readback or device
+    std::string queuePackets;       // queue pipeline: auto, on or off
     std::string accel;
     std::string offset;  // fixed, scaled or bound; empty = the scene's default
     bool plainSphere = false, mollerTrumbore = false, fixedOffset = false;

@@ -118,7 +118,7 @@ const std::set<std::string> kGroupKeys = {"scenes", "pipelines", "sizes",  "boun
                                           "memory-budget", "adaptive", "images",
                                           "repeats", "warmup", "count-rays",
                                           "max-launch-ms", "stop-after-failure", "max-frame-s",
-                                          "queue-launch", "pool"};
+                                          "queue-launch", "pool", "queue-packets"};
 const std::set<std::string> kTopKeys = {"reference-bounces",
                                         "reference-shadow-samples", "reference-aa"};
 
@@ -171,6 +171,8 @@ void applyGroupKey(SweepGroup& g, const std::string& key, const std::string& val
         g.maxLaunchMs = p.number(value, 0, 1e6);
     } else if (key == "queue-launch") {
         g.queueLaunch = p.wrap([&] { return parseQueueLaunch(value); });
+    } else if (key == "queue-packets") {
+        g.queuePackets = p.wrap([&] { return parseQueuePackets(value); });
     } else if (key == "pool") {
         g.pool = value == "default" ? 0 : size_t(p.integer(value, 1, 1 << 26));
     } else if (key == "stop-after-failure") {
@@ -266,6 +268,7 @@ std::string Cell::settingKey() const {
     if (o.maxLaunchMs > 0) k << "|L" << o.maxLaunchMs;  // absent before max-launch-ms existed
     if (o.queueLaunch != RenderOptions::QueueLaunch::Readback) k << "|Q" << queueLaunchName(o.queueLaunch);
     if (o.pool) k << "|P" << o.pool;
+    if (o.queuePackets != RenderOptions::QueuePackets::Auto) k << "|K" << queuePacketsName(o.queuePackets);
     return k.str();
 }
 
@@ -275,6 +278,7 @@ std::string Cell::batchKey() const {
     k << scene << '|' << o.bounces << '|' << o.shadowSamples << '|' << o.aa << '|' << int(o.layout)
       << '|' << o.memoryBudget << '|' << o.adaptiveAa << '|' << repeats << '|' << warmup << '|'
       << countRays << '|' << images << '|' << o.maxLaunchMs << '|' << int(o.queueLaunch) << '|' << o.pool;
+    if (o.queuePackets != RenderOptions::QueuePackets::Auto) k << "|K" << int(o.queuePackets);
     // A cell that may be skipped depends on the smaller sizes' outcome: one size per batch.
     if (stopAfterFailure) k << '|' << o.width << 'x' << o.height;
     return k.str();
@@ -293,6 +297,8 @@ std::string Cell::label() const {
     if (o.queueLaunch != RenderOptions::QueueLaunch::Readback)
         l << ' ' << queueLaunchName(o.queueLaunch) << "-sized";
     if (o.pool) l << " pool " << o.pool;
+    if (o.queuePackets != RenderOptions::QueuePackets::Auto)
+        l << " packets " << queuePacketsName(o.queuePackets);
     if (o.memoryBudget)
         l << " budget "
           << (o.memoryBudget % (1 << 20) ? std::to_string(o.memoryBudget >> 10) + "K"
@@ -343,6 +349,7 @@ std::vector<Cell> expandCells(const SweepConfig& config,
                                     c.options.maxLaunchMs = g.maxLaunchMs;
                                     c.options.queueLaunch = g.queueLaunch;
                                     c.options.pool = g.pool;
+                                    c.options.queuePackets = g.queuePackets;
                                     c.accelApplies = prims;
                                     c.branching = scene.branching();
                                     c.groups = {g.name};

@@ -32,6 +32,8 @@ struct SweepGroup {
     // How the queue pipeline sizes its launches (--queue-launch); the other pipelines ignore it.
     RenderOptions::QueueLaunch queueLaunch = RenderOptions::QueueLaunch::Readback;
     size_t pool = 0;  // the queue pipeline's ray slots (--pool); 0: chosen from the device
+    // Whether the queue pipeline traces packets on CPU devices (--queue-packets).
+    RenderOptions::QueuePackets queuePackets = RenderOptions::QueuePackets::Auto;
     // Once a pipeline fails at a setting (or a frame takes longer than maxFrameS), the group's
     // settings of that pipeline that are no smaller (size, bounce limit) are skipped.
     bool stopAfterFailure = false;

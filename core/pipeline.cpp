@@ -36,6 +36,22 @@ const char* queueLaunchName(RenderOptions::QueueLaunch launch) {
     return launch == RenderOptions::QueueLaunch::Device ? "device" : "readback";
 }
 
+RenderOptions::QueuePackets parseQueuePackets(const std::string& name) {
+    if (name == "auto") return RenderOptions::QueuePackets::Auto;
+    if (name == "on") return RenderOptions::QueuePackets::On;
+    if (name == "off") return RenderOptions::QueuePackets::Off;
+    throw Error("--queue-packets " + name + ": must be auto, on or off");
+}
+
+const char* queuePacketsName(RenderOptions::QueuePackets packets) {
+    switch (packets) {
+        case RenderOptions::QueuePackets::Auto: return "auto";
+        case RenderOptions::QueuePackets::On: return "on";
+        case RenderOptions::QueuePackets::Off: return "off";
+    }
+    return "?";
+}
+
 const char* offsetName(RenderOptions::Offset offset) {
     switch (offset) {
         case RenderOptions::Offset::Fixed: return "fixed";

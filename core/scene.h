@@ -45,6 +45,11 @@ struct RenderOptions {
     // knows, and each kernel reads its real count from the device (wavefront/queue/README.md).
     enum class QueueLaunch { Readback, Device };
     QueueLaunch queueLaunch = QueueLaunch::Readback;
+    // Queue pipeline: trace the extend and shadow queues 16 rays per work-item (packets of the
+    // wide BVH, for CPU devices). Auto: when the device is a CPU, --accel wide and the scene
+    // has no spheres outside the BVH's reach (wavefront/queue/README.md); On refuses otherwise.
+    enum class QueuePackets { Auto, On, Off };
+    QueuePackets queuePackets = QueuePackets::Auto;
     // Render only rows [rowBegin, rowEnd) of the frame (rowEnd 0: every row); the other rows of
     // the image returned are unspecified. Pipelines whose registry entry says supports.rowWindow
     // render just those rows (the viewer's progressive frames); the others render every row.

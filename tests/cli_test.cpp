@@ -124,6 +124,14 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"render scenes/spheres.json --pipeline queue --queue-launch device "
                 "--max-launch-ms 5 -o /tmp/x.png",
                 "--queue-launch device does not go with --max-launch-ms"},
+        BadCase{"render scenes/mesh.json --pipeline queue --queue-packets often -o /tmp/x.png",
+                "--queue-packets often: must be auto, on or off"},
+        BadCase{"render scenes/mesh.json --pipeline queue --accel bvh --queue-packets on "
+                "-o /tmp/x.png",
+                "--queue-packets on: packets traverse the wide BVH only (use --accel wide)"},
+        BadCase{"render scenes/spheres.json --pipeline queue --accel wide --queue-packets on "
+                "-o /tmp/x.png",
+                "--queue-packets on: packets trace triangles, and the scene has none"},
         BadCase{"render tests/data/bad_scenes/negative_radius.json -o /tmp/x.png",
                 "tests/data/bad_scenes/negative_radius.json: /spheres/"},
         BadCase{"render scenes/spheres.json --kernel-dir /no/such -o /tmp/x.png", "--kernel-dir"},

@@ -17,9 +17,13 @@
 // A ray's result does not depend on the order: every triangle it could hit below its current
 // hit is tested, with the same per-ray arithmetic as the single-ray query, so the closest t is
 // the same float, and a shadow ray is occluded exactly when Wide_Query says so.
-// Triangles only (bench/ray_batch.cpp checks the scene), with Triangle_Intersect's test: the
-// watertight one under RT_WATERTIGHT, else Moller-Trumbore.
-// Included by trace_rays.cl after scene.cl (RT_ACCEL_WIDE); reuses Wide_Step and RT_WIDE_STACK.
+// Each ray gets the whole hit Scene_Intersect would give it (PacketHit: t, kind, object and a
+// triangle's uv), so a pipeline stage can shade from it (wavefront/queue/queue_packet.cl).
+// Triangles with Triangle_Intersect's test (the watertight one under RT_WATERTIGHT, else
+// Moller-Trumbore); spheres in a leaf (RT_HAS_SPHERES) are tested ray by ray with Hit_Sphere.
+// Planes are the caller's: Scene_Query tests them before the BVH, so the caller does too and
+// passes their hit in. Included by trace_rays.cl and queue_packet.cl after scene.cl
+// (RT_ACCEL_WIDE); reuses Wide_Step and RT_WIDE_STACK.
 #ifndef RTLAB_CL_ACCEL_WIDE_PACKET
 #define RTLAB_CL_ACCEL_WIDE_PACKET
 
@@ -54,6 +58,24 @@ typedef struct RayPacket {
     int kx, ky, kz;        // the axes when every ray has the same, else kx = -1
 #endif
 } RayPacket;
+
+// Every ray's hit as Scene_Query keeps it: t is the ray's tMax on entry (-INFINITY for an
+// unused lane) and its closest hit on return; kind RT_KIND_MISS until something is hit; u, v
+// a triangle's barycentrics (Hit.uv). For any-hit queries t drops to 0 when a ray is occluded.
+typedef struct PacketHit {
+    floatP t, u, v;
+    intP kind, object;
+} PacketHit;
+
+inline PacketHit PacketHit_Make(floatP tMax) {
+    PacketHit h;
+    h.t = tMax;
+    h.u = (floatP)(0.0f);
+    h.v = (floatP)(0.0f);
+    h.kind = (intP)(RT_KIND_MISS);
+    h.object = (intP)(-1);
+    return h;
+}
 
 // Component k of (x, y, z) in each lane, k given as the masks k == 1 and k == 2.
 inline floatP Packet_Component(floatP x, floatP y, floatP z, intP k1, intP k2) {
@@ -201,7 +223,7 @@ inline void Packet_Permute(float3 v, const RayPacket* r, floatP* x, floatP* y, f
 // one triangle, in its order of operations (component(v - o, k) is v[k] - o[k]); the lanes
 // where it hits with 0 < t < hitT.
 inline intP Packet_Triangle(global const Triangle* tri, const RayPacket* r, floatP hitT,
-                            floatP* tOut) {
+                            floatP* tOut, floatP* uOut, floatP* vOut) {
     floatP px, py, pz;
     Packet_Permute(f3(tri->v0), r, &px, &py, &pz);
     floatP Ak = pz - r->okz;
@@ -217,15 +239,18 @@ inline intP Packet_Triangle(global const Triangle* tri, const RayPacket* r, floa
     floatP det = U + V + W;
     floatP T = U * r->sz * Ak + V * r->sz * Bk + W * r->sz * Ck;
     miss |= (det == 0.0f) | ((det < 0.0f) & (T >= 0.0f)) | ((det > 0.0f) & (T <= 0.0f));
-    floatP t = T * (1.0f / det);
+    floatP rcp = 1.0f / det;
+    floatP t = T * rcp;
     *tOut = t;
+    *uOut = V * rcp;
+    *vOut = W * rcp;
     return ~miss & (t > 0.0f) & (t < hitT);
 }
 #else
 // Triangle_Intersect's Moller-Trumbore for every ray against one triangle, written out per
 // component in the order of cross() and dot(); the lanes where it hits with 0 < t < hitT.
 inline intP Packet_Triangle(global const Triangle* tri, const RayPacket* r, floatP hitT,
-                            floatP* tOut) {
+                            floatP* tOut, floatP* uOut, floatP* vOut) {
     float3 v0 = f3(tri->v0);
     float3 e1 = f3(tri->v1) - v0, e2 = f3(tri->v2) - v0;
     floatP hx = r->dy * e2.z - r->dz * e2.y;
@@ -244,34 +269,80 @@ inline intP Packet_Triangle(global const Triangle* tri, const RayPacket* r, floa
     intP miss = (a == 0.0f) | (u < 0.0f) | (u > 1.0f) | (v < 0.0f) | (u + v > 1.0f) |
                 (t <= 0.0f);
     *tOut = t;
+    *uOut = u;
+    *vOut = v;
     return ~miss & (t > 0.0f) & (t < hitT);
 }
 
 #endif
 
-// Tests the triangles of one leaf for every ray. Closest hit: a ray's hitT drops to each
-// nearer t. Any hit: a ray that is occluded gets hitT = 0, which no box or triangle passes.
+// Tests the triangles of one leaf for every ray. Closest hit: a ray's hit becomes each nearer
+// triangle (Hit_Triangle). Any hit: a ray that is occluded gets t = 0, which no box or triangle
+// passes.
 inline void Packet_Leaf(const SceneData* sc, int first, int count, const RayPacket* r,
-                        floatP* hitT, intP* found, bool anyHit) {
+                        PacketHit* h, bool anyHit) {
     for (int i = first; i < first + count; ++i) {
-        floatP t;
-        intP hit = Packet_Triangle(sc->triangles + i, r, *hitT, &t);
+        floatP t, u, v;
+        intP hit = Packet_Triangle(sc->triangles + i, r, h->t, &t, &u, &v);
         if (!Packet_Any(hit)) continue;
-        *found |= hit;
-        *hitT = select(*hitT, anyHit ? (floatP)(0.0f) : t, hit);
-        if (anyHit && !Packet_Any(*hitT > 0.0f)) return;
+        h->kind = select(h->kind, (intP)(RT_KIND_TRIANGLE), hit);
+        if (anyHit) {
+            h->t = select(h->t, (floatP)(0.0f), hit);
+            if (!Packet_Any(h->t > 0.0f)) return;
+            continue;
+        }
+        h->t = select(h->t, t, hit);
+        h->object = select(h->object, (intP)(i), hit);
+        h->u = select(h->u, u, hit);
+        h->v = select(h->v, v, hit);
     }
 }
 
-// hitT holds each ray's tMax on entry (-INFINITY for an unused lane) and its closest hit on
-// return; found marks the rays that hit something below their tMax.
-inline void Wide_QueryPacket(const SceneData* sc, const RayPacket* r, floatP* hitT, intP* found,
-                             bool anyHit) {
+#ifdef RT_HAS_SPHERES
+// Spheres of one leaf, ray by ray with Hit_Sphere (the scalar test, so the same t): scenes of
+// many triangles hold a few spheres at most, and this keeps the arithmetic the single ray's.
+inline void Packet_SphereLeaf(const SceneData* sc, int first, int count, const RayPacket* r,
+                              PacketHit* h, bool anyHit) {
+    float o[3][RT_PACKET], d[3][RT_PACKET], t[RT_PACKET];
+    int kind[RT_PACKET], object[RT_PACKET];
+    vstoreP(r->ox, 0, o[0]);
+    vstoreP(r->oy, 0, o[1]);
+    vstoreP(r->oz, 0, o[2]);
+    vstoreP(r->dx, 0, d[0]);
+    vstoreP(r->dy, 0, d[1]);
+    vstoreP(r->dz, 0, d[2]);
+    vstoreP(h->t, 0, t);
+    vstoreP(h->kind, 0, kind);
+    vstoreP(h->object, 0, object);
+    for (int j = 0; j < RT_PACKET; ++j) {
+        if (!(t[j] > 0.0f)) continue;  // an unused lane, or an occluded one
+        Ray ray = makeRay((float3)(o[0][j], o[1][j], o[2][j]), (float3)(d[0][j], d[1][j], d[2][j]));
+        Hit hit;
+        hit.t = t[j];
+        hit.kind = kind[j];
+        hit.object = object[j];
+        for (int i = first; i < first + count; ++i)
+            if (Hit_Sphere(sc, i, ray, &hit) && anyHit) {
+                hit.t = 0.0f;
+                break;
+            }
+        t[j] = hit.t;
+        kind[j] = hit.kind;
+        object[j] = hit.object;
+    }
+    h->t = vloadP(0, t);
+    h->kind = vloadP(0, kind);
+    h->object = vloadP(0, object);
+}
+#endif
+
+// Every ray's closest hit below h->t (its tMax, or a plane's hit), or with anyHit whether it
+// is occluded (PacketHit).
+inline void Wide_QueryPacket(const SceneData* sc, const RayPacket* r, PacketHit* h, bool anyHit) {
     global const WideNode* nodes = (global const WideNode*)sc->bvh;
     int stack[RT_WIDE_STACK];
     floatP stackT[RT_WIDE_STACK];  // every ray's entry distance of each deferred node
     int top = 0, index = 0;
-    *found = (intP)(0);
     for (;;) {
         global const WideNode* n = nodes + index;
         PacketSlabs slabs = Packet_Slabs(n, r);
@@ -282,12 +353,17 @@ inline void Wide_QueryPacket(const SceneData* sc, const RayPacket* r, floatP* hi
             t[k] = n->child[k] == -1 ? (floatP)(INFINITY)
                                      : Packet_Enter(&slabs, slabs.lo[0][k], slabs.lo[1][k],
                                                     slabs.lo[2][k], slabs.hi[0][k],
-                                                    slabs.hi[1][k], slabs.hi[2][k], *hitT);
+                                                    slabs.hi[1][k], slabs.hi[2][k], h->t);
         // Leaves first: hits there shorten the rays before the inner children are ordered.
         for (int k = 0; k < 4; ++k) {
-            if (n->count[k] == 0 || !Packet_Any(t[k] < *hitT)) continue;
-            Packet_Leaf(sc, n->child[k], n->count[k], r, hitT, found, anyHit);
-            if (anyHit && !Packet_Any(*hitT > 0.0f)) return;
+            if (n->count[k] == 0 || !Packet_Any(t[k] < h->t)) continue;
+#ifdef RT_HAS_SPHERES
+            if ((n->sphereMask >> k) & 1u)
+                Packet_SphereLeaf(sc, n->child[k], n->count[k], r, h, anyHit);
+            else
+#endif
+                Packet_Leaf(sc, n->child[k], n->count[k], r, h, anyHit);
+            if (anyHit && !Packet_Any(h->t > 0.0f)) return;
         }
         // Inner children some ray enters before its hit, by the packet's nearest entry.
         int near[4];
@@ -296,7 +372,7 @@ inline void Wide_QueryPacket(const SceneData* sc, const RayPacket* r, floatP* hi
         int m = 0;
         for (int k = 0; k < 4; ++k) {
             if (n->count[k] != 0 || n->child[k] == -1) continue;
-            floatP tk = select((floatP)(INFINITY), t[k], t[k] < *hitT);
+            floatP tk = select((floatP)(INFINITY), t[k], t[k] < h->t);
             float key = Packet_Smallest(tk);
             if (key == INFINITY) continue;
             int j = m++;
@@ -320,42 +396,48 @@ inline void Wide_QueryPacket(const SceneData* sc, const RayPacket* r, floatP* hi
             continue;
         }
         // Next: the most recently deferred node that some ray enters before its current hit.
-        while (top > 0 && !Packet_Any(stackT[top - 1] < *hitT)) --top;
+        while (top > 0 && !Packet_Any(stackT[top - 1] < h->t)) --top;
         if (top == 0) return;
         index = stack[--top];
     }
 }
 
-// Loads rays first .. first + RT_PACKET - 1 of a batch (8 floats each: origin, tMax, direction,
-// unused); lanes past count get tMax = -INFINITY and take no part.
-inline RayPacket Packet_Load(global const float8* rays, int first, int count, floatP* tMax) {
-    float o[3][RT_PACKET], d[3][RT_PACKET], tm[RT_PACKET];
-    for (int j = 0; j < RT_PACKET; ++j) {
-        bool used = first + j < count;
-        float8 ray = used ? rays[first + j] : (float8)(0.0f, 0.0f, 0.0f, 0.0f, 1.0f, 0.0f, 0.0f, 0.0f);
-        o[0][j] = ray.s0;
-        o[1][j] = ray.s1;
-        o[2][j] = ray.s2;
-        tm[j] = used ? ray.s3 : -INFINITY;
-        d[0][j] = ray.s4;
-        d[1][j] = ray.s5;
-        d[2][j] = ray.s6;
-    }
+// A packet from each ray's origin and direction, component by component: o and d hold
+// RT_PACKET x values, then y, then z.
+inline RayPacket Packet_Make(const float* o, const float* d) {
     RayPacket r;
-    r.ox = vloadP(0, o[0]);
-    r.oy = vloadP(0, o[1]);
-    r.oz = vloadP(0, o[2]);
-    r.dx = vloadP(0, d[0]);
-    r.dy = vloadP(0, d[1]);
-    r.dz = vloadP(0, d[2]);
+    r.ox = vloadP(0, o);
+    r.oy = vloadP(1, o);
+    r.oz = vloadP(2, o);
+    r.dx = vloadP(0, d);
+    r.dy = vloadP(1, d);
+    r.dz = vloadP(2, d);
     r.ix = Packet_InvDir(r.dx);
     r.iy = Packet_InvDir(r.dy);
     r.iz = Packet_InvDir(r.dz);
 #ifdef RT_WATERTIGHT
     Packet_Shear(&r);
 #endif
-    *tMax = vloadP(0, tm);
     return r;
+}
+
+// Loads rays first .. first + RT_PACKET - 1 of a batch (8 floats each: origin, tMax, direction,
+// unused); lanes past count get tMax = -INFINITY and take no part.
+inline RayPacket Packet_Load(global const float8* rays, int first, int count, floatP* tMax) {
+    float o[3 * RT_PACKET], d[3 * RT_PACKET], tm[RT_PACKET];
+    for (int j = 0; j < RT_PACKET; ++j) {
+        bool used = first + j < count;
+        float8 ray = used ? rays[first + j] : (float8)(0.0f, 0.0f, 0.0f, 0.0f, 1.0f, 0.0f, 0.0f, 0.0f);
+        o[j] = ray.s0;
+        o[RT_PACKET + j] = ray.s1;
+        o[2 * RT_PACKET + j] = ray.s2;
+        tm[j] = used ? ray.s3 : -INFINITY;
+        d[j] = ray.s4;
+        d[RT_PACKET + j] = ray.s5;
+        d[2 * RT_PACKET + j] = ray.s6;
+    }
+    *tMax = vloadP(0, tm);
+    return Packet_Make(o, d);
 }
 
 #endif

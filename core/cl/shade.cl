@@ -137,35 +137,56 @@ inline int Shade_LightSamples(const SceneData* sc, int j) {
     return sc->lights[j].radius > 0.0f ? sc->settings.shadowSamples : 1;
 }
 
-// Occluded shadow rays toward light j from `origin`, the offset start of hit point p with
-// shading normal n; 0 when the light is behind the surface. key: the shading point's sampler
-// key (Sampling_PointKey of its pixel, AA sample and depth), which places the samples on the
-// light's disk: one per ring of equal area, jittered, at golden-angle steps from a rotation
-// (core/sampling.h; core/reference.cpp does the same in double).
-inline int Shade_OcclusionFrom(const SceneData* sc, float3 p, float3 n, float3 origin, int j,
-                               uint key) {
+// Where the shadow samples of light j lie as seen from hit point p with shading normal n:
+// one per ring of equal area of the light's disk, jittered, at golden-angle steps from a
+// rotation (core/sampling.h; core/reference.cpp does the same in double). key: the shading
+// point's sampler key (Sampling_PointKey of its pixel, AA sample and depth).
+typedef struct LightSamples {
+    float3 center, t, bt;  // the light's position and a basis of its disk facing p
+    float radius, turn;
+    int count;  // 0 when the light is behind the surface
+} LightSamples;
+
+inline LightSamples Shade_LightSamplesFrom(const SceneData* sc, float3 p, float3 n, int j,
+                                           uint key) {
     Light light = sc->lights[j];
-    float3 lp = f3(light.position);
-    float3 w = normalize(lp - p);
-    if (dot(n, w) <= 0.0f) return 0;
-    int samples = Shade_LightSamples(sc, j);
+    LightSamples s;
+    s.center = f3(light.position);
+    s.radius = light.radius;
+    float3 w = normalize(s.center - p);
+    s.count = 0;
+    if (dot(n, w) <= 0.0f) return s;  // the other fields are not used then
+    s.count = Shade_LightSamples(sc, j);
     // Orthonormal basis around w (Duff et al. 2017).
     float sign = w.z >= 0.0f ? 1.0f : -1.0f;
     float a = -1.0f / (sign + w.z);
     float b = w.x * w.y * a;
-    float3 t = (float3)(1.0f + sign * w.x * w.x * a, sign * b, -sign * w.x);
-    float3 bt = (float3)(b, sign + w.y * w.y * a, -w.y);
+    s.t = (float3)(1.0f + sign * w.x * w.x * a, sign * b, -sign * w.x);
+    s.bt = (float3)(b, sign + w.y * w.y * a, -w.y);
+    s.turn = Sampling_Unit(key, j, 0, 0);
+    return s;
+}
+
+// Sample k of light j (LightSamples).
+inline float3 Shade_LightPoint(const LightSamples* s, uint key, int j, int k) {
+    float3 q = s->center;
+    if (s->radius > 0.0f) {
+        float area = ((float)k + Sampling_Unit(key, j, k, 1)) / (float)s->count;
+        float rho = s->radius * sqrt(area);
+        float phi = 2.399963229728653f * (float)k + 6.283185307179586f * s->turn;
+        q = s->center + rho * (cos(phi) * s->t + sin(phi) * s->bt);
+    }
+    return q;
+}
+
+// Occluded shadow rays toward light j from `origin`, the offset start of hit point p with
+// shading normal n; 0 when the light is behind the surface. key: as Shade_LightSamplesFrom.
+inline int Shade_OcclusionFrom(const SceneData* sc, float3 p, float3 n, float3 origin, int j,
+                               uint key) {
+    LightSamples s = Shade_LightSamplesFrom(sc, p, n, j, key);
     int occluded = 0;
-    float turn = Sampling_Unit(key, j, 0, 0);
-    for (int k = 0; k < samples; ++k) {
-        float3 q = lp;
-        if (light.radius > 0.0f) {
-            float area = ((float)k + Sampling_Unit(key, j, k, 1)) / (float)samples;
-            float rho = light.radius * sqrt(area);
-            float phi = 2.399963229728653f * (float)k + 6.283185307179586f * turn;
-            q = lp + rho * (cos(phi) * t + sin(phi) * bt);
-        }
-        float3 v = q - origin;
+    for (int k = 0; k < s.count; ++k) {
+        float3 v = Shade_LightPoint(&s, key, j, k) - origin;
         float len = length(v);
         RT_COUNT_RAY(sc, RT_RAY_SHADOW);
         if (Scene_Occluded(sc, makeRay(origin, v / len), len)) ++occluded;

@@ -36,12 +36,12 @@ kernel void Rays_ClosestPacket(RT_SCENE_PARAMS, global const float8* rays, globa
     int first = (int)get_global_id(0) * RT_PACKET;
     if (first >= count) return;  // the work-group padding
     RT_SCENE_INIT(sc);
-    floatP hitT;
-    intP found;
-    RayPacket r = Packet_Load(rays, first, count, &hitT);
-    Wide_QueryPacket(&sc, &r, &hitT, &found, false);
+    floatP tMax;
+    RayPacket r = Packet_Load(rays, first, count, &tMax);
+    PacketHit h = PacketHit_Make(tMax);
+    Wide_QueryPacket(&sc, &r, &h, false);
     float out[RT_PACKET];
-    vstoreP(select((floatP)(-1.0f), hitT, found), 0, out);
+    vstoreP(select((floatP)(-1.0f), h.t, h.kind != RT_KIND_MISS), 0, out);
     for (int j = 0; j < RT_PACKET && first + j < count; ++j) t[first + j] = out[j];
 }
 
@@ -51,12 +51,12 @@ kernel void Rays_OccludedPacket(RT_SCENE_PARAMS, global const float8* rays,
     int first = (int)get_global_id(0) * RT_PACKET;
     if (first >= count) return;  // the work-group padding
     RT_SCENE_INIT(sc);
-    floatP hitT;
-    intP found;
-    RayPacket r = Packet_Load(rays, first, count, &hitT);
-    Wide_QueryPacket(&sc, &r, &hitT, &found, true);
+    floatP tMax;
+    RayPacket r = Packet_Load(rays, first, count, &tMax);
+    PacketHit h = PacketHit_Make(tMax);
+    Wide_QueryPacket(&sc, &r, &h, true);
     int out[RT_PACKET];
-    vstoreP(found & 1, 0, out);
+    vstoreP((h.kind != RT_KIND_MISS) & 1, 0, out);
     for (int j = 0; j < RT_PACKET && first + j < count; ++j) occluded[first + j] = out[j];
 }
 #endif

@@ -186,3 +186,8 @@ QUEUE_SHADE_KERNEL(Queue_ShadeGlass, RT_Q_GLASS)
 QUEUE_SHADE_KERNEL(Queue_ShadeProcedural, RT_Q_PROCEDURAL)
 
 #include "queue_scan.cl"
+
+#ifdef RT_QUEUE_PACKETS
+#include "accel_wide_packet.cl"
+#include "queue_packet.cl"
+#endif

@@ -40,13 +40,19 @@ std::string stageName(const std::string& kernel) {
 // The scene's feature defines, but one program for every bounce limit: B travels in the
 // settings, and the histogram is sized for the most bounces there can be (RT_Q_MAX_DEPTH), so
 // changing B (the viewer's +/-, a sweep over B) builds nothing. No tree is kept: N is 1.
-std::vector<std::string> programDefines(const Scene& scene, const RenderOptions& o, int group) {
+std::vector<std::string> programDefines(const Scene& scene, const RenderOptions& o, int group,
+                                        bool packets, int dropLane) {
     std::vector<std::string> d;
     for (const std::string& x : featureDefines(scene, o))
         if (x.rfind("RT_MAX_BOUNCES=", 0) != 0 && x.rfind("RT_TREE_NODES=", 0) != 0) d.push_back(x);
     d.push_back("RT_MAX_BOUNCES=" + std::to_string(RT_Q_MAX_DEPTH));
     d.push_back("RT_TREE_NODES=1");
     d.push_back("RT_QUEUE_GROUP=" + std::to_string(group));
+    if (packets) {
+        d.push_back("RT_QUEUE_PACKETS");
+        d.push_back("RT_PACKET=" + std::to_string(QueuePipeline::kPacket));
+        if (dropLane >= 0) d.push_back("RT_PACKET_DROP_LANE=" + std::to_string(dropLane));
+    }
     return d;
 }
 
@@ -80,9 +86,21 @@ public:
     // targetMs: --max-launch-ms (0: one launch per stage); fakeItemMs > 0 (tests only) prices
     // every launch at its items times that instead of its profiling event.
     QueueFrame(ClContext& cl, cl::Program& program, const DeviceScene& scene, int group,
-               QueueKernels& kernels, StageCosts& costs, double targetMs, double fakeItemMs)
+               QueueKernels& kernels, StageCosts& costs, double targetMs, double fakeItemMs,
+               bool packets)
         : cl_(cl), program_(program), scene_(scene), group_(group), kernels_(kernels.kernels),
-          locals_(kernels.locals), costs_(costs), targetMs_(targetMs), fakeItemMs_(fakeItemMs) {}
+          locals_(kernels.locals), costs_(costs), targetMs_(targetMs), fakeItemMs_(fakeItemMs),
+          packets_(packets) {}
+
+    // The extend and shadow kernels of this frame: per ray, or per packet of rays.
+    const char* extendKernel() const { return packets_ ? "Queue_ExtendPacket" : "Queue_Extend"; }
+    const char* shadowKernel() const { return packets_ ? "Queue_ShadowPacket" : "Queue_Shadow"; }
+    // Queue items one work-item of `name` handles.
+    size_t lanes(const std::string& name) const {
+        return name.size() > 6 && name.compare(name.size() - 6, 6, "Packet") == 0
+                   ? size_t(QueuePipeline::kPacket)
+                   : 1;
+    }
 
     cl::Kernel& kernel(const std::string& name) {
         auto it = kernels_.find(name);
@@ -114,10 +132,12 @@ public:
     // work-groups when the stage's measured cost per item says one would run past the cap. A
     // stage never measured starts with a probe that is timed before the rest is sized. With a
     // bound (countWord >= 0) the caller has made sure that one launch fits (wouldSplit).
+    // A packet kernel's pieces are whole groups of packets, so each starts at a multiple of
+    // its lanes and no packet straddles two pieces.
     void launch(const std::string& name, size_t items, int countWord = -1) {
-        const size_t local = locals_.at(name);
+        const size_t step = locals_.at(name) * lanes(name);
         for (size_t done = 0; done < items;) {
-            size_t piece = costs_.piece(name, items - done, targetMs_, local);
+            size_t piece = costs_.piece(name, items - done, targetMs_, step);
             enqueue(name, done, piece, countWord);
             done += piece;
             if (done < items && !costs_.known(name)) {
@@ -129,7 +149,7 @@ public:
     }
     // Whether a launch of `name` over `items` would be split (it is over the cap).
     bool wouldSplit(const std::string& name, size_t items) const {
-        return costs_.piece(name, items, targetMs_, locals_.at(name)) < items;
+        return costs_.piece(name, items, targetMs_, locals_.at(name) * lanes(name)) < items;
     }
     // What the launches since the last call cost per item, stage by stage, for the pieces to
     // come; their events must be complete (the caller just waited on a read-back). `counters`
@@ -169,10 +189,12 @@ public:
     std::vector<QueueLaunch>& launches() { return launches_; }
 
 private:
+    // Items [offset, offset + items) of the queue: work-items from offset / lanes on.
     void enqueue(const std::string& name, size_t offset, size_t items, int countWord) {
-        size_t local = locals_.at(name), global = (items + local - 1) / local * local;
+        size_t local = locals_.at(name), per = lanes(name);
+        size_t workItems = (items + per - 1) / per, global = (workItems + local - 1) / local * local;
         cl::Event e;
-        cl_.queue().enqueueNDRangeKernel(kernels_.at(name), cl::NDRange(offset),
+        cl_.queue().enqueueNDRangeKernel(kernels_.at(name), cl::NDRange(offset / per),
                                          cl::NDRange(global), cl::NDRange(local), nullptr, &e);
         launches_.push_back({name, e, offset, items, countWord});
     }
@@ -185,6 +207,7 @@ private:
     std::map<std::string, size_t>& locals_;
     StageCosts& costs_;
     double targetMs_, fakeItemMs_;
+    bool packets_;
     std::vector<QueueLaunch> launches_;
     size_t learned_ = 0;  // launches_ before it were learned from
 };
@@ -234,7 +257,7 @@ private:
         cl::Kernel& gen = f_.sceneKernel("Queue_Generate", s);
         QueueFrame::setRays(gen, a, b_.rays);
         gen.setArg(a + 7, b_.retry);
-        cl::Kernel& ext = f_.sceneKernel("Queue_Extend", s);
+        cl::Kernel& ext = f_.sceneKernel(f_.extendKernel(), s);
         int at = QueueFrame::setRays(ext, a, b_.rays);
         ext.setArg(at + 1, b_.nodes);
         ext.setArg(at + 2, b_.classQueues);
@@ -242,7 +265,7 @@ private:
         ext.setArg(at + 4, b_.shadowQueue);
         ext.setArg(at + 5, b_.counters);
         ext.setArg(at + 6, cl_int(onDevice_ ? RT_Q_LIVE : -1));
-        cl::Kernel& sh = f_.sceneKernel("Queue_Shadow", s);
+        cl::Kernel& sh = f_.sceneKernel(f_.shadowKernel(), s);
         sh.setArg(a, b_.nodes);
         sh.setArg(a + 1, b_.shadowQueue);
         sh.setArg(a + 2, b_.counters);
@@ -328,12 +351,12 @@ private:
     // live rays; device mode: a bound on them, the kernels read the real count).
     void enqueueStages(size_t n) {
         cl_.queue().enqueueFillBuffer(b_.counters, cl_int(0), 0, RT_Q_PER_ITERATION * 4);
-        f_.kernel("Queue_Extend").setArg(DeviceScene::kFirstKernelArg + 5, cl_int(n));
-        f_.launch("Queue_Extend", n);
+        f_.kernel(f_.extendKernel()).setArg(DeviceScene::kFirstKernelArg + 5, cl_int(n));
+        f_.launch(f_.extendKernel(), n);
         // Shadow and shade run over queues that extend fills: over the bound n, each kernel
         // reads its queue's length. When one launch that long could run past --max-launch-ms,
         // the host reads the lengths first and launches each queue in pieces over them.
-        bool split = !onDevice_ && lights_ > 0 && f_.wouldSplit("Queue_Shadow", n);
+        bool split = !onDevice_ && lights_ > 0 && f_.wouldSplit(f_.shadowKernel(), n);
         for (int c = 0; c < RT_Q_CLASSES; ++c)
             split = split || (!onDevice_ && classes_[c] && f_.wouldSplit(kShadeKernels[c], n));
         cl_int len[RT_Q_PER_ITERATION] = {};
@@ -346,7 +369,7 @@ private:
             if (split) f_.launch(kernel, size_t(len[word]));
             else f_.launch(kernel, n, onDevice_ ? -1 : word);
         };
-        if (lights_ > 0) queueLaunch("Queue_Shadow", RT_Q_SHADOW);
+        if (lights_ > 0) queueLaunch(f_.shadowKernel(), RT_Q_SHADOW);
         for (int c = 0; c < RT_Q_CLASSES; ++c)
             if (classes_[c]) queueLaunch(kShadeKernels[c], RT_Q_COUNT + c);
         size_t group = size_t(QueuePipeline::groupSize(cl_.device()));
@@ -492,7 +515,9 @@ Image QueuePipeline::render(const Scene& scene, const RenderOptions& o) {
     const DeviceInfo& dev = cl_.device();
     size_t pool = poolSize(dev, C, o.bounces, o);
     int group = groupSize(dev);
-    cl::Program program = cl_.program("queue.cl", programDefines(scene, o, group));
+    const bool packets = usesPackets(dev, scene, o);
+    const std::vector<std::string> defines = programDefines(scene, o, group, packets, dropLane_);
+    cl::Program program = cl_.program("queue.cl", defines);
     stats_.kernelResources = kernelResources(program, cl_.device().device);
     stats_.program = cl_.lastProgramSource();
     if (!scene_ || !scene_->matches(scene, o.accel))
@@ -510,6 +535,7 @@ Image QueuePipeline::render(const Scene& scene, const RenderOptions& o) {
     }
     queue_.poolRays = pool;
     queue_.poolBytes = buf_.poolBytes;
+    queue_.packets = packets;
     stats_.privateBytes = 0;  // a work-item keeps one ray; the state lives in the pool
 
     dev::RenderSettings settings = makeSettings(scene, o);
@@ -520,14 +546,14 @@ Image QueuePipeline::render(const Scene& scene, const RenderOptions& o) {
     std::string key = std::to_string(o.maxLaunchMs) + " " + std::to_string(o.width) + "x" +
                       std::to_string(o.height) + " B" + std::to_string(o.bounces) + " s" +
                       std::to_string(o.shadowSamples) + " " + scene.source.string();
-    for (const std::string& d : programDefines(scene, o, group)) key += " " + d;
+    for (const std::string& d : defines) key += " " + d;
     key += std::string(" ") + queueLaunchName(o.queueLaunch);
     if (key != learnedKey_) {
         learnedLimit_ = 0;
         stageCosts_.clear();
     }
     QueueFrame frame(cl_, program, *scene_, group, kernels_, stageCosts_,
-                     onDevice ? 0.0 : o.maxLaunchMs, fakeItemMs_);
+                     onDevice ? 0.0 : o.maxLaunchMs, fakeItemMs_, packets);
     try {
         if (o.countRays) scene_->resetRayCounts(cl_.queue());
         cl_.queue().enqueueFillBuffer(buf_.counters, cl_int(0), 0, RT_Q_WORDS * 4);
@@ -591,12 +617,38 @@ Image QueuePipeline::render(const Scene& scene, const RenderOptions& o) {
     stats_.extras["restarted_paths"] = queue_.restartedPaths;
     stats_.extras["queue_lengths"] = queue_.queueLengths;  // [depth][miss, diffuse, mirror, glass]
     stats_.extras["queue_launch"] = queueLaunchName(o.queueLaunch);
+    stats_.extras["queue_packets"] = packets ? kPacket : 0;  // rays per extend/shadow work-item
     stats_.extras["readbacks"] = queue_.readbacks;
     stats_.extras["span_ms"] = queue_.spanMs;
     stats_.extras["idle_ms"] = queue_.idleMs;
     stats_.hostMs =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     return out;
+}
+
+std::string QueuePipeline::packetRefusal(const DeviceInfo& device, const Scene& scene,
+                                         const RenderOptions& o) {
+    if (o.accel != RenderOptions::Accel::Wide)
+        return "packets traverse the wide BVH only (use --accel wide)";
+    if (scene.triangles.empty()) return "packets trace triangles, and the scene has none";
+    if (device.type != "CPU")
+        return "packets are for CPU devices, and " + device.name + " is a " + device.type;
+    return "";
+}
+
+bool QueuePipeline::usesPackets(const DeviceInfo& device, const Scene& scene,
+                                const RenderOptions& o) {
+    using Packets = RenderOptions::QueuePackets;
+    if (o.queuePackets == Packets::Off) return false;
+    std::string why = packetRefusal(device, scene, o);
+    if (o.queuePackets == Packets::On) {
+        if (!why.empty())
+            throw Error("--queue-packets on: " + why, FailureKind::InvalidOption);
+        return true;
+    }
+    // auto: spheres sit in the BVH's leaves too, but a packet tests them ray by ray; only
+    // triangle scenes (planes are tested per ray before the BVH either way) are sure to gain.
+    return why.empty() && scene.spheres.empty();
 }
 
 void registerQueueWavefront(PipelineRegistry& registry) {

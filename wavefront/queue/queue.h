@@ -53,6 +53,7 @@ struct QueueStats {
     int readbacks = 0;
     double spanMs = 0, idleMs = 0;
     bool fellBack = false;  // device sizing overflowed the pool: rendered again with read-backs
+    bool packets = false;   // extend and shadow traced packets (--queue-packets)
     std::vector<std::array<long long, 5>> queueLengths;  // RT_Q_CLASSES (queue_layout.h)
 };
 
@@ -74,6 +75,17 @@ public:
     static size_t bytesPerRay(int branching);
     // Work-group size of the scan (and the most any queue kernel uses): a power of two.
     static int groupSize(const DeviceInfo& device);
+    // Whether the extend and shadow stages trace packets of kPacket queue entries per work-item
+    // (--queue-packets; wavefront/queue/queue_packet.cl), or why not: "" when they do. Throws
+    // rt::Error, one line naming the flag, when `on` is asked for and cannot be had.
+    static std::string packetRefusal(const DeviceInfo& device, const Scene& scene,
+                                     const RenderOptions& options);
+    static bool usesPackets(const DeviceInfo& device, const Scene& scene,
+                            const RenderOptions& options);
+    static constexpr int kPacket = 16;
+    // Tests only: drop the hit of this lane of every packet (the test that packets give the same
+    // bits must see it); -1: none.
+    void setDropLaneForTest(int lane) { dropLane_ = lane; }
     // Tests only: price every launch at its items times `ms` instead of its profiling event, so
     // that --max-launch-ms splits the stages the same way on any device (0: real timings).
     void setFakeItemMsForTest(double ms) { fakeItemMs_ = ms; }
@@ -93,6 +105,7 @@ private:
     size_t learnedLimit_ = 0;
     StageCosts stageCosts_;
     double fakeItemMs_ = 0;
+    int dropLane_ = -1;
 };
 
 }  // namespace rt
