@@ -10,6 +10,7 @@
 #include "apps/commands.h"
 #include "apps/parse_error.h"
 #include "core/error.h"
+#include "core/version.h"
 #include "pipelines/registry.h"
 
 int main(int argc, char** argv) {
@@ -17,6 +18,8 @@ int main(int argc, char** argv) {
                  "Renders scenes with a double-precision CPU reference and every registered\n"
                  "pipeline, and measures them:\n" +
                  rt::pipelineRegistry().help()};
+    app.set_version_flag("--version", std::string("rtlab ") + RTLAB_COMMIT,
+                         "Print the commit this binary was built from and exit");
     app.require_subcommand(1);
     rt::cli::addRender(app);
     rt::cli::addDevices(app);

@@ -21,6 +21,7 @@
 #include "apps/viewer_renderer.h"
 #include "core/error.h"
 #include "core/scene_loader.h"
+#include "core/version.h"
 #include "image/image_io.h"
 #include "pipelines/registry.h"
 
@@ -203,6 +204,8 @@ int main(int argc, char** argv) {
     keys += guard;
     CLI::App app{"rtlab-view: watch the pipelines render a scene in real time."};
     app.footer(keys);
+    app.set_version_flag("--version", std::string("rtlab-view ") + RTLAB_COMMIT,
+                         "Print the commit this binary was built from and exit");
     Args a;
     app.add_option("scene", a.scene, "Scene file (.json) or OBJ model")->required();
     const PipelineRegistry& registry = pipelineRegistry();

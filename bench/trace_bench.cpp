@@ -33,6 +33,7 @@
 #include "core/kernel_resources.h"
 #include "core/pipeline.h"
 #include "core/scene_loader.h"
+#include "core/version.h"
 
 namespace rt {
 namespace {
@@ -437,6 +438,8 @@ int run(const Args& a) {
 int main(int argc, char** argv) {
     rt::Args a;
     CLI::App app{"Embree as a peer: the same camera and shadow rays through Embree and rtlab"};
+    app.set_version_flag("--version", std::string("rtlab-trace-bench ") + RTLAB_COMMIT,
+                         "Print the commit this binary was built from and exit");
     app.add_option("scene", a.scene, "Scene file (.json) or a bare .obj")->required();
     app.add_option("--size", a.size, "Frame WxH [scene default]");
     app.add_option("--accels", a.accels,

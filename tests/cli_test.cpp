@@ -16,6 +16,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/cl_runtime.h"
+#include "core/version.h"
 #include "pipelines/registry.h"
 
 namespace {
@@ -166,6 +167,16 @@ TEST(Cli, RendersWithEveryPipeline) {
             EXPECT_NE(r.out.find("shade diffuse"), std::string::npos) << r.out;
         }
     }
+}
+
+// --version names the commit the binary was built from (the one every result row records), and
+// exits 0 without asking for a subcommand.
+TEST(Cli, VersionNamesTheBuildCommit) {
+    Result r = run("--version");
+    EXPECT_EQ(r.status, 0) << r.err;
+    EXPECT_EQ(r.out, std::string("rtlab ") + RTLAB_COMMIT + "\n");
+    Result h = run("--help");
+    EXPECT_NE(h.out.find("--version"), std::string::npos) << h.out;
 }
 
 TEST(Cli, PipelineHelpListsTheRegistry) {
