@@ -62,27 +62,45 @@ typedef struct Hit {
 
 #include "accel.cl"
 
-// Closest hit with 0 < t < tMax, or with anyHit the first one found (shadow rays stop there).
-// Without a grid or BVH the order is spheres, planes, triangles (mesh by mesh) and ties keep
-// the first object (core/SHADING.md section 2); with one, planes come first.
-inline Hit Scene_Query(const SceneData* sc, Ray ray, float tMax, bool anyHit) {
+// No hit yet: t = tMax, kind RT_KIND_MISS.
+inline Hit Hit_None(float tMax) {
     Hit hit;
     hit.t = tMax;
     hit.kind = RT_KIND_MISS;
     hit.object = -1;
     hit.uv = (float2)(0.0f, 0.0f);
-#if defined(RT_ACCEL_GRID) || defined(RT_ACCEL_BVH) || defined(RT_ACCEL_WIDE)
+    return hit;
+}
+
+// The planes, one by one (they are infinite: no structure holds them). True when anyHit and one
+// was accepted, so that the caller can stop there.
+inline bool Scene_Planes(const SceneData* sc, Ray ray, Hit* hit, bool anyHit) {
 #ifdef RT_HAS_PLANES
     for (int i = 0; i < sc->settings.planeCount; ++i) {
         float t = Plane_Intersect(ray, f3(sc->planes[i].normal), sc->planes[i].offset);
-        if (t > 0.0f && t < hit.t) {
-            hit.t = t;
-            hit.kind = RT_KIND_PLANE;
-            hit.object = i;
-            if (anyHit) return hit;
+        if (t > 0.0f && t < hit->t) {
+            hit->t = t;
+            hit->kind = RT_KIND_PLANE;
+            hit->object = i;
+            if (anyHit) return true;
         }
     }
+#else
+    (void)sc;
+    (void)ray;
+    (void)hit;
+    (void)anyHit;
 #endif
+    return false;
+}
+
+// Closest hit with 0 < t < tMax, or with anyHit the first one found (shadow rays stop there).
+// Without a grid or BVH the order is spheres, planes, triangles (mesh by mesh) and ties keep
+// the first object (core/SHADING.md section 2); with one, planes come first.
+inline Hit Scene_Query(const SceneData* sc, Ray ray, float tMax, bool anyHit) {
+    Hit hit = Hit_None(tMax);
+#if defined(RT_ACCEL_GRID) || defined(RT_ACCEL_BVH) || defined(RT_ACCEL_WIDE)
+    if (Scene_Planes(sc, ray, &hit, anyHit)) return hit;
 #ifdef RT_ACCEL_GRID
     Grid_Query(sc, ray, &hit, anyHit);
 #elif defined(RT_ACCEL_WIDE)
@@ -95,17 +113,7 @@ inline Hit Scene_Query(const SceneData* sc, Ray ray, float tMax, bool anyHit) {
     for (int i = 0; i < sc->settings.sphereCount; ++i)
         if (Hit_Sphere(sc, i, ray, &hit) && anyHit) return hit;
 #endif
-#ifdef RT_HAS_PLANES
-    for (int i = 0; i < sc->settings.planeCount; ++i) {
-        float t = Plane_Intersect(ray, f3(sc->planes[i].normal), sc->planes[i].offset);
-        if (t > 0.0f && t < hit.t) {
-            hit.t = t;
-            hit.kind = RT_KIND_PLANE;
-            hit.object = i;
-            if (anyHit) return hit;
-        }
-    }
-#endif
+    if (Scene_Planes(sc, ray, &hit, anyHit)) return hit;
 #ifdef RT_HAS_TRIANGLES
     for (int m = 0; m < sc->settings.meshCount; ++m)
         if (Mesh_Query(sc, m, ray, &hit, anyHit) && anyHit) return hit;

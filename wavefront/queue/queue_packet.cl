@@ -11,26 +11,8 @@
 // Scene_Query's planes, tested before the BVH as it does, one ray at a time: the plane hit
 // below tMax (the closest, or with anyHit the first), or a miss with t = tMax.
 inline Hit QueuePacket_Planes(const SceneData* sc, Ray ray, float tMax, bool anyHit) {
-    Hit hit;
-    hit.t = tMax;
-    hit.kind = RT_KIND_MISS;
-    hit.object = -1;
-    hit.uv = (float2)(0.0f, 0.0f);
-#ifdef RT_HAS_PLANES
-    for (int i = 0; i < sc->settings.planeCount; ++i) {
-        float t = Plane_Intersect(ray, f3(sc->planes[i].normal), sc->planes[i].offset);
-        if (t > 0.0f && t < hit.t) {
-            hit.t = t;
-            hit.kind = RT_KIND_PLANE;
-            hit.object = i;
-            if (anyHit) return hit;
-        }
-    }
-#else
-    (void)sc;
-    (void)ray;
-    (void)anyHit;
-#endif
+    Hit hit = Hit_None(tMax);
+    Scene_Planes(sc, ray, &hit, anyHit);
     return hit;
 }
 
