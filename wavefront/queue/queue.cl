@@ -80,6 +80,26 @@ inline int Queue_Class(const SceneData* sc, const Node* node) {
     return m.pattern != RT_PATTERN_NONE ? RT_Q_PROCEDURAL : RT_Q_DIFFUSE;
 }
 
+// A work-group's pushes to the class queues, the shadow queue and the per-bounce histogram are
+// counted in local memory (count, histogram) and reserved in the global counters once per group
+// (base: the group's first slot in each queue). Every work-item of the group calls both.
+inline void Queue_GroupPushesBegin(local int* count, local int* histogram, int lid, int size) {
+    for (int k = lid; k < RT_Q_CLASSES + 1; k += size) count[k] = 0;
+    for (int k = lid; k < (RT_Q_MAX_DEPTH + 1) * RT_Q_CLASSES; k += size) histogram[k] = 0;
+    barrier(CLK_LOCAL_MEM_FENCE);
+}
+
+inline void Queue_GroupPushesReserve(local const int* count, local int* base,
+                                     local const int* histogram, global int* counters, int lid,
+                                     int size) {
+    barrier(CLK_LOCAL_MEM_FENCE);
+    for (int k = lid; k < RT_Q_CLASSES + 1; k += size)
+        base[k] = count[k] ? atomic_add(&counters[RT_Q_COUNT + k], count[k]) : 0;
+    for (int k = lid; k < (RT_Q_MAX_DEPTH + 1) * RT_Q_CLASSES; k += size)
+        if (histogram[k]) atomic_add(&counters[RT_Q_HISTOGRAM + k], histogram[k]);
+    barrier(CLK_LOCAL_MEM_FENCE);
+}
+
 // From: pool [0, n) (n: see Queue_Length) / To: nodes[i], class queues, shadow queue, per-bounce histogram.
 // Pushes are aggregated per work-group in local memory: one global atomic per queue per group.
 kernel void Queue_Extend(RT_SCENE_PARAMS, QUEUE_RAYS_PARAMS(rays), int n, global Node* nodes,
@@ -93,9 +113,7 @@ kernel void Queue_Extend(RT_SCENE_PARAMS, QUEUE_RAYS_PARAMS(rays), int n, global
     // test is the same for every work-item of a group, so no barrier is left half-reached).
     // The group's first index counts the global offset of a launch split into pieces.
     if (i - lid >= n) return;
-    for (int k = lid; k < RT_Q_CLASSES + 1; k += size) count[k] = 0;
-    for (int k = lid; k < (RT_Q_MAX_DEPTH + 1) * RT_Q_CLASSES; k += size) histogram[k] = 0;
-    barrier(CLK_LOCAL_MEM_FENCE);
+    Queue_GroupPushesBegin(count, histogram, lid, size);
     int cls = -1, slot = 0, shadowSlot = -1;
     if (i < n) {
         RT_SCENE_INIT(sc);
@@ -111,12 +129,7 @@ kernel void Queue_Extend(RT_SCENE_PARAMS, QUEUE_RAYS_PARAMS(rays), int n, global
         if (cls != RT_Q_MISS && settings.lightCount > 0)
             shadowSlot = atomic_inc(&count[RT_Q_CLASSES]);
     }
-    barrier(CLK_LOCAL_MEM_FENCE);
-    for (int k = lid; k < RT_Q_CLASSES + 1; k += size)
-        base[k] = count[k] ? atomic_add(&counters[RT_Q_COUNT + k], count[k]) : 0;
-    for (int k = lid; k < (RT_Q_MAX_DEPTH + 1) * RT_Q_CLASSES; k += size)
-        if (histogram[k]) atomic_add(&counters[RT_Q_HISTOGRAM + k], histogram[k]);
-    barrier(CLK_LOCAL_MEM_FENCE);
+    Queue_GroupPushesReserve(count, base, histogram, counters, lid, size);
     if (cls >= 0) classQueues[cls * pool + base[cls] + slot] = i;
     if (shadowSlot >= 0) shadowQueue[base[RT_Q_CLASSES] + shadowSlot] = i;
 }

@@ -90,9 +90,7 @@ kernel void Queue_ExtendPacket(RT_SCENE_PARAMS, QUEUE_RAYS_PARAMS(rays), int n,
     int first = g * RT_PACKET;
     n = Queue_Length(n, nWord, counters);
     if ((g - lid) * RT_PACKET >= n) return;  // a whole group past the queue (Queue_Extend)
-    for (int k = lid; k < RT_Q_CLASSES + 1; k += size) count[k] = 0;
-    for (int k = lid; k < (RT_Q_MAX_DEPTH + 1) * RT_Q_CLASSES; k += size) histogram[k] = 0;
-    barrier(CLK_LOCAL_MEM_FENCE);
+    Queue_GroupPushesBegin(count, histogram, lid, size);
     int lanes = clamp(n - first, 0, RT_PACKET);
     int cls[RT_PACKET], slot[RT_PACKET], shadowSlot[RT_PACKET];
     if (lanes > 0) {
@@ -123,12 +121,7 @@ kernel void Queue_ExtendPacket(RT_SCENE_PARAMS, QUEUE_RAYS_PARAMS(rays), int n,
                                 : -1;
         }
     }
-    barrier(CLK_LOCAL_MEM_FENCE);
-    for (int k = lid; k < RT_Q_CLASSES + 1; k += size)
-        base[k] = count[k] ? atomic_add(&counters[RT_Q_COUNT + k], count[k]) : 0;
-    for (int k = lid; k < (RT_Q_MAX_DEPTH + 1) * RT_Q_CLASSES; k += size)
-        if (histogram[k]) atomic_add(&counters[RT_Q_HISTOGRAM + k], histogram[k]);
-    barrier(CLK_LOCAL_MEM_FENCE);
+    Queue_GroupPushesReserve(count, base, histogram, counters, lid, size);
     for (int j = 0; j < lanes; ++j) {
         classQueues[cls[j] * pool + base[cls[j]] + slot[j]] = first + j;
         if (shadowSlot[j] >= 0) shadowQueue[base[RT_Q_CLASSES] + shadowSlot[j]] = first + j;
