@@ -77,7 +77,7 @@ TraversalCost binaryTraversalCost(const AccelData& data, const std::vector<Batch
     TraversalCost cost;
     if (data.bvh.empty() || rays.empty()) return cost;
     size_t stride = std::max<size_t>(1, rays.size() / maxRays);
-    long long nodes = 0, pairs = 0, pops = 0, triangles = 0;
+    long long nodes = 0, pairs = 0, triangles = 0;
     for (size_t i = 0; i < rays.size(); i += stride) {
         const BatchRay& r = rays[i];
         ++cost.rays;
@@ -115,14 +115,13 @@ TraversalCost binaryTraversalCost(const AccelData& data, const std::vector<Batch
             }
             while (top > 0 && !(stackT[top - 1] < best)) --top;
             if (top == 0) break;
-            index = stack[--top];
-            ++pops;  // a deferred node's record is loaded again
+            index = stack[--top];  // its (first, count) came with the stack entry: no load
         }
     }
     double n = double(cost.rays);
     cost.nodes = double(nodes) / n;
     cost.triangles = double(triangles) / n;
-    cost.bytes = (32.0 * double(cost.rays) + 64.0 * double(pairs) + 32.0 * double(pops)) / n +
+    cost.bytes = (32.0 * double(cost.rays) + 64.0 * double(pairs)) / n +
                  36 * cost.triangles;
     return cost;
 }

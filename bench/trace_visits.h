@@ -20,8 +20,8 @@ struct TraversalCost {
 };
 
 // Binary BVH: nodes are inner and leaf visits; bytes count the root record (32 B), each inner
-// node's pair of child records (64 B), each deferred node loaded again when popped (32 B) and
-// the triangles' vertices (36 B).
+// node's pair of child records (64 B) and the triangles' vertices (36 B). A deferred node costs
+// no load when popped: its (first, count) travels in its stack entry (core/cl/accel.cl).
 TraversalCost binaryTraversalCost(const AccelData& bvh, const std::vector<BatchRay>& rays,
                                   bool anyHit, size_t maxRays = 65536);
 
