@@ -11,45 +11,16 @@
 #include <vector>
 
 #include "core/accel.h"
+#include "core/accel_quantize.h"
 #include "core/error.h"
 
 namespace rt {
 namespace {
 
+using namespace quant;
+
 constexpr int kWidth = 4;
 constexpr int kStack = 64;  // RT_WIDE_STACK in core/cl/accel_wide.cl
-
-float area(const dev::BvhNode& n) {
-    float dx = n.hi.x - n.lo.x, dy = n.hi.y - n.lo.y, dz = n.hi.z - n.lo.z;
-    return dx * dy + dy * dz + dz * dx;
-}
-
-// 2^(e - 127), from a float's exponent bits: what the device computes with a shift.
-float stepOf(uint8_t e) { return std::bit_cast<float>(uint32_t(e) << 23); }
-
-// The smallest exponent whose 255 steps from lo reach hi, in the device's float arithmetic.
-uint8_t exponentFor(float lo, float hi) {
-    int e = 1;  // 0 would be a zero step
-    if (hi > lo) {
-        int x;
-        std::frexp((hi - lo) / 255.f, &x);
-        e = std::max(1, x + 125);  // one below the estimate; the loop climbs to the exact one
-    }
-    while (e < 254 && lo + 255.f * stepOf(uint8_t(e)) < hi) ++e;
-    return uint8_t(e);
-}
-
-// Outward rounding: the decoded bound origin + q * step never cuts into the child's box.
-uint8_t quantLo(float origin, float step, float v) {
-    int q = std::clamp(int(std::floor((v - origin) / step)), 0, 255);
-    while (q > 0 && origin + float(q) * step > v) --q;
-    return uint8_t(q);
-}
-uint8_t quantHi(float origin, float step, float v) {
-    int q = std::clamp(int(std::ceil((v - origin) / step)), 0, 255);
-    while (q < 255 && origin + float(q) * step < v) ++q;
-    return uint8_t(q);
-}
 
 class Collapser {
   public:
@@ -137,10 +108,6 @@ class Collapser {
     std::vector<dev::WideNode> out_;
 };
 
-struct Box {
-    float lo[3], hi[3];
-};
-
 // Child k's decoded box, as the device computes it.
 Box decode(const dev::WideNode& n, int k) {
     const uint8_t* qlo[3] = {n.loX, n.loY, n.loZ};
@@ -150,28 +117,6 @@ Box decode(const dev::WideNode& n, int k) {
         float o = (&n.origin.x)[a], s = stepOf(n.exponent[a]);
         b.lo[a] = o + float(qlo[a][k]) * s;
         b.hi[a] = o + float(qhi[a][k]) * s;
-    }
-    return b;
-}
-
-bool contains(const Box& b, const float* lo, const float* hi) {
-    for (int a = 0; a < 3; ++a)
-        if (lo[a] < b.lo[a] || hi[a] > b.hi[a]) return false;
-    return true;
-}
-
-Box sphereBox(const dev::Sphere& s) {
-    const float* c = &s.center.x;
-    return {{c[0] - s.radius, c[1] - s.radius, c[2] - s.radius},
-            {c[0] + s.radius, c[1] + s.radius, c[2] + s.radius}};
-}
-
-Box triangleBox(const dev::Triangle& t) {
-    Box b;
-    for (int a = 0; a < 3; ++a) {
-        float v0 = (&t.v0.x)[a], v1 = (&t.v1.x)[a], v2 = (&t.v2.x)[a];
-        b.lo[a] = std::min({v0, v1, v2});
-        b.hi[a] = std::max({v0, v1, v2});
     }
     return b;
 }
