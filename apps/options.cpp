@@ -44,8 +44,9 @@ void SceneFlags::add(CLI::App& cmd) {
                    "[auto]");
     cmd.add_option("--accel", accel,
                    "How rays find spheres and triangles: none (per-mesh bounding sphere only), "
-                   "bv (plus 7 slab pairs per mesh), grid (uniform grid), bvh (SAH BVH) or wide "
-                   "(the SAH BVH as 4-wide nodes with quantised boxes) "
+                   "bv (plus 7 slab pairs per mesh), grid (uniform grid), bvh (SAH BVH), wide "
+                   "(the SAH BVH as 4-wide nodes with quantised boxes) or cwbvh (as compressed "
+                   "8-wide nodes in ray-octant order, for GPUs) "
                    "[scene's render.accel, else bvh above 64 spheres and triangles, else bv with "
                    "triangles, else none]");
     cmd.add_flag("--plain-sphere", plainSphere,

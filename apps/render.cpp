@@ -51,7 +51,7 @@ void printAccel(const AccelStats& a, RenderOptions::Accel chosen) {
         std::printf("  accel        none (preliminary checks only)\n");
         return;
     }
-    const char* unit = a.name == "bvh" || a.name == "wide" ? "nodes" : a.name == "grid" ? "cells" : "volumes";
+    const char* unit = a.name == "bvh" || a.name == "wide" || a.name == "cwbvh" ? "nodes" : a.name == "grid" ? "cells" : "volumes";
     std::printf("  accel        %s, %lld %s (%s), %s; built in %.1f ms\n", a.name.c_str(), a.nodes,
                 unit, mib(double(a.bytes)).c_str(), a.detail.c_str(), a.buildMs);
 }

@@ -45,7 +45,7 @@ Google Benchmark mode (every --benchmark_* flag works, e.g. --benchmark_filter=R
   --pipelines=a,b,...   any registered pipelines (listed below) [all]
   --sizes=WxH,...       [640x360,1280x720,1920x1080,3840x2160]
   --bounces=0..8        list and/or ranges [0..8]
-  --accels=bvh,...      none, bv, grid, bvh, wide [each scene's default]
+  --accels=bvh,...      none, bv, grid, bvh, wide, cwbvh [each scene's default]
   --cells=SWEEP         instead of the lists above: the cells of a sweep file (every cell:
                         stop-after-failure applies in sweep mode only)
   --devices=SPEC,...    OpenCL devices by index or name, or all (every GPU)

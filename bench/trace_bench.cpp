@@ -256,6 +256,9 @@ bool report(const Args& a, const Scene& scene, const RenderOptions& o, ClContext
                                       binaryTraversalCost(wide, shadow, true));
     nlohmann::json cost = costJson("wide BVH", wideTraversalCost(wide, primary, false),
                                    wideTraversalCost(wide, shadow, true));
+    buildCwbvh(wide);  // from the same binary tree
+    nlohmann::json cwCost = costJson("cwbvh", cwbvhTraversalCost(wide, primary, false),
+                                     cwbvhTraversalCost(wide, shadow, true));
     // What a packet of rays does instead (the packet peers' sizes), and how many of its rays
     // each node and triangle serves.
     nlohmann::json packetCost = nlohmann::json::object();
@@ -310,6 +313,7 @@ bool report(const Args& a, const Scene& scene, const RenderOptions& o, ClContext
                     {"agree", agree},
                     {"peers", rows},
                     {"bvh_cost", bvhCost},
+                    {"cwbvh_cost", cwCost},
                     {"wide_cost", cost},
                     {"wide_packet_cost", packetCost}});
         std::filesystem::create_directories(a.out);

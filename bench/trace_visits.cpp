@@ -8,6 +8,8 @@
 #include <bit>
 #include <cmath>
 #include <cstdint>
+#include <tuple>
+#include <utility>
 
 namespace rt {
 namespace {
@@ -177,6 +179,79 @@ TraversalCost wideTraversalCost(const AccelData& data, const std::vector<BatchRa
     cost.nodes = double(nodes) / double(cost.rays);
     cost.triangles = double(triangles) / double(cost.rays);
     cost.bytes = 64 * cost.nodes + 36 * cost.triangles;
+    return cost;
+}
+
+TraversalCost cwbvhTraversalCost(const AccelData& data, const std::vector<BatchRay>& rays,
+                                 bool anyHit, size_t maxRays) {
+    TraversalCost cost;
+    if (data.cwbvh.empty() || rays.empty()) return cost;
+    size_t stride = std::max<size_t>(1, rays.size() / maxRays);
+    long long nodes = 0, triangles = 0;
+    for (size_t i = 0; i < rays.size(); i += stride) {
+        const BatchRay& r = rays[i];
+        ++cost.rays;
+        float inv[3];
+        invDir(r, inv);
+        const float o[3] = {r.ox, r.oy, r.oz};
+        unsigned octant = (inv[0] < 0 ? 1u : 0u) | (inv[1] < 0 ? 2u : 0u) | (inv[2] < 0 ? 4u : 0u);
+        float best = r.tMax;
+        std::vector<std::pair<unsigned, unsigned>> stack;
+        unsigned groupBase = 0, groupBits = 0;
+        int index = 0;
+        for (bool done = false; !done;) {
+            const dev::CwbvhNode& n = data.cwbvh[size_t(index)];
+            ++nodes;
+            // Cwbvh_Enter: the facing bounds give the entry distances; empty slots never hit.
+            const uint8_t* lo[3] = {n.loX, n.loY, n.loZ};
+            const uint8_t* hi[3] = {n.hiX, n.hiY, n.hiZ};
+            unsigned slots = 0;
+            for (int k = 0; k < 8; ++k) {
+                float near = 0.f, far = best;
+                for (int a = 0; a < 3; ++a) {
+                    float step = std::bit_cast<float>(uint32_t(n.exponent[a]) << 23);
+                    float base = ((&n.origin.x)[a] - o[a]) * inv[a], scale = step * inv[a];
+                    const uint8_t* qn = inv[a] < 0 ? hi[a] : lo[a];
+                    const uint8_t* qf = inv[a] < 0 ? lo[a] : hi[a];
+                    near = std::max(near, std::fma(float(qn[k]), scale, base));
+                    far = std::min(far, std::fma(float(qf[k]), scale, base));
+                }
+                if (near <= far) slots |= 1u << k;
+            }
+            unsigned entries = 0;
+            for (int k = 0; k < 8; ++k)
+                if ((slots & ~unsigned(n.innerMask)) >> k & 1)
+                    entries |= ((2u << (n.meta[k] >> 5)) - 1u) << (n.meta[k] & 31);
+            for (; entries && !done; entries &= entries - 1) {
+                const dev::CwbvhPrim& p = data.cwbvhPrims[size_t(n.primBase + std::countr_zero(entries))];
+                if (p.ref < 0) continue;  // a sphere: not counted
+                ++triangles;
+                double h = hitTriangle(data.triangles[size_t(p.ref)], r);
+                if (h > 0 && h < best) best = float(h), done = anyHit;
+            }
+            if (done) break;
+            unsigned visit = 0;
+            for (unsigned k = 0; k < 8; ++k)
+                if ((slots & n.innerMask) >> k & 1) visit |= 1u << (k ^ octant);
+            if (visit) {
+                if (groupBits & 0xFF) stack.push_back({groupBase, groupBits});
+                groupBase = unsigned(n.childBase);
+                groupBits = visit | unsigned(n.innerMask) << 8;
+            }
+            if ((groupBits & 0xFF) == 0) {
+                if (stack.empty()) break;
+                std::tie(groupBase, groupBits) = stack.back();
+                stack.pop_back();
+            }
+            unsigned k = unsigned(std::countr_zero(groupBits & 0xFF));
+            groupBits &= ~(1u << k);
+            unsigned slot = k ^ octant;
+            index = int(groupBase + unsigned(std::popcount((groupBits >> 8) & ((1u << slot) - 1u))));
+        }
+    }
+    cost.nodes = double(nodes) / double(cost.rays);
+    cost.triangles = double(triangles) / double(cost.rays);
+    cost.bytes = 80 * cost.nodes + 48 * cost.triangles;
     return cost;
 }
 

@@ -1,6 +1,6 @@
-// rtlab — the work one ray does in the binary and the wide BVH (issue 18), counted on the host:
+// rtlab — the work one ray does in the binary and the wide BVHs (issue 18), counted on the host:
 // node visits, triangles tested and bytes fetched per ray, in the traversal order of
-// core/cl/accel.cl (Bvh_Query) and core/cl/accel_wide.cl; and per packet of rays in that of
+// core/cl/accel.cl (Bvh_Query), core/cl/accel_wide.cl and core/cl/accel_cwbvh.cl; and per packet of rays in that of
 // core/cl/accel_wide_packet.cl, with the share of its rays each node and triangle serves.
 // rtlab-trace-bench prints it beside the rays/s, so that a missed figure names its bound.
 #pragma once
@@ -27,6 +27,12 @@ TraversalCost binaryTraversalCost(const AccelData& bvh, const std::vector<BatchR
 
 TraversalCost wideTraversalCost(const AccelData& wide, const std::vector<BatchRay>& rays,
                                 bool anyHit, size_t maxRays = 65536);
+
+// Compressed 8-wide BVH (core/cl/accel_cwbvh.cl): nodes are node visits (80 B each), triangles
+// the leaf entries tested (48 B each); deferred groups are not culled by distance, so `nodes`
+// counts the visits that find nothing left to enter as well.
+TraversalCost cwbvhTraversalCost(const AccelData& cwbvh, const std::vector<BatchRay>& rays,
+                                 bool anyHit, size_t maxRays = 65536);
 
 // The packet traversal of core/cl/accel_wide_packet.cl (Wide_QueryPacket), `packet` consecutive
 // rays at a time: what a packet does, and how many of its rays each step serves.

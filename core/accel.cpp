@@ -24,6 +24,8 @@ const char* accelName(RenderOptions::Accel accel) {
             return "bvh";
         case RenderOptions::Accel::Wide:
             return "wide";
+        case RenderOptions::Accel::Cwbvh:
+            return "cwbvh";
     }
     return "?";
 }
@@ -34,7 +36,8 @@ RenderOptions::Accel parseAccel(const std::string& name) {
     if (name == "grid") return RenderOptions::Accel::Grid;
     if (name == "bvh") return RenderOptions::Accel::Bvh;
     if (name == "wide") return RenderOptions::Accel::Wide;
-    throw Error("--accel " + name + ": must be one of none, bv, grid, bvh, wide");
+    if (name == "cwbvh") return RenderOptions::Accel::Cwbvh;
+    throw Error("--accel " + name + ": must be one of none, bv, grid, bvh, wide, cwbvh");
 }
 
 RenderOptions::Accel defaultAccel(const Scene& scene) {
@@ -196,6 +199,23 @@ AccelData buildAccel(const Scene& scene, RenderOptions::Accel accel) {
                 for (int k = 0; k < 4; ++k) slots += n.child[k] != -1;
             s.detail = fmt("%.2f children/node, binned SAH %.1f ms, collapse %.1f ms",
                            out.wide.empty() ? 0.0 : slots / double(out.wide.size()), binaryMs,
+                           msSince(t0) - binaryMs) +
+                       fmt(", %.0f ms of CPU time", cpuMsSince(c0));
+            break;
+        }
+        case RenderOptions::Accel::Cwbvh: {
+            buildBvh(out);
+            double binaryMs = msSince(t0);
+            buildCwbvh(out);
+            s.nodes = (long long)out.cwbvh.size();
+            s.bytes = out.cwbvh.size() * sizeof(dev::CwbvhNode) +
+                      out.cwbvhPrims.size() * sizeof(dev::CwbvhPrim);
+            double slots = 0;
+            for (const dev::CwbvhNode& n : out.cwbvh)
+                for (int k = 0; k < 8; ++k)
+                    slots += (n.innerMask >> k & 1) || n.loX[k] != 255 || n.hiX[k] != 0;
+            s.detail = fmt("%.2f children/node, binned SAH %.1f ms, collapse %.1f ms",
+                           out.cwbvh.empty() ? 0.0 : slots / double(out.cwbvh.size()), binaryMs,
                            msSince(t0) - binaryMs) +
                        fmt(", %.0f ms of CPU time", cpuMsSince(c0));
             break;

@@ -5,6 +5,8 @@
 //   grid  uniform grid over every sphere and triangle, 3D-DDA traversal
 //   bvh   binned-SAH BVH over every sphere and triangle, built with every core
 //   wide  the same BVH collapsed into 4-wide nodes with quantised child boxes (issue 18)
+//   cwbvh the same BVH collapsed into compressed 8-wide nodes, children in ray-octant order
+//         and each node's leaf primitives side by side (issue 18; for GPUs)
 // Planes are infinite and always tested one by one.
 #pragma once
 
@@ -39,6 +41,8 @@ struct AccelData {
     std::vector<dev::Kdop> kdops;           // bv: one per mesh
     std::vector<dev::BvhNode> bvh;          // bvh, wide: root at 0 (wide: the tree it collapses)
     std::vector<dev::WideNode> wide;        // wide: root at 0, uploaded in place of bvh
+    std::vector<dev::CwbvhNode> cwbvh;      // cwbvh: root at 0, uploaded in place of bvh
+    std::vector<dev::CwbvhPrim> cwbvhPrims; // cwbvh: leaf entries, uploaded in place of cells
     dev::Grid grid{};                       // grid: the cell layout of `cells`
     std::vector<int> cells;                 // grid: cell c's refs are cells[cells[c]..cells[c+1])
     std::vector<int> sphereSource, triangleSource;
@@ -56,6 +60,8 @@ void buildBvh(AccelData& data, unsigned threads = 0);
 void buildGrid(AccelData& data);
 // Collapses data.bvh into data.wide (core/accel_wide.cpp); the primitive order is kept.
 void buildWide(AccelData& data);
+// Collapses data.bvh into data.cwbvh and data.cwbvhPrims (core/accel_cwbvh.cpp).
+void buildCwbvh(AccelData& data);
 
 // Every primitive's box, padded so that float rounding in the slab and DDA tests never culls a
 // primitive that its intersection routine would hit. Spheres first, then triangles.
@@ -86,5 +92,11 @@ std::string checkBvh(const AccelData& data);
 // primitives and inside its parent's box, every node reachable once, and no path deeper in
 // deferred children than the device's stack; returns "" or the first violation.
 std::string checkWide(const AccelData& data);
+
+// Checks the compressed 8-wide BVH: each primitive in exactly one leaf entry (a triangle's with
+// its exact vertices), each decoded child box on its path holding it, leaves within their node's
+// 32 entries, every node reachable once, and no path needing more than the device's stack;
+// returns "" or the first violation.
+std::string checkCwbvh(const AccelData& data);
 
 }  // namespace rt

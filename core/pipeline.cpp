@@ -147,6 +147,7 @@ std::vector<std::string> featureDefines(const Scene& scene, const RenderOptions&
     if (o.accel == RenderOptions::Accel::Grid && prims) d.push_back("RT_ACCEL_GRID");
     if (o.accel == RenderOptions::Accel::Bvh && prims) d.push_back("RT_ACCEL_BVH");
     if (o.accel == RenderOptions::Accel::Wide && prims) d.push_back("RT_ACCEL_WIDE");
+    if (o.accel == RenderOptions::Accel::Cwbvh && prims) d.push_back("RT_ACCEL_CWBVH");
     return d;
 }
 
@@ -202,10 +203,18 @@ DeviceScene::DeviceScene(ClContext& cl, const Scene& scene, RenderOptions::Accel
         lights_ = upload(cl, scene.lights, "the light buffer", bytes_);
         materials_ = upload(cl, scene.materials, "the material buffer", bytes_);
         cubemap_ = upload(cl, scene.environment.cubemap, "the cubemap buffer", bytes_);
-        // The wide nodes take the BVH's buffer: kernels keep one signature for every mode.
-        bvh_ = a == RenderOptions::Accel::Wide ? upload(cl, accel.wide, "the BVH buffer", bytes_)
-                                               : upload(cl, accel.bvh, "the BVH buffer", bytes_);
-        cells_ = upload(cl, accel.cells, "the grid buffer", bytes_);
+        // The wide nodes take the BVH's buffer, and the cwbvh's leaf entries the grid's: kernels
+        // keep one signature for every mode.
+        if (a == RenderOptions::Accel::Wide)
+            bvh_ = upload(cl, accel.wide, "the BVH buffer", bytes_);
+        else if (a == RenderOptions::Accel::Cwbvh)
+            bvh_ = upload(cl, accel.cwbvh, "the BVH buffer", bytes_);
+        else
+            bvh_ = upload(cl, accel.bvh, "the BVH buffer", bytes_);
+        if (a == RenderOptions::Accel::Cwbvh)
+            cells_ = upload(cl, accel.cwbvhPrims, "the leaf-primitive buffer", bytes_);
+        else
+            cells_ = upload(cl, accel.cells, "the grid buffer", bytes_);
         rayCounts_ = cl.allocate(RT_RAY_TYPES * sizeof(cl_uint), CL_MEM_READ_WRITE, "the ray counters");
         bytes_ += RT_RAY_TYPES * sizeof(cl_uint);
     } catch (...) {

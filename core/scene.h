@@ -34,7 +34,7 @@ struct RenderOptions {
     enum class Layout { Tree, Weighted };
     Layout layout = Layout::Tree;   // private rays: the full ray tree, or a weighted stack
     size_t memoryBudget = 0;        // bytes a global ray tree may use (0 = device max)
-    enum class Accel { None, Bv, Grid, Bvh, Wide };
+    enum class Accel { None, Bv, Grid, Bvh, Wide, Cwbvh };
     Accel accel = Accel::Bv;        // how rays find triangles (issue 5)
     bool countRays = false;         // count rays by type on the device (slower; benchmarks)
     // Split frames into row tiles so no launch runs past this (display watchdogs); 0 = off.

@@ -645,7 +645,7 @@ class Loader {
             try {
                 r.accel = parseAccel(name);
             } catch (const Error&) {
-                a.fail("must be one of none, bv, grid, bvh, wide, got '" + name + "'");
+                a.fail("must be one of none, bv, grid, bvh, wide, cwbvh, got '" + name + "'");
             }
             accelGiven_ = true;
         }

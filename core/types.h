@@ -222,6 +222,39 @@ typedef struct WideNode {
     uint16_t count[4];
 } WideNode;
 
+// Compressed 8-wide BVH node (issue 18, --accel cwbvh; the layout of Ylitie, Karras and Laine
+// 2017), 80 bytes: five 16-byte loads give the boxes of eight children. Boxes are quantised as in
+// WideNode. Slot k's child lies towards corner k of the node (bit a of k set: the + side of axis
+// a), so a ray whose direction has the sign bits o (bit a: towards -a) visits the slots in the
+// order k ^ o, roughly nearest first, without sorting. Slot k is
+//   an inner node: bit k of innerMask. The inner children are the nodes childBase, childBase + 1,
+//                  ... in slot order.
+//   a leaf:        meta[k] = offset | (count - 1) << 5, the entries prims[primBase + offset, +
+//                  count) of CwbvhPrim; offset + count <= 32 (a node's leaves fit one 32-bit mask).
+//   empty:         the quantised box lo = 255, hi = 0 on every axis, which no ray enters.
+typedef struct CwbvhNode {
+    Float3 origin;
+    uint8_t exponent[3];
+    uint8_t innerMask;
+    int32_t childBase;
+    int32_t primBase;
+    uint8_t meta[8];
+    uint8_t loX[8], loY[8], loZ[8];
+    uint8_t hiX[8], hiY[8], hiZ[8];
+} CwbvhNode;
+
+// A primitive of a cwbvh leaf, laid out node by node so that a leaf's entries are adjacent:
+// ref is a triangle t >= 0, whose vertices follow (the scene's floats, so that every hit is the
+// one the other structures find), or a sphere ~s (the vertices unused). 48 bytes, three loads.
+typedef struct CwbvhPrim {
+    Float3 v0;
+    int32_t ref;
+    Float3 v1;
+    float pad1;
+    Float3 v2;
+    float pad2;
+} CwbvhPrim;
+
 // Bounding volume of 7 slab pairs around a mesh (report 3.6.2, Kay and Kajiya 1986): slab k
 // holds the points p with lo[k] <= dot(RT_SLAB_k, p) <= hi[k], for the unnormalized normals
 // x, y, z, (1,1,1), (-1,1,1), (1,-1,1), (1,1,-1).
@@ -242,6 +275,7 @@ static_assert(offsetof(Material, diffuse2) == 64);
 static_assert(sizeof(Sphere) == 32);
 static_assert(sizeof(Plane) == 32);
 static_assert(sizeof(Triangle) == 80);
+static_assert(offsetof(Triangle, v1) == 12 && offsetof(Triangle, v2) == 24);  // Hit_Triangle's loads
 static_assert(sizeof(MeshInstance) == 64);
 static_assert(sizeof(Light) == 32);
 static_assert(sizeof(Camera) == 32);
@@ -252,6 +286,9 @@ static_assert(sizeof(Node) == 48);
 static_assert(sizeof(BvhNode) == 32);
 static_assert(sizeof(WideNode) == 64);
 static_assert(offsetof(WideNode, child) == 40);
+static_assert(sizeof(CwbvhNode) == 80);
+static_assert(offsetof(CwbvhNode, meta) == 24 && offsetof(CwbvhNode, loX) == 32);
+static_assert(sizeof(CwbvhPrim) == 48 && offsetof(CwbvhPrim, ref) == 12);
 static_assert(offsetof(Node, occluded) == 44);
 static_assert(offsetof(RenderSettings, camera) == 96);
 static_assert(offsetof(RenderSettings, grid) == 128);

@@ -76,6 +76,30 @@ TEST(TraversalCost, APoppedNodeLoadsNothing) {
     EXPECT_EQ(b.bytes, 32.0 + 64.0 + 36.0);
 }
 
+// The compressed 8-wide BVH: one node holds both leaves; a closest-hit ray beside the small
+// triangle tests both (80 B of node, 48 B per leaf entry).
+TEST(TraversalCost, CwbvhCountsNodesAndLeafEntries) {
+    AccelData d = buildAccel(triangles({flat(-1, -1, 1, -1, 0, 1, 0), flat(-3, -3, 3, -3, 0, 3, -5)}),
+                             RenderOptions::Accel::Cwbvh);
+    ASSERT_EQ(d.cwbvh.size(), 1u);
+    TraversalCost c = cwbvhTraversalCost(d, {down(0.9f, 0.9f)}, false);
+    EXPECT_EQ(c.nodes, 1.0);
+    EXPECT_EQ(c.triangles, 2.0);
+    EXPECT_EQ(c.bytes, 80.0 + 2 * 48.0);
+    TraversalCost miss = cwbvhTraversalCost(d, {{0.f, 0.f, 5.f, INFINITY, 1.f, 0.f, 0.f, 0.f}}, false);
+    EXPECT_EQ(miss.nodes, 1.0);
+    EXPECT_EQ(miss.triangles, 0.0);
+    // 300 random triangles: a node visit tests eight slots, so a ray makes fewer visits than in
+    // the binary tree it came from.
+    AccelData soup = buildAccel(test::soup(0, 300, 11), RenderOptions::Accel::Cwbvh);
+    std::vector<BatchRay> rays;
+    for (int i = 0; i < 64; ++i) rays.push_back(down(-20.f + 0.6f * float(i), 3.f));
+    c = cwbvhTraversalCost(soup, rays, false);
+    TraversalCost b = binaryTraversalCost(soup, rays, false);
+    EXPECT_GT(c.nodes, 0.0);
+    EXPECT_LT(c.nodes, b.nodes);
+}
+
 // A packet of 8 over one triangle: the four rays that come down through it hit, the four that
 // run sideways miss the scene. The packet visits the one node once, tests the triangle once
 // for all eight, and half its rays are in the leaf that test serves.

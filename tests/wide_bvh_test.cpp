@@ -1,9 +1,11 @@
-// The 4-wide BVH of --accel wide (issue 18): the collapsed tree's invariants on the host
-// (checkWide: every primitive in one leaf, every decoded box on its path holding it, the device
-// stack never overflowing), and images that match --accel none with both pipelines.
+// The wide BVHs of issue 18, --accel wide (4-wide) and --accel cwbvh (compressed 8-wide): the
+// collapsed trees' invariants on the host (checkWide, checkCwbvh: every primitive in one leaf,
+// every decoded box on its path holding it, the device stack never overflowing), and images that
+// match --accel none with every pipeline.
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -29,13 +31,27 @@ using test::kScenes;
 using test::load;
 
 
+// The layouts under test, and each one's checker.
+constexpr Accel kWide[] = {Accel::Wide, Accel::Cwbvh};
+
+std::string check(const AccelData& d, Accel a) {
+    return a == Accel::Wide ? checkWide(d) : checkCwbvh(d);
+}
+
+size_t nodeCount(const AccelData& d, Accel a) {
+    return a == Accel::Wide ? d.wide.size() : d.cwbvh.size();
+}
+
 void expectValidWide(const Scene& scene, const std::string& name) {
-    AccelData d = buildAccel(scene, Accel::Wide);
-    EXPECT_EQ(checkWide(d), "") << name;
-    EXPECT_EQ(checkBvh(d), "") << name;  // the binary tree it came from
-    EXPECT_EQ(d.stats.nodes, (long long)d.wide.size()) << name;
-    EXPECT_EQ(d.stats.name, "wide");
-    if (d.bvh.size() > 1) EXPECT_LT(d.wide.size(), d.bvh.size() / 2) << name;
+    for (Accel a : kWide) {
+        AccelData d = buildAccel(scene, a);
+        std::string what = name + " " + accelName(a);
+        EXPECT_EQ(check(d, a), "") << what;
+        EXPECT_EQ(checkBvh(d), "") << what;  // the binary tree it came from
+        EXPECT_EQ(d.stats.nodes, (long long)nodeCount(d, a)) << what;
+        EXPECT_EQ(d.stats.name, accelName(a));
+        if (d.bvh.size() > 1) EXPECT_LT(nodeCount(d, a), d.bvh.size() / 2) << what;
+    }
 }
 
 TEST(WideBvh, EveryPrimitiveInOneLeafInsideEveryDecodedBoxOnItsPath) {
@@ -50,7 +66,7 @@ TEST(WideBvh, EveryPrimitiveInOneLeafInsideEveryDecodedBoxOnItsPath) {
 
 // Spheres of geometrically growing size and distance make the binary tree as deep as the
 // builder allows; the collapse must then keep the deferred entries within the device stack
-// (checkWide walks every path and counts them).
+// (the checkers walk every path and count them).
 TEST(WideBvh, DeepTreesStayWithinTheDeviceStack) {
     Scene s = test::soup(0, 0, 5);
     for (int i = 0; i < 400; ++i) {
@@ -78,16 +94,83 @@ TEST(WideBvh, CheckerRejectsBrokenTrees) {
     EXPECT_NE(checkWide(twice), "");
 }
 
+TEST(Cwbvh, CheckerRejectsBrokenTrees) {
+    AccelData d = buildAccel(test::soup(500, 500, 6), Accel::Cwbvh);
+    ASSERT_EQ(checkCwbvh(d), "");
+    ASSERT_GT(d.cwbvh.size(), 2u);
+    AccelData flat = d;
+    for (int k = 0; k < 8; ++k)
+        if (flat.cwbvh[0].loX[k] != 255) flat.cwbvh[0].hiX[k] = flat.cwbvh[0].loX[k];
+    EXPECT_NE(checkCwbvh(flat), "");
+    // A leaf entry whose vertex is not its triangle's, and two leaves sharing entries.
+    AccelData moved = d;
+    for (dev::CwbvhPrim& p : moved.cwbvhPrims)
+        if (p.ref >= 0) {
+            p.v1.x += 1e-3f;
+            break;
+        }
+    EXPECT_NE(checkCwbvh(moved), "");
+    AccelData shared = d;
+    for (dev::CwbvhNode& n : shared.cwbvh) {
+        int leaves[2], m = 0;
+        for (int k = 0; k < 8 && m < 2; ++k)
+            if (!(n.innerMask >> k & 1) && n.loX[k] <= n.hiX[k]) leaves[m++] = k;
+        if (m == 2) {
+            n.meta[leaves[1]] = n.meta[leaves[0]];
+            break;
+        }
+    }
+    EXPECT_NE(checkCwbvh(shared), "");
+}
+
+// Eight spheres at the corners of a cube: the root's slot k holds the one at corner k (bit a of
+// k set: the + side of axis a), the order a ray visits them in without sorting.
+TEST(Cwbvh, ChildrenSitInTheSlotOfTheirCorner) {
+    Scene s = test::soup(0, 0, 8);
+    for (int k = 0; k < 8; ++k)
+        s.spheres.push_back({{k & 1 ? 5.f : -5.f, k & 2 ? 5.f : -5.f, k & 4 ? 5.f : -5.f}, 1.f, 0,
+                             {0, 0, 0}});
+    finalizeScene(s);
+    AccelData d = buildAccel(s, Accel::Cwbvh);
+    ASSERT_EQ(checkCwbvh(d), "");
+    const dev::CwbvhNode& root = d.cwbvh.at(0);
+    for (int k = 0; k < 8; ++k) {
+        ASSERT_FALSE(root.innerMask >> k & 1) << "slot " << k;
+        ASSERT_EQ(root.meta[k] >> 5, 0) << "slot " << k << " holds one sphere";
+        const dev::CwbvhPrim& p = d.cwbvhPrims.at(size_t(root.primBase + (root.meta[k] & 31)));
+        ASSERT_LT(p.ref, 0);
+        const dev::Float3& c = d.spheres.at(size_t(sphereRef(p.ref))).center;
+        EXPECT_EQ((c.x > 0 ? 1 : 0) | (c.y > 0 ? 2 : 0) | (c.z > 0 ? 4 : 0), k);
+    }
+}
+
+// A leaf longer than a slot holds (the binary builder's depth cap can leave one) is cut into
+// slots of at most eight, and what does not fit the node's 32 entries goes one node down.
+TEST(Cwbvh, LongLeavesAreCutIntoSlots) {
+    AccelData d = buildAccel(test::soup(0, 300, 9), Accel::Bvh);
+    d.bvh.resize(1);
+    d.bvh[0].first = 0;
+    d.bvh[0].count = int(d.triangles.size());
+    buildCwbvh(d);
+    EXPECT_EQ(checkCwbvh(d), "");
+    EXPECT_GE(d.cwbvh.size(), 300u / 32u);
+    for (const dev::CwbvhNode& n : d.cwbvh) EXPECT_LE(std::popcount(unsigned(n.innerMask)), 1);
+}
+
 TEST(WideBvh, ParsedAndNamedInTheDefines) {
     EXPECT_EQ(parseAccel("wide"), Accel::Wide);
     EXPECT_STREQ(accelName(Accel::Wide), "wide");
+    EXPECT_EQ(parseAccel("cwbvh"), Accel::Cwbvh);
+    EXPECT_STREQ(accelName(Accel::Cwbvh), "cwbvh");
     EXPECT_THROW(parseAccel("bvh8"), Error);
-    RenderOptions o;
-    o.accel = Accel::Wide;
-    auto d = featureDefines(load("mesh"), o);
-    EXPECT_NE(std::find(d.begin(), d.end(), "RT_ACCEL_WIDE"), d.end());
-    d = featureDefines(load("empty"), o);
-    EXPECT_EQ(std::find(d.begin(), d.end(), "RT_ACCEL_WIDE"), d.end());
+    for (auto [a, define] : {std::pair{Accel::Wide, "RT_ACCEL_WIDE"}, {Accel::Cwbvh, "RT_ACCEL_CWBVH"}}) {
+        RenderOptions o;
+        o.accel = a;
+        auto d = featureDefines(load("mesh"), o);
+        EXPECT_NE(std::find(d.begin(), d.end(), define), d.end());
+        d = featureDefines(load("empty"), o);
+        EXPECT_EQ(std::find(d.begin(), d.end(), define), d.end());
+    }
 }
 
 // The tolerance of tests/accel_test.cpp: the traversal order only changes which of two equally
@@ -100,10 +183,11 @@ void expectSameImage(const Image& a, const Image& b, const std::string& what) {
     EXPECT_LE(d.meanAbs, 0.1 / 255.0) << what;
 }
 
-class WideImages : public ::testing::TestWithParam<std::string> {};
+class WideImages : public ::testing::TestWithParam<std::tuple<std::string, Accel>> {};
 
 TEST_P(WideImages, StandardScenesMatchNone) {
-    auto p = makePipeline(GetParam(), &test::device());
+    auto [kind, accel] = GetParam();
+    auto p = makePipeline(kind, &test::device());
     for (const char* name : kScenes) {
         Scene scene = load(name);
         RenderOptions o = scene.defaults;
@@ -114,14 +198,15 @@ TEST_P(WideImages, StandardScenesMatchNone) {
         o.aa = 1;
         o.accel = Accel::None;
         Image none = p->render(scene, o);
-        o.accel = Accel::Wide;
-        expectSameImage(p->render(scene, o), none, std::string(name) + " wide");
+        o.accel = accel;
+        expectSameImage(p->render(scene, o), none, std::string(name) + " " + accelName(accel));
     }
 }
 
-// A soup of spheres and triangles seen from inside: rays start in many boxes, and the four
-// children of a node overlap.
+// A soup of spheres and triangles seen from inside: rays start in many boxes, and the children
+// of a node overlap.
 TEST_P(WideImages, SoupMatchesNone) {
+    auto [kind, accel] = GetParam();
     Scene scene = test::soup(300, 700, 7);
     scene.lights.push_back({{0, 30, 0}, 0.f, {1, 1, 1}, 0});
     scene.camera.position = {0, 0, -30};
@@ -130,20 +215,23 @@ TEST_P(WideImages, SoupMatchesNone) {
     scene.camera.fovY = 0.8f;
     scene.materials[0].diffuse = {0.7f, 0.6f, 0.5f};
     scene.materials[0].exponent = 16.f;
-    auto p = makePipeline(GetParam(), &test::device());
+    auto p = makePipeline(kind, &test::device());
     RenderOptions o = scene.defaults;
     o.width = 64;
     o.height = 48;
     o.bounces = 1;
     o.accel = Accel::None;
     Image none = p->render(scene, o);
-    o.accel = Accel::Wide;
-    expectSameImage(p->render(scene, o), none, "soup wide");
+    o.accel = accel;
+    expectSameImage(p->render(scene, o), none, std::string("soup ") + accelName(accel));
 }
 
 INSTANTIATE_TEST_SUITE_P(Pipelines, WideImages,
-                         ::testing::ValuesIn(pipelineRegistry().names(true)),
-                         [](const auto& info) { return info.param; });
+                         ::testing::Combine(::testing::ValuesIn(pipelineRegistry().names(true)),
+                                            ::testing::ValuesIn(kWide)),
+                         [](const auto& info) {
+                             return std::get<0>(info.param) + "_" + accelName(std::get<1>(info.param));
+                         });
 
 // The small stress scenes (4,096 spheres, 20,000 triangles) into a folder of this test's own.
 TEST(WideBvh, SmallStressScenesMatchNone) {
@@ -153,7 +241,7 @@ TEST(WideBvh, SmallStressScenesMatchNone) {
     ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
     for (const char* name : {"many-spheres", "big-mesh"}) {
         Scene scene = loadScene(dir / (std::string(name) + ".json"), readImage);
-        EXPECT_EQ(checkWide(buildAccel(scene, Accel::Wide)), "") << name;
+        for (Accel a : kWide) EXPECT_EQ(check(buildAccel(scene, a), a), "") << name;
         for (const std::string& kind : pipelineRegistry().names(true)) {
             RenderOptions o = scene.defaults;
             o.width = 48;
@@ -162,9 +250,11 @@ TEST(WideBvh, SmallStressScenesMatchNone) {
             auto p = makePipeline(kind, &test::device());
             o.accel = Accel::None;
             Image none = p->render(scene, o);
-            o.accel = Accel::Wide;
-            expectSameImage(p->render(scene, o), none,
-                            std::string(name) + " " + kind + " wide");
+            for (Accel a : kWide) {
+                o.accel = a;
+                expectSameImage(p->render(scene, o), none,
+                                std::string(name) + " " + kind + " " + accelName(a));
+            }
         }
     }
 }

@@ -1,8 +1,8 @@
 // rtlab — acceleration structures on the device (issue 5; built by core/accel*.cpp). Each query
 // takes the current hit and only accepts 0 < t < hit->t; with anyHit it returns at the first
 // primitive it accepts (shadow rays), otherwise it finds the closest. Included by scene.cl after
-// SceneData and Hit; RT_ACCEL_BV, RT_ACCEL_GRID, RT_ACCEL_BVH or RT_ACCEL_WIDE (accel_wide.cl)
-// picks the structure.
+// SceneData and Hit; RT_ACCEL_BV, RT_ACCEL_GRID, RT_ACCEL_BVH, RT_ACCEL_WIDE (accel_wide.cl) or
+// RT_ACCEL_CWBVH (accel_cwbvh.cl) picks the structure.
 #ifndef RTLAB_CL_ACCEL
 #define RTLAB_CL_ACCEL
 
@@ -60,16 +60,21 @@ inline bool Hit_Sphere(const SceneData* sc, int i, Ray ray, Hit* hit) {
 #endif
 
 #ifdef RT_HAS_TRIANGLES
-inline bool Hit_Triangle(const SceneData* sc, int i, Ray ray, Hit* hit) {
-    global const Triangle* tri = sc->triangles + i;
+// Triangle i with the given vertices (its own, or the copy a cwbvh leaf holds).
+inline bool Hit_TriangleWith(float3 v0, float3 v1, float3 v2, int i, Ray ray, Hit* hit) {
     float2 uv;
-    float t = Triangle_Intersect(ray, f3(tri->v0), f3(tri->v1), f3(tri->v2), &uv);
+    float t = Triangle_Intersect(ray, v0, v1, v2, &uv);
     if (!(t > 0.0f && t < hit->t)) return false;
     hit->t = t;
     hit->kind = RT_KIND_TRIANGLE;
     hit->object = i;
     hit->uv = uv;
     return true;
+}
+
+inline bool Hit_Triangle(const SceneData* sc, int i, Ray ray, Hit* hit) {
+    global const Triangle* tri = sc->triangles + i;
+    return Hit_TriangleWith(f3(tri->v0), f3(tri->v1), f3(tri->v2), i, ray, hit);
 }
 
 // ---- none and bv: mesh by mesh ----
@@ -273,6 +278,10 @@ inline bool Bvh_Query(const SceneData* sc, Ray ray, Hit* hit, bool anyHit) {
 
 #ifdef RT_ACCEL_WIDE
 #include "accel_wide.cl"
+#endif
+
+#ifdef RT_ACCEL_CWBVH
+#include "accel_cwbvh.cl"
 #endif
 
 #endif

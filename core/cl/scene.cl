@@ -16,8 +16,9 @@ typedef struct SceneData {
     global const Light* lights;
     global const Material* materials;
     global const float* cubemap;
-    global const BvhNode* bvh;  // RT_ACCEL_BVH: root at 0; RT_ACCEL_WIDE: WideNode records
-    global const int* cells;    // RT_ACCEL_GRID: cell offsets, then references (core/accel.h)
+    global const BvhNode* bvh;  // RT_ACCEL_BVH: root at 0; RT_ACCEL_WIDE, _CWBVH: their nodes
+    global const int* cells;    // RT_ACCEL_GRID: cell offsets, then references (core/accel.h);
+                                // RT_ACCEL_CWBVH: CwbvhPrim records
     global uint* rayCounts;  // RT_RAY_* counters, written only when RT_COUNT_RAYS is defined
     RenderSettings settings;
 } SceneData;
@@ -99,12 +100,15 @@ inline bool Scene_Planes(const SceneData* sc, Ray ray, Hit* hit, bool anyHit) {
 // the first object (core/SHADING.md section 2); with one, planes come first.
 inline Hit Scene_Query(const SceneData* sc, Ray ray, float tMax, bool anyHit) {
     Hit hit = Hit_None(tMax);
-#if defined(RT_ACCEL_GRID) || defined(RT_ACCEL_BVH) || defined(RT_ACCEL_WIDE)
+#if defined(RT_ACCEL_GRID) || defined(RT_ACCEL_BVH) || defined(RT_ACCEL_WIDE) || \
+    defined(RT_ACCEL_CWBVH)
     if (Scene_Planes(sc, ray, &hit, anyHit)) return hit;
 #ifdef RT_ACCEL_GRID
     Grid_Query(sc, ray, &hit, anyHit);
 #elif defined(RT_ACCEL_WIDE)
     Wide_Query(sc, ray, &hit, anyHit);
+#elif defined(RT_ACCEL_CWBVH)
+    Cwbvh_Query(sc, ray, &hit, anyHit);
 #else
     Bvh_Query(sc, ray, &hit, anyHit);
 #endif
