@@ -27,6 +27,7 @@
 #include "bench/measure.h"
 #include "bench/ray_batch.h"
 #include "bench/trace_visits.h"
+#include "apps/parse_error.h"
 #include "core/accel.h"
 #include "core/cl_runtime.h"
 #include "core/error.h"
@@ -130,6 +131,7 @@ struct Args {
     std::string scene, size, accels = "bvh,wide,wide-p16", device = "cpu", out;
     int rounds = 5;
     int local = 0;
+    int coherent = 1;  // rays per group that trace one ray (a bound on SIMT divergence)
     unsigned threads = std::max(1u, std::thread::hardware_concurrency());
     double distance = 0;
     double pitch = 1000;  // degrees; 1000 keeps the scene's
@@ -302,6 +304,7 @@ bool report(const Args& a, const Scene& scene, const RenderOptions& o, ClContext
                     {"shadow_rays", shadow.size()},
                     {"rounds", a.rounds},
                     {"local_size", a.local},
+                    {"coherent_rays", a.coherent},
                     // Which kernel sources ran: the embedded ones, or a tree ($RTLAB_KERNEL_DIR),
                     // and any extra compiler options ($RTLAB_CL_OPTIONS), for A/B runs.
                     {"kernel_sources", std::getenv("RTLAB_KERNEL_DIR") ? std::getenv("RTLAB_KERNEL_DIR")
@@ -362,6 +365,13 @@ int run(const Args& a) {
 
     // The reference hits (Embree's, else the first structure's) give the shadow rays.
     std::vector<BatchRay> primary = primaryRays(scene, o.width, o.height);
+    // --coherent N: each run of N consecutive rays (a tile's) becomes copies of its middle ray,
+    // for every peer. On a GPU, N = 32 makes each warp trace one ray 32 times: the kernel's rays/s
+    // with no divergence at all, against which the real rays' figure measures what it costs.
+    for (size_t i = 0, n = size_t(a.coherent); n > 1 && i < primary.size(); i += n) {
+        BatchRay middle = primary[std::min(primary.size() - 1, i + n / 2)];
+        std::fill(primary.begin() + long(i), primary.begin() + long(std::min(primary.size(), i + n)), middle);
+    }
     cl::Buffer primaryIn = uploadRays(cl, primary);
     cl::Buffer tOut(cl.context(), CL_MEM_WRITE_ONLY, primary.size() * 4);
     std::vector<float> t;
@@ -462,11 +472,16 @@ int main(int argc, char** argv) {
         ->check(CLI::Range(-90.0, 90.0));
     app.add_option("--local", a.local, "Work-group size of rtlab's kernels [0: the driver's]")
         ->check(CLI::Range(0, 1024));
+    app.add_option("--coherent", a.coherent,
+                   "Replace each run of N consecutive primary rays (in 8x8 tiles) by copies of its "
+                   "middle ray, for every peer: with N = 32 each GPU warp traces one ray, which "
+                   "bounds what divergence costs [1: the camera's rays]")
+        ->check(CLI::Range(1, 1 << 20));
     app.add_option("--out", a.out, "Folder for the JSON result [none]");
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
-        return app.exit(e);
+        return rt::cli::reportParseError(app, e, "rtlab-trace-bench", argc, argv);
     }
     try {
         return rt::run(a);
