@@ -72,23 +72,31 @@ void invDir(const BatchRay& r, float inv[3]) {
         inv[a] = 1.f / (std::fabs(d[a]) < 1e-20f ? std::copysign(1e-20f, d[a]) : d[a]);
 }
 
+// Calls trace(ray, inverse direction) for an even sample of at most maxRays of the batch;
+// returns how many it followed.
+template <typename Trace>
+size_t forSampledRays(const std::vector<BatchRay>& rays, size_t maxRays, Trace trace) {
+    size_t stride = std::max<size_t>(1, rays.size() / maxRays), followed = 0;
+    for (size_t i = 0; i < rays.size(); i += stride, ++followed) {
+        float inv[3];
+        invDir(rays[i], inv);
+        trace(rays[i], inv);
+    }
+    return followed;
+}
+
 }  // namespace
 
 TraversalCost binaryTraversalCost(const AccelData& data, const std::vector<BatchRay>& rays,
                                   bool anyHit, size_t maxRays) {
     TraversalCost cost;
     if (data.bvh.empty() || rays.empty()) return cost;
-    size_t stride = std::max<size_t>(1, rays.size() / maxRays);
     long long nodes = 0, pairs = 0, triangles = 0;
-    for (size_t i = 0; i < rays.size(); i += stride) {
-        const BatchRay& r = rays[i];
-        ++cost.rays;
-        float inv[3];
-        invDir(r, inv);
+    cost.rays = forSampledRays(rays, maxRays, [&](const BatchRay& r, const float* inv) {
         float best = r.tMax;
         if (enter(data.bvh[0], r, inv, best) == INFINITY) {
             ++nodes;  // the root's box, tested on its own
-            continue;
+            return;
         }
         int stack[64];
         float stackT[64];
@@ -119,7 +127,7 @@ TraversalCost binaryTraversalCost(const AccelData& data, const std::vector<Batch
             if (top == 0) break;
             index = stack[--top];  // its (first, count) came with the stack entry: no load
         }
-    }
+    });
     double n = double(cost.rays);
     cost.nodes = double(nodes) / n;
     cost.triangles = double(triangles) / n;
@@ -132,13 +140,8 @@ TraversalCost wideTraversalCost(const AccelData& data, const std::vector<BatchRa
                                 bool anyHit, size_t maxRays) {
     TraversalCost cost;
     if (data.wide.empty() || rays.empty()) return cost;
-    size_t stride = std::max<size_t>(1, rays.size() / maxRays);
     long long nodes = 0, triangles = 0;
-    for (size_t i = 0; i < rays.size(); i += stride) {
-        const BatchRay& r = rays[i];
-        ++cost.rays;
-        float inv[3];
-        invDir(r, inv);
+    cost.rays = forSampledRays(rays, maxRays, [&](const BatchRay& r, const float* inv) {
         float best = r.tMax;
         int stack[64];
         float stackT[64];
@@ -175,7 +178,7 @@ TraversalCost wideTraversalCost(const AccelData& data, const std::vector<BatchRa
             if (top == 0) break;
             index = stack[--top];
         }
-    }
+    });
     cost.nodes = double(nodes) / double(cost.rays);
     cost.triangles = double(triangles) / double(cost.rays);
     cost.bytes = 64 * cost.nodes + 36 * cost.triangles;
@@ -186,13 +189,8 @@ TraversalCost cwbvhTraversalCost(const AccelData& data, const std::vector<BatchR
                                  bool anyHit, size_t maxRays) {
     TraversalCost cost;
     if (data.cwbvh.empty() || rays.empty()) return cost;
-    size_t stride = std::max<size_t>(1, rays.size() / maxRays);
     long long nodes = 0, triangles = 0;
-    for (size_t i = 0; i < rays.size(); i += stride) {
-        const BatchRay& r = rays[i];
-        ++cost.rays;
-        float inv[3];
-        invDir(r, inv);
+    cost.rays = forSampledRays(rays, maxRays, [&](const BatchRay& r, const float* inv) {
         const float o[3] = {r.ox, r.oy, r.oz};
         unsigned octant = (inv[0] < 0 ? 1u : 0u) | (inv[1] < 0 ? 2u : 0u) | (inv[2] < 0 ? 4u : 0u);
         float best = r.tMax;
@@ -248,7 +246,7 @@ TraversalCost cwbvhTraversalCost(const AccelData& data, const std::vector<BatchR
             unsigned slot = k ^ octant;
             index = int(groupBase + unsigned(std::popcount((groupBits >> 8) & ((1u << slot) - 1u))));
         }
-    }
+    });
     cost.nodes = double(nodes) / double(cost.rays);
     cost.triangles = double(triangles) / double(cost.rays);
     cost.bytes = 80 * cost.nodes + 48 * cost.triangles;

@@ -241,17 +241,11 @@ class Collapser {
     std::vector<dev::CwbvhPrim>& prims_;
 };
 
-// Slot k's decoded box, as the device computes it.
-Box decode(const dev::CwbvhNode& n, int k) {
-    const uint8_t* qlo[3] = {n.loX, n.loY, n.loZ};
-    const uint8_t* qhi[3] = {n.hiX, n.hiY, n.hiZ};
-    Box b;
-    for (int a = 0; a < 3; ++a) {
-        float o = (&n.origin.x)[a], s = stepOf(n.exponent[a]);
-        b.lo[a] = o + float(qlo[a][k]) * s;
-        b.hi[a] = o + float(qhi[a][k]) * s;
-    }
-    return b;
+bool sameVertices(const dev::Triangle& t, const dev::CwbvhPrim& p) {
+    auto same = [](const dev::Float3& a, const dev::Float3& b) {
+        return a.x == b.x && a.y == b.y && a.z == b.z;
+    };
+    return same(t.v0, p.v0) && same(t.v1, p.v1) && same(t.v2, p.v2);
 }
 
 bool emptySlot(const dev::CwbvhNode& n, int k) {
@@ -275,23 +269,11 @@ std::string checkCwbvh(const AccelData& data) {
     if (data.cwbvhPrims.size() != prims)
         return std::to_string(data.cwbvhPrims.size()) + " leaf entries for " +
                std::to_string(prims) + " primitives";
-    std::vector<int> sphereSeen(data.spheres.size()), triangleSeen(data.triangles.size()),
-        nodeSeen(nodes.size());
     // Every decoded box on a primitive's path must hold it. Descending into an inner child, the
     // device stacks the node's other inner children as one group.
-    struct Item {
-        int node, pending;  // pending: groups the device holds on its stack on the way here
-        std::vector<Box> path;
-    };
-    std::vector<Item> stack{{0, 0, {}}};
-    while (!stack.empty()) {
-        Item it = std::move(stack.back());
-        stack.pop_back();
-        std::string where = "node " + std::to_string(it.node);
-        if (it.node < 0 || size_t(it.node) >= nodes.size()) return where + " out of range";
-        if (nodeSeen[it.node]++) return where + " is reached twice";
-        if (it.pending >= kStack) return where + " needs more than the device's stack";
-        const dev::CwbvhNode& n = nodes[it.node];
+    PathCheck check(data, nodes.size(), kStack);
+    return check.run([&](const PathCheck::Item& it, const std::string& where) -> std::string {
+        const dev::CwbvhNode& n = nodes[size_t(it.node)];
         int pending = it.pending + (std::popcount(unsigned(n.innerMask)) > 1 ? 1 : 0);
         int rank = 0;
         uint32_t used = 0;  // the node's leaf entries, as the device's mask
@@ -301,7 +283,7 @@ std::string checkCwbvh(const AccelData& data) {
             std::vector<Box> path = it.path;
             path.push_back(decode(n, k));
             if (inner) {
-                stack.push_back({n.childBase + rank++, pending, std::move(path)});
+                check.push({n.childBase + rank++, pending, std::move(path)});
                 continue;
             }
             int offset = n.meta[k] & 31, count = (n.meta[k] >> 5) + 1;
@@ -318,24 +300,15 @@ std::string checkCwbvh(const AccelData& data) {
                 int i = sphere ? sphereRef(p.ref) : p.ref;
                 if (size_t(i) >= (sphere ? data.spheres.size() : data.triangles.size()))
                     return where + ": entry " + std::to_string(e) + " names no primitive";
-                int& seen = sphere ? sphereSeen[i] : triangleSeen[i];
-                std::string what = (sphere ? "sphere " : "triangle ") + std::to_string(i);
-                if (seen++) return what + " is in two leaves";
-                if (!sphere) {
-                    const dev::Triangle& t = data.triangles[i];
-                    const float* a = &t.v0.x;
-                    const float* b = &p.v0.x;
-                    if (!std::equal(a, a + 3, b) || !std::equal(&t.v1.x, &t.v1.x + 3, &p.v1.x) ||
-                        !std::equal(&t.v2.x, &t.v2.x + 3, &p.v2.x))
-                        return where + ": entry " + std::to_string(e) + " is not " + what;
-                }
-                Box b = sphere ? sphereBox(data.spheres[i]) : triangleBox(data.triangles[i]);
-                for (const Box& above : path)
-                    if (!contains(above, b.lo, b.hi)) return where + ": a box on the path cuts " + what;
+                if (!sphere && !sameVertices(data.triangles[size_t(i)], p))
+                    return where + ": entry " + std::to_string(e) + " is not triangle " +
+                           std::to_string(i) + "'s vertices";
+                if (std::string err = check.place(sphere, size_t(i), path, where); !err.empty())
+                    return err;
             }
         }
-    }
-    return firstUnvisited(triangleSeen, sphereSeen, nodeSeen);
+        return "";
+    });
 }
 
 }  // namespace rt

@@ -8,7 +8,11 @@
 #include <bit>
 #include <cmath>
 #include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
 
+#include "core/accel.h"
 #include "core/types.h"
 
 namespace rt::quant {
@@ -51,6 +55,20 @@ struct Box {
     float lo[3], hi[3];
 };
 
+// Slot k's decoded box in a WideNode or CwbvhNode, as the device computes it.
+template <typename Node>
+Box decode(const Node& n, int k) {
+    const uint8_t* qlo[3] = {n.loX, n.loY, n.loZ};
+    const uint8_t* qhi[3] = {n.hiX, n.hiY, n.hiZ};
+    Box b;
+    for (int a = 0; a < 3; ++a) {
+        float o = (&n.origin.x)[a], s = stepOf(n.exponent[a]);
+        b.lo[a] = o + float(qlo[a][k]) * s;
+        b.hi[a] = o + float(qhi[a][k]) * s;
+    }
+    return b;
+}
+
 inline bool contains(const Box& b, const float* lo, const float* hi) {
     for (int a = 0; a < 3; ++a)
         if (lo[a] < b.lo[a] || hi[a] > b.hi[a]) return false;
@@ -72,5 +90,56 @@ inline Box triangleBox(const dev::Triangle& t) {
     }
     return b;
 }
+
+// The walk both wide checkers make (checkWide, checkCwbvh): every path from node 0 with the
+// decoded boxes above it and the entries the device's stack holds on the way. Each node must be
+// reached once, each primitive once, inside every box on its path.
+class PathCheck {
+  public:
+    struct Item {
+        int node, pending;  // pending: deferred entries on the device's stack on the way here
+        std::vector<Box> path;
+    };
+
+    PathCheck(const AccelData& data, size_t nodes, int stackLimit)
+        : data_(data), nodeSeen_(nodes), sphereSeen_(data.spheres.size()),
+          triangleSeen_(data.triangles.size()), stackLimit_(stackLimit) {}
+
+    // visit(item, where) checks one node and push()es its inner children; it returns "" or the
+    // first violation, as run() does.
+    template <typename Visit>
+    std::string run(Visit visit) {
+        stack_.push_back({0, 0, {}});
+        while (!stack_.empty()) {
+            Item it = std::move(stack_.back());
+            stack_.pop_back();
+            std::string where = "node " + std::to_string(it.node);
+            if (it.node < 0 || size_t(it.node) >= nodeSeen_.size()) return where + " out of range";
+            if (nodeSeen_[size_t(it.node)]++) return where + " is reached twice";
+            if (it.pending >= stackLimit_) return where + " needs more than the device's stack";
+            if (std::string e = visit(it, where); !e.empty()) return e;
+        }
+        return firstUnvisited(triangleSeen_, sphereSeen_, nodeSeen_);
+    }
+
+    void push(Item item) { stack_.push_back(std::move(item)); }
+
+    // Primitive p, a sphere or a triangle, in a leaf below the boxes `path`.
+    std::string place(bool sphere, size_t p, const std::vector<Box>& path, const std::string& where) {
+        int& seen = sphere ? sphereSeen_[p] : triangleSeen_[p];
+        std::string what = (sphere ? "sphere " : "triangle ") + std::to_string(p);
+        if (seen++) return what + " is in two leaves";
+        Box b = sphere ? sphereBox(data_.spheres[p]) : triangleBox(data_.triangles[p]);
+        for (const Box& above : path)
+            if (!contains(above, b.lo, b.hi)) return where + ": a box on the path cuts " + what;
+        return "";
+    }
+
+  private:
+    const AccelData& data_;
+    std::vector<int> nodeSeen_, sphereSeen_, triangleSeen_;
+    std::vector<Item> stack_;
+    int stackLimit_;
+};
 
 }  // namespace rt::quant

@@ -108,19 +108,6 @@ class Collapser {
     std::vector<dev::WideNode> out_;
 };
 
-// Child k's decoded box, as the device computes it.
-Box decode(const dev::WideNode& n, int k) {
-    const uint8_t* qlo[3] = {n.loX, n.loY, n.loZ};
-    const uint8_t* qhi[3] = {n.hiX, n.hiY, n.hiZ};
-    Box b;
-    for (int a = 0; a < 3; ++a) {
-        float o = (&n.origin.x)[a], s = stepOf(n.exponent[a]);
-        b.lo[a] = o + float(qlo[a][k]) * s;
-        b.hi[a] = o + float(qhi[a][k]) * s;
-    }
-    return b;
-}
-
 }  // namespace
 
 void buildWide(AccelData& data) {
@@ -133,23 +120,11 @@ std::string checkWide(const AccelData& data) {
     const std::vector<dev::WideNode>& nodes = data.wide;
     size_t prims = data.spheres.size() + data.triangles.size();
     if (nodes.empty()) return prims ? "no nodes for " + std::to_string(prims) + " primitives" : "";
-    std::vector<int> sphereSeen(data.spheres.size()), triangleSeen(data.triangles.size()),
-        nodeSeen(nodes.size());
-    // A primitive is found only if every decoded box on its path holds it: each stack entry
-    // carries the node and the boxes above it, and the deferred entries on its path.
-    struct Item {
-        int node, pending;
-        std::vector<Box> path;
-    };
-    std::vector<Item> stack{{0, 0, {}}};
-    while (!stack.empty()) {
-        Item it = std::move(stack.back());
-        stack.pop_back();
-        std::string where = "node " + std::to_string(it.node);
-        if (it.node < 0 || size_t(it.node) >= nodes.size()) return where + " out of range";
-        if (nodeSeen[it.node]++) return where + " is reached twice";
-        if (it.pending >= kStack) return where + " needs more than the device's stack";
-        const dev::WideNode& n = nodes[it.node];
+    // A primitive is found only if every decoded box on its path holds it; a node defers all
+    // but one of its children on the device's stack.
+    PathCheck check(data, nodes.size(), kStack);
+    return check.run([&](const PathCheck::Item& it, const std::string& where) -> std::string {
+        const dev::WideNode& n = nodes[size_t(it.node)];
         int slots = 0;
         for (int k = 0; k < kWidth; ++k) slots += n.child[k] != -1;
         for (int k = 0; k < kWidth; ++k) {
@@ -157,24 +132,18 @@ std::string checkWide(const AccelData& data) {
             std::vector<Box> path = it.path;
             path.push_back(decode(n, k));
             if (n.count[k] == 0) {
-                stack.push_back({n.child[k], it.pending + slots - 1, std::move(path)});
+                check.push({n.child[k], it.pending + slots - 1, std::move(path)});
                 continue;
             }
             bool sphere = n.sphereMask >> k & 1;
             size_t end = size_t(n.child[k]) + n.count[k];
             if (n.child[k] < 0 || end > (sphere ? data.spheres.size() : data.triangles.size()))
                 return where + ": leaf range out of bounds";
-            for (size_t p = size_t(n.child[k]); p < end; ++p) {
-                int& seen = sphere ? sphereSeen[p] : triangleSeen[p];
-                std::string what = (sphere ? "sphere " : "triangle ") + std::to_string(p);
-                if (seen++) return what + " is in two leaves";
-                Box b = sphere ? sphereBox(data.spheres[p]) : triangleBox(data.triangles[p]);
-                for (const Box& above : path)
-                    if (!contains(above, b.lo, b.hi)) return where + ": a box on the path cuts " + what;
-            }
+            for (size_t p = size_t(n.child[k]); p < end; ++p)
+                if (std::string e = check.place(sphere, p, path, where); !e.empty()) return e;
         }
-    }
-    return firstUnvisited(triangleSeen, sphereSeen, nodeSeen);
+        return "";
+    });
 }
 
 }  // namespace rt
