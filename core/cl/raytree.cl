@@ -79,7 +79,7 @@ inline float3 RayTree_SpawnOrigin(const SceneData* sc, const Node* node, float s
 // Traces one ray of the given RT_RAY_* type: the closest hit, its facing normal, and its
 // shadow-ray occlusion counts. key: Sampling_PointKey of the ray's pixel, AA sample and depth,
 // which places its shadow samples on the lights (core/sampling.h).
-inline Node RayTree_NodeFromHit(const SceneData* sc, Ray ray, Hit hit, uint key);
+RT_INLINE Node RayTree_NodeFromHit(const SceneData* sc, Ray ray, Hit hit, uint key);
 inline Node RayTree_TraceNode(const SceneData* sc, Ray ray, int type, uint key) {
     RT_COUNT_RAY(sc, type);
     (void)type;
@@ -88,7 +88,7 @@ inline Node RayTree_TraceNode(const SceneData* sc, Ray ray, int type, uint key) 
 
 // The node of `ray` from its closest hit (Scene_Intersect's, or a packet's lane of the same
 // hit: wavefront/queue/queue_packet.cl): point, facing normal, material, shadow-ray counts.
-inline Node RayTree_NodeFromHit(const SceneData* sc, Ray ray, Hit hit, uint key) {
+RT_INLINE Node RayTree_NodeFromHit(const SceneData* sc, Ray ray, Hit hit, uint key) {
     Node n;
     n.dir = F3(ray.dir);
     n.object = hit.object;

@@ -147,7 +147,7 @@ typedef struct LightSamples {
     int count;  // 0 when the light is behind the surface
 } LightSamples;
 
-inline LightSamples Shade_LightSamplesFrom(const SceneData* sc, float3 p, float3 n, int j,
+RT_INLINE LightSamples Shade_LightSamplesFrom(const SceneData* sc, float3 p, float3 n, int j,
                                            uint key) {
     Light light = sc->lights[j];
     LightSamples s;
@@ -168,7 +168,7 @@ inline LightSamples Shade_LightSamplesFrom(const SceneData* sc, float3 p, float3
 }
 
 // Sample k of light j (LightSamples).
-inline float3 Shade_LightPoint(const LightSamples* s, uint key, int j, int k) {
+RT_INLINE float3 Shade_LightPoint(const LightSamples* s, uint key, int j, int k) {
     float3 q = s->center;
     if (s->radius > 0.0f) {
         float area = ((float)k + Sampling_Unit(key, j, k, 1)) / (float)s->count;
@@ -181,7 +181,7 @@ inline float3 Shade_LightPoint(const LightSamples* s, uint key, int j, int k) {
 
 // Occluded shadow rays toward light j from `origin`, the offset start of hit point p with
 // shading normal n; 0 when the light is behind the surface. key: as Shade_LightSamplesFrom.
-inline int Shade_OcclusionFrom(const SceneData* sc, float3 p, float3 n, float3 origin, int j,
+RT_INLINE int Shade_OcclusionFrom(const SceneData* sc, float3 p, float3 n, float3 origin, int j,
                                uint key) {
     LightSamples s = Shade_LightSamplesFrom(sc, p, n, j, key);
     int occluded = 0;
