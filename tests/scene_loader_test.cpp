@@ -1,5 +1,6 @@
 // Scene files: every malformed file fails with its exact one-line message, and the standard
 // scenes load with the objects, materials and settings they declare.
+#include "core/accel.h"
 #include "core/scene_loader.h"
 
 #include <gtest/gtest.h>
@@ -287,6 +288,22 @@ TEST(SceneLoader, RenderSectionAndAnglesParse) {
     EXPECT_EQ(s.defaults.aa, 4);
     EXPECT_EQ(s.defaults.shadowStrength, 0.5f);
     EXPECT_TRUE(s.defaults.adaptiveAa);
+}
+
+// Every structure --accel knows is a scene's render.accel too, and an unknown one is named.
+TEST(SceneLoader, RenderAccelNamesEveryStructure) {
+    for (const char* name : {"none", "bv", "grid", "bvh", "wide", "cwbvh"}) {
+        fs::path p = writeTemp(std::string(name) + ".json",
+                               std::string(R"({"camera": {"position": [0, 0, 0]}, "render": {"accel": ")") +
+                                   name + "\"}}");
+        EXPECT_STREQ(accelName(loadScene(p).defaults.accel), name);
+    }
+    fs::path bad = writeTemp("octree.json",
+                             R"({"camera": {"position": [0, 0, 0]}, "render": {"accel": "octree"}})");
+    EXPECT_NE(loadError(bad).find("/render/accel: must be one of none, bv, grid, bvh, wide, cwbvh, "
+                                  "got 'octree'"),
+              std::string::npos)
+        << loadError(bad);
 }
 
 TEST(SceneLoader, LookAtTurnsTowardTheTarget) {
