@@ -211,9 +211,7 @@ AccelData buildAccel(const Scene& scene, RenderOptions::Accel accel) {
             s.bytes = out.cwbvh.size() * sizeof(dev::CwbvhNode) +
                       out.cwbvhPrims.size() * sizeof(dev::CwbvhPrim);
             double slots = 0;
-            for (const dev::CwbvhNode& n : out.cwbvh)
-                for (int k = 0; k < 8; ++k)
-                    slots += (n.innerMask >> k & 1) || n.loX[k] != 255 || n.hiX[k] != 0;
+            for (const dev::CwbvhNode& n : out.cwbvh) slots += cwbvhChildren(n);
             s.detail = fmt("%.2f children/node, binned SAH %.1f ms, collapse %.1f ms",
                            out.cwbvh.empty() ? 0.0 : slots / double(out.cwbvh.size()), binaryMs,
                            msSince(t0) - binaryMs) +

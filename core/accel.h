@@ -62,6 +62,8 @@ void buildGrid(AccelData& data);
 void buildWide(AccelData& data);
 // Collapses data.bvh into data.cwbvh and data.cwbvhPrims (core/accel_cwbvh.cpp).
 void buildCwbvh(AccelData& data);
+// The slots of a cwbvh node that hold a child (inner or leaf; the others are empty).
+int cwbvhChildren(const dev::CwbvhNode& node);
 
 // Every primitive's box, padded so that float rounding in the slab and DDA tests never culls a
 // primitive that its intersection routine would hit. Spheres first, then triangles.

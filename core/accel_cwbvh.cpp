@@ -37,8 +37,6 @@ struct Kid {
     bool leaf() const { return bin < 0 && !split; }
 };
 
-Box boxOf(const dev::BvhNode& n) { return {{n.lo.x, n.lo.y, n.lo.z}, {n.hi.x, n.hi.y, n.hi.z}}; }
-
 Box merge(const Box& a, const Box& b) {
     Box m;
     for (int k = 0; k < 3; ++k) {
@@ -46,11 +44,6 @@ Box merge(const Box& a, const Box& b) {
         m.hi[k] = std::max(a.hi[k], b.hi[k]);
     }
     return m;
-}
-
-float halfArea(const Box& b) {
-    float dx = b.hi[0] - b.lo[0], dy = b.hi[1] - b.lo[1], dz = b.hi[2] - b.lo[2];
-    return dx * dy + dy * dz + dz * dx;
 }
 
 class Collapser {
@@ -254,6 +247,12 @@ bool emptySlot(const dev::CwbvhNode& n, int k) {
 }
 
 }  // namespace
+
+int cwbvhChildren(const dev::CwbvhNode& node) {
+    int n = 0;
+    for (int k = 0; k < kWidth; ++k) n += (node.innerMask >> k & 1) || !emptySlot(node, k);
+    return n;
+}
 
 void buildCwbvh(AccelData& data) {
     data.cwbvh.clear();

@@ -44,16 +44,20 @@ inline uint8_t quantHi(float origin, float step, float v) {
     return uint8_t(q);
 }
 
-// Surface area (halved) of a binary node's box: the collapse opens the largest child first.
-inline float area(const dev::BvhNode& n) {
-    float dx = n.hi.x - n.lo.x, dy = n.hi.y - n.lo.y, dz = n.hi.z - n.lo.z;
-    return dx * dy + dy * dz + dz * dx;
-}
-
-// An axis-aligned box, decoded or exact, for the checkers.
+// An axis-aligned box: a binary node's, a decoded slot's, a primitive's.
 struct Box {
     float lo[3], hi[3];
 };
+
+inline Box boxOf(const dev::BvhNode& n) {
+    return {{n.lo.x, n.lo.y, n.lo.z}, {n.hi.x, n.hi.y, n.hi.z}};
+}
+
+// Half the surface area: the collapses open the child of largest area first.
+inline float halfArea(const Box& b) {
+    float dx = b.hi[0] - b.lo[0], dy = b.hi[1] - b.lo[1], dz = b.hi[2] - b.lo[2];
+    return dx * dy + dy * dz + dz * dx;
+}
 
 // Slot k's decoded box in a WideNode or CwbvhNode, as the device computes it.
 template <typename Node>

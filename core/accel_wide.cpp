@@ -54,9 +54,11 @@ class Collapser {
         int width = std::min(kWidth, 1 + std::max(1, kStack - 1 - pending - height_[b]));
         while (int(kids.size()) < width) {
             int best = -1;
-            for (int k = 0; k < int(kids.size()); ++k)
-                if (bvh_[kids[k]].count == 0 && (best < 0 || area(bvh_[kids[k]]) > area(bvh_[kids[best]])))
+            for (int k = 0; k < int(kids.size()); ++k) {
+                const dev::BvhNode& c = bvh_[kids[k]];
+                if (c.count == 0 && (best < 0 || halfArea(boxOf(c)) > halfArea(boxOf(bvh_[kids[best]]))))
                     best = k;
+            }
             if (best < 0) break;
             int opened = kids[best];
             kids[best] = bvh_[opened].first;

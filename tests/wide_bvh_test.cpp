@@ -134,6 +134,8 @@ TEST(Cwbvh, ChildrenSitInTheSlotOfTheirCorner) {
     AccelData d = buildAccel(s, Accel::Cwbvh);
     ASSERT_EQ(checkCwbvh(d), "");
     const dev::CwbvhNode& root = d.cwbvh.at(0);
+    EXPECT_EQ(cwbvhChildren(root), 8);
+    EXPECT_EQ(cwbvhChildren(buildAccel(test::soup(0, 1, 3), Accel::Cwbvh).cwbvh.at(0)), 1);
     for (int k = 0; k < 8; ++k) {
         ASSERT_FALSE(root.innerMask >> k & 1) << "slot " << k;
         ASSERT_EQ(root.meta[k] >> 5, 0) << "slot " << k << " holds one sphere";
