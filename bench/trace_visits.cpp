@@ -11,6 +11,8 @@
 #include <tuple>
 #include <utility>
 
+#include "core/accel_quantize.h"
+
 namespace rt {
 namespace {
 
@@ -36,6 +38,17 @@ double hitTriangle(const dev::Triangle& t, const BatchRay& r) {
     return dot(e2, q) / det;
 }
 
+// One triangle of a leaf: counts the test and shortens best to a closer hit; true when an any-hit
+// query may stop there.
+bool testTriangle(const dev::Triangle& t, const BatchRay& r, bool anyHit, float& best,
+                  long long& tests) {
+    ++tests;
+    double h = hitTriangle(t, r);
+    if (!(h > 0 && h < best)) return false;
+    best = float(h);
+    return anyHit;
+}
+
 // Entry distances of a node's four children, as Wide_Enter computes them.
 void enter(const dev::WideNode& n, const BatchRay& r, const float inv[3], float tMax, float t[4]) {
     const float o[3] = {r.ox, r.oy, r.oz};
@@ -44,7 +57,7 @@ void enter(const dev::WideNode& n, const BatchRay& r, const float inv[3], float 
     for (int k = 0; k < 4; ++k) {
         float near = 0.f, far = tMax;
         for (int a = 0; a < 3; ++a) {
-            float step = std::bit_cast<float>(uint32_t(n.exponent[a]) << 23);
+            float step = quant::stepOf(n.exponent[a]);
             float base = ((&n.origin.x)[a] - o[a]) * inv[a], scale = step * inv[a];
             float t0 = float(lo[a][k]) * scale + base, t1 = float(hi[a][k]) * scale + base;
             near = std::max(near, std::min(t0, t1));
@@ -117,9 +130,7 @@ TraversalCost binaryTraversalCost(const AccelData& data, const std::vector<Batch
                 }
             } else {
                 for (int p = n.first; p < n.first + n.count && !done; ++p) {
-                    ++triangles;
-                    double h = hitTriangle(data.triangles[p], r);
-                    if (h > 0 && h < best) best = float(h), done = anyHit;
+                    done = testTriangle(data.triangles[p], r, anyHit, best, triangles);
                 }
                 if (done) break;
             }
@@ -155,9 +166,7 @@ TraversalCost wideTraversalCost(const AccelData& data, const std::vector<BatchRa
             for (int k = 0; k < 4 && !done; ++k) {
                 if (n.count[k] == 0 || !(t[k] < best) || (n.sphereMask >> k & 1)) continue;
                 for (int p = n.child[k]; p < n.child[k] + n.count[k] && !done; ++p) {
-                    ++triangles;
-                    double h = hitTriangle(data.triangles[p], r);
-                    if (h > 0 && h < best) best = float(h), done = anyHit;
+                    done = testTriangle(data.triangles[p], r, anyHit, best, triangles);
                 }
             }
             if (done) break;
@@ -207,7 +216,7 @@ TraversalCost cwbvhTraversalCost(const AccelData& data, const std::vector<BatchR
             for (int k = 0; k < 8; ++k) {
                 float near = 0.f, far = best;
                 for (int a = 0; a < 3; ++a) {
-                    float step = std::bit_cast<float>(uint32_t(n.exponent[a]) << 23);
+                    float step = quant::stepOf(n.exponent[a]);
                     float base = ((&n.origin.x)[a] - o[a]) * inv[a], scale = step * inv[a];
                     const uint8_t* qn = inv[a] < 0 ? hi[a] : lo[a];
                     const uint8_t* qf = inv[a] < 0 ? lo[a] : hi[a];
@@ -223,9 +232,7 @@ TraversalCost cwbvhTraversalCost(const AccelData& data, const std::vector<BatchR
             for (; entries && !done; entries &= entries - 1) {
                 const dev::CwbvhPrim& p = data.cwbvhPrims[size_t(n.primBase + std::countr_zero(entries))];
                 if (p.ref < 0) continue;  // a sphere: not counted
-                ++triangles;
-                double h = hitTriangle(data.triangles[size_t(p.ref)], r);
-                if (h > 0 && h < best) best = float(h), done = anyHit;
+                done = testTriangle(data.triangles[size_t(p.ref)], r, anyHit, best, triangles);
             }
             if (done) break;
             unsigned visit = 0;
