@@ -11,13 +11,13 @@
 #include <sstream>
 #include <string>
 #include <sys/wait.h>
-#include <unistd.h>
 
 #include <nlohmann/json.hpp>
 
 #include "core/cl_runtime.h"
 #include "core/version.h"
 #include "pipelines/registry.h"
+#include "scratch_dir.h"
 
 namespace {
 
@@ -29,8 +29,7 @@ struct Result {
 Result run(const std::string& args) {
     // One stderr file per call and process: CTest runs the cases in parallel.
     static int calls = 0;
-    std::string errFile = ::testing::TempDir() + "rtlab_cli_err_" + std::to_string(getpid()) +
-                          "_" + std::to_string(++calls) + ".txt";
+    std::string errFile = rt::test::scratchPath("err_" + std::to_string(++calls) + ".txt");
     std::string cmd = std::string(RTLAB_BIN_DIR) + "/rtlab " + args + " 2>" + errFile;
     Result r{};
     FILE* p = popen(cmd.c_str(), "r");
@@ -77,7 +76,7 @@ TEST_P(CliRejects, WithOneLineAndNonZeroExit) {
     EXPECT_EQ(lines(r.err), 1) << c.args << "\nstderr: " << r.err;
 }
 
-const std::string kOut = " -o " + ::testing::TempDir() + "cli_" + std::to_string(getpid()) + ".png";
+const std::string kOut = " -o " + rt::test::scratchPath("out.png");
 
 INSTANTIATE_TEST_SUITE_P(
     BadInput, CliRejects,
@@ -153,7 +152,7 @@ INSTANTIATE_TEST_SUITE_P(
 TEST(Cli, RendersWithEveryPipeline) {
     for (const std::string& name : rt::pipelineRegistry().names()) {
         const char* p = name.c_str();
-        std::string out = ::testing::TempDir() + "cli_" + std::to_string(getpid()) + "_" + p + ".exr";
+        std::string out = rt::test::scratchPath(name + ".exr");
         Result r = run(std::string("render scenes/shadows.json --size 32x24 --pipeline ") + p +
                        " --stats -o " + out);
         EXPECT_EQ(r.status, 0) << p << ": " << r.err;
@@ -213,8 +212,8 @@ TEST(Cli, CompareShowsRaysRateAndLaunches) {
 
 // --stats prints ray counts and rays/s; --stats-json writes them for scripts.
 TEST(Cli, StatsJsonCarriesTimesLaunchesAndRays) {
-    const std::string json = ::testing::TempDir() + "cli_stats_" + std::to_string(getpid()) + ".json";
-    const std::string png = ::testing::TempDir() + "cli_stats_" + std::to_string(getpid()) + ".png";
+    const std::string json = rt::test::scratchPath("stats.json");
+    const std::string png = rt::test::scratchPath("stats.png");
     Result r = run("render scenes/shadows.json --size 32x18 --pipeline mega --stats --stats-json " +
                    json + " -o " + png);
     ASSERT_EQ(r.status, 0) << r.err;
@@ -256,9 +255,7 @@ TEST(Cli, HelpExplainsEveryRenderFlag) {
 TEST(Cli, ShardsImportIntoOneSetInCellOrder) {
     std::string bench = std::string(RTLAB_BIN_DIR) + "/rtlab-bench";
     if (!std::filesystem::exists(bench)) GTEST_SKIP() << "rtlab-bench not built";
-    std::filesystem::path dir = ::testing::TempDir() + "cli_shards_" + std::to_string(getpid());
-    std::filesystem::remove_all(dir);
-    std::filesystem::create_directories(dir);
+    std::filesystem::path dir = rt::test::scratchPath("shards/");
     std::ofstream(dir / "tiny") << "repeats = 1\nwarmup = 0\ncount-rays = no\n"
                                    "reference-bounces = 2\nreference-shadow-samples = 1\n"
                                    "reference-aa = 1\n"

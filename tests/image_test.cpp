@@ -10,11 +10,11 @@
 #include <fstream>
 #include <functional>
 #include <string>
-#include <unistd.h>
 
 #include "core/error.h"
 #include "image/compare.h"
 #include "image/image_io.h"
+#include "scratch_dir.h"
 
 namespace {
 
@@ -25,9 +25,7 @@ class ImageIoTest : public ::testing::Test {
   protected:
     void SetUp() override {
         const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-        dir_ = fs::path(::testing::TempDir()) / ("rtlab_image_test_" + std::string(info->name()) + "_" + std::to_string(getpid()));
-        fs::remove_all(dir_);
-        fs::create_directories(dir_);
+        dir_ = rt::test::scratchPath(std::string(info->name()) + "/");
     }
     void TearDown() override { fs::remove_all(dir_); }
     fs::path dir_;

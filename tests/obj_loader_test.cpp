@@ -5,7 +5,6 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
-#include <unistd.h>
 #include <fstream>
 #include <glm/glm.hpp>
 #include <string>
@@ -13,6 +12,7 @@
 #include "core/error.h"
 #include "core/scene_loader.h"
 #include "tests/test_device.h"
+#include "scratch_dir.h"
 
 namespace rt {
 namespace {
@@ -180,8 +180,7 @@ TEST(ObjLoader, MissingMtlLibraryRendersWithTheDefaultMaterialAndSaysSo) {
 
 // A library that is a device or FIFO would be read forever: refused like a missing one.
 TEST(ObjLoader, MtlLibraryThatIsNoRegularFileIsRefusedNotRead) {
-    const fs::path dir = fs::path(::testing::TempDir()) / ("rtlab_mtl_" + std::to_string(::getpid()));
-    fs::create_directories(dir);
+    const fs::path dir = rt::test::scratchPath("mtl/");
     const fs::path obj = dir / "endless.obj";
     std::ofstream(obj) << "mtllib ../../../../../../../../dev/zero\nv 0 0 0\nv 1 0 0\nv 0 1 0\n"
                           "usemtl x\nf 1 2 3\n";

@@ -9,7 +9,6 @@
 #include <fstream>
 #include <random>
 
-#include <unistd.h>
 
 #include "core/error.h"
 #include "core/kernel_resources.h"
@@ -21,6 +20,7 @@
 #include "image/image_io.h"
 #include "pipelines/registry.h"
 #include "test_device.h"
+#include "scratch_dir.h"
 
 namespace rt {
 namespace {
@@ -122,12 +122,10 @@ TEST(Procedural, BumpLeavesTheNormalWithoutOctavesOrStrength) {
     EXPECT_GT(glm::length(c - n), 1e-3);
 }
 
-// A scene of one material written to a per-test, per-process file (tests may run in parallel).
+// A scene of one material written to a per-test file in this process's scratch folder.
 Scene loadText(const std::string& materials) {
     const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    const std::filesystem::path path =
-        std::filesystem::temp_directory_path() /
-        ("rtlab_procedural_" + std::string(info->name()) + "_" + std::to_string(getpid()) + ".json");
+    const std::filesystem::path path = rt::test::scratchPath(std::string(info->name()) + ".json");
     std::ofstream(path) << "{\"camera\": {\"position\": [0, 1, -3]}, \"materials\": {" << materials
                         << "}}";
     struct Remove {

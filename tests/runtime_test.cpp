@@ -5,12 +5,12 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <unistd.h>
 
 #include "core/cl_runtime.h"
 #include "core/error.h"
 #include "core/kernel_sources.h"
 #include "test_device.h"
+#include "scratch_dir.h"
 
 namespace rt {
 namespace {
@@ -53,8 +53,7 @@ TEST(Runtime, OutOfMemoryErrorsCarryTheHint) {
 }
 
 TEST(Runtime, RepeatBuildsComeFromTheCache) {
-    fs::path dir = fs::path(::testing::TempDir()) / ("rtlab_cache_test_" + std::to_string(getpid()));
-    fs::remove_all(dir);
+    fs::path dir = rt::test::scratchPath("cache");
     setenv("RTLAB_CACHE_DIR", dir.c_str(), 1);
     DeviceInfo d = test::device().device();
     {
@@ -75,9 +74,7 @@ TEST(Runtime, RepeatBuildsComeFromTheCache) {
 
 TEST(Runtime, BuildFailureCarriesTheBuildLog) {
     // A copy of the kernel tree with a syntax error injected into intersect.cl.
-    fs::path dir = fs::path(::testing::TempDir()) / ("rtlab_broken_kernels_" + std::to_string(getpid()));
-    fs::remove_all(dir);
-    fs::create_directories(dir);
+    fs::path dir = rt::test::scratchPath("broken_kernels/");
     for (const EmbeddedSource& s : embeddedKernelSources()) {
         std::ofstream out(dir / s.name);
         out << s.text;

@@ -4,7 +4,6 @@
 #include "core/scene_loader.h"
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <cmath>
 #include <filesystem>
@@ -14,6 +13,7 @@
 
 #include "core/error.h"
 #include "image/image_io.h"
+#include "scratch_dir.h"
 
 namespace rt {
 namespace {
@@ -30,12 +30,10 @@ std::string loadError(const fs::path& path, const ImageReader& reader = {}) {
     return "(no error)";
 }
 
-// Writes `text` to a fresh file in a per-test temporary directory.
+// Writes `text` to a fresh file in a per-test folder of this process's scratch folder.
 fs::path writeTemp(const std::string& name, const std::string& text) {
     const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    fs::path dir = fs::temp_directory_path() / ("rtlab_scene_test_" + std::string(info->name()) +
-                                                "_" + std::to_string(getpid()));
-    fs::create_directories(dir);
+    fs::path dir = rt::test::scratchPath(std::string(info->name()) + "/");
     std::ofstream(dir / name) << text;
     return dir / name;
 }

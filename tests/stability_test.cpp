@@ -13,7 +13,6 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <unistd.h>
 
 #include "core/error.h"
 #include "core/reference.h"
@@ -21,6 +20,7 @@
 #include "megakernel/megakernel.h"
 #include "pipelines/registry.h"
 #include "test_device.h"
+#include "scratch_dir.h"
 #include "wavefront/tree/wavefront.h"
 
 namespace rt::stress {
@@ -211,8 +211,7 @@ TEST(Stability, NanAndInfRaysReturnWithoutBadHits) {
 
 // ---- garbage geometry ----
 fs::path writeFile(const std::string& name, const std::string& text) {
-    fs::path dir = fs::path(::testing::TempDir()) / ("rtlab_stability_" + std::to_string(getpid()));
-    fs::create_directories(dir);
+    fs::path dir = rt::test::scratchPath("stability/");
     std::ofstream(dir / name) << text;
     return dir / name;
 }

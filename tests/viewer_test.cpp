@@ -4,9 +4,11 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -20,6 +22,7 @@
 
 #include "image/compare.h"
 #include "image/image_io.h"
+#include "scratch_dir.h"
 
 namespace {
 
@@ -44,8 +47,7 @@ std::string slurp(const std::string& path) {
 Result run(const std::string& cmd, const std::function<void()>& onFirstLine = {}) {
     // One stderr file per call and process: CTest runs the cases in parallel.
     static int calls = 0;
-    std::string errFile = ::testing::TempDir() + "rtlab_view_err_" + std::to_string(getpid()) +
-                          "_" + std::to_string(++calls) + ".txt";
+    std::string errFile = rt::test::scratchPath("err_" + std::to_string(++calls) + ".txt");
     Result r{};
     FILE* p = popen((cmd + " 2>" + errFile).c_str(), "r");
     std::array<char, 4096> line;
@@ -68,13 +70,9 @@ int lines(const std::string& s) {
     return n;
 }
 
-// A folder of this process's own under the test temp folder: CTest runs the cases in parallel,
-// and two processes must never share a file.
-std::string privateDir(const std::string& name) {
-    std::string dir = ::testing::TempDir() + "rtlab_view_" + std::to_string(getpid()) + "_" + name + "/";
-    fs::create_directories(dir);
-    return dir;
-}
+// A folder inside this process's own scratch folder: CTest runs the cases in parallel, and two
+// processes (or an earlier run's leftovers) must never share a file.
+std::string privateDir(const std::string& name) { return rt::test::scratchPath(name + "/"); }
 
 // Writes `text` into a FIFO as soon as a reader opens it, so that a reader sees exactly this text
 // at its next open, whatever the speed of the device; gives up after two minutes (reader died).
@@ -149,8 +147,7 @@ TEST_F(Viewer, SplitViewHalvesMatchTheirPipelinesRenders) {
 
 TEST_F(Viewer, SplitPairPicksWhichPipelineIsOnWhichSide) {
     const std::string scene = "scenes/spheres.json";
-    std::string shotPath = ::testing::TempDir() + "viewer_split_pair.png";
-    fs::remove(shotPath);
+    std::string shotPath = privateDir("split_pair") + "split.png";
     Result r = run(kXvfb + kBin + "/rtlab-view " + scene +
                    " --frames 30 --split wave,mega --no-overlay --scale 1 --screenshot " + shotPath);
     ASSERT_EQ(r.status, 0) << r.out << r.err;
@@ -170,7 +167,7 @@ TEST_F(Viewer, SceneErrorOnReloadKeepsTheOldSceneWithOneLine) {
     // The scene is a FIFO: the viewer's first read gets the good scene, and the reload at
     // frame 6 gets a broken one. Each open blocks until the other side is there, so the order
     // holds on a slow CPU and on a GPU that renders the six frames in milliseconds alike.
-    ASSERT_EQ(mkfifo(scene.c_str(), 0600), 0) << scene;
+    ASSERT_EQ(mkfifo(scene.c_str(), 0600), 0) << scene << ": " << std::strerror(errno);
     std::thread good([&] { EXPECT_TRUE(feedFifo(scene, slurp("scenes/spheres.json"))); });
     std::thread broken;
     // The first stdout line comes after the scene was read and closed.

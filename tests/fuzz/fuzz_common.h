@@ -3,7 +3,7 @@
 // line), anything else is a bug and aborts so that libFuzzer keeps the input.
 #pragma once
 
-#include <unistd.h>
+#include <stdlib.h>
 
 #include <cstdio>
 #include <cstdlib>
@@ -20,9 +20,14 @@ namespace rt::fuzz {
 
 inline const std::filesystem::path& workDir() {
     static const std::filesystem::path dir = [] {
-        std::filesystem::path d = std::filesystem::temp_directory_path() /
-                                  ("rtlab-fuzz-" + std::to_string(getpid()));
-        std::filesystem::create_directories(d);
+        // mkdtemp, not the process id: containers reuse ids, and an earlier run's folder may remain.
+        // scripts/fuzz points TMPDIR at a folder of build-fuzz/ that it empties before each run.
+        std::string pattern = (std::filesystem::temp_directory_path() / "rtlab-fuzz-XXXXXX").string();
+        if (!mkdtemp(pattern.data())) {
+            std::perror(pattern.c_str());
+            std::abort();
+        }
+        std::filesystem::path d = pattern;
         // A model the fuzzed scenes can name ("meshes": [{"file": "m.obj", ...}]).
         std::ofstream(d / "m.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n"
                                       "f 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3 4\n";
