@@ -73,10 +73,16 @@ inline Hit Hit_None(float tMax) {
     return hit;
 }
 
+#ifdef RT_HAS_PLANES
 // The planes, one by one (they are infinite: no structure holds them). True when anyHit and one
 // was accepted, so that the caller can stop there.
+//
+// Only programs whose scene has planes see this function or a call to it. NVIDIA's OpenCL
+// compiler (driver 580.159.04) did not finish building, in minutes, a program with spheres and
+// triangles in which a stub of it that returned false sat between Scene_Query's sphere and
+// triangle loops (clBuildProgram busy on one core, nothing launched). Without the stub it builds
+// them in seconds.
 inline bool Scene_Planes(const SceneData* sc, Ray ray, Hit* hit, bool anyHit) {
-#ifdef RT_HAS_PLANES
     for (int i = 0; i < sc->settings.planeCount; ++i) {
         float t = Plane_Intersect(ray, f3(sc->planes[i].normal), sc->planes[i].offset);
         if (t > 0.0f && t < hit->t) {
@@ -86,14 +92,9 @@ inline bool Scene_Planes(const SceneData* sc, Ray ray, Hit* hit, bool anyHit) {
             if (anyHit) return true;
         }
     }
-#else
-    (void)sc;
-    (void)ray;
-    (void)hit;
-    (void)anyHit;
-#endif
     return false;
 }
+#endif
 
 // Closest hit with 0 < t < tMax, or with anyHit the first one found (shadow rays stop there).
 // Without a grid or BVH the order is spheres, planes, triangles (mesh by mesh) and ties keep
@@ -102,7 +103,9 @@ inline Hit Scene_Query(const SceneData* sc, Ray ray, float tMax, bool anyHit) {
     Hit hit = Hit_None(tMax);
 #if defined(RT_ACCEL_GRID) || defined(RT_ACCEL_BVH) || defined(RT_ACCEL_WIDE) || \
     defined(RT_ACCEL_CWBVH)
+#ifdef RT_HAS_PLANES
     if (Scene_Planes(sc, ray, &hit, anyHit)) return hit;
+#endif
 #ifdef RT_ACCEL_GRID
     Grid_Query(sc, ray, &hit, anyHit);
 #elif defined(RT_ACCEL_WIDE)
@@ -117,7 +120,9 @@ inline Hit Scene_Query(const SceneData* sc, Ray ray, float tMax, bool anyHit) {
     for (int i = 0; i < sc->settings.sphereCount; ++i)
         if (Hit_Sphere(sc, i, ray, &hit) && anyHit) return hit;
 #endif
+#ifdef RT_HAS_PLANES
     if (Scene_Planes(sc, ray, &hit, anyHit)) return hit;
+#endif
 #ifdef RT_HAS_TRIANGLES
     for (int m = 0; m < sc->settings.meshCount; ++m)
         if (Mesh_Query(sc, m, ray, &hit, anyHit) && anyHit) return hit;

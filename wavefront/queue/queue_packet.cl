@@ -12,7 +12,13 @@
 // below tMax (the closest, or with anyHit the first), or a miss with t = tMax.
 inline Hit QueuePacket_Planes(const SceneData* sc, Ray ray, float tMax, bool anyHit) {
     Hit hit = Hit_None(tMax);
+#ifdef RT_HAS_PLANES
     Scene_Planes(sc, ray, &hit, anyHit);
+#else
+    (void)sc;
+    (void)ray;
+    (void)anyHit;
+#endif
     return hit;
 }
 
