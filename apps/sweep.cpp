@@ -32,6 +32,7 @@ struct SweepArgs {
     std::string config, device, devices, shard, out, sceneDir, kernelDir, exportScenes;
     std::vector<std::string> importDirs;
     double timeLimit = 0;
+    double cellTimeout = bench::kDefaultCellTimeoutS;
     bool noCharts = false;
 } sweepArgs;
 
@@ -236,6 +237,13 @@ void addSweep(CLI::App& app) {
         ->take_all();
     sweepCmd->add_option("--time-limit", a.timeLimit,
                          "Stop before a cell that would end after this many seconds");
+    sweepCmd->add_option("--cell-timeout", a.cellTimeout,
+                         "A cell (program builds included) that has not finished after this many "
+                         "seconds fails with \"timeout\"; after a stuck compiler the sweep goes on "
+                         "in a fresh context, after a stuck device it stops with the rows so far "
+                         "written; the exit status is then 1. 0: no limit")
+        ->check(CLI::Range(0.0, 1e7))
+        ->capture_default_str();
     sweepCmd->add_option("--scene-dir", a.sceneDir, "Folder holding <scene>.json [scenes/]");
     sweepCmd->add_option("--kernel-dir", a.kernelDir, "Read kernel sources from this source tree");
     sweepCmd->add_flag("--no-charts", a.noCharts, "Write CSV and JSON only");
@@ -251,6 +259,7 @@ int runSweepCommand() {
 
     nlohmann::json meta, rows = nlohmann::json::array();
     std::vector<PendingFrame> frames;
+    int timedOut = 0;
     std::map<std::string, bool> shardComplete;  // by --shard spec ("" for none)
     int shardCount = 0;
     if (!a.importDirs.empty()) {
@@ -327,12 +336,14 @@ int runSweepCommand() {
                                       ? std::getenv("RTLAB_KERNEL_DIR")
                                       : a.kernelDir);
         o.timeLimitS = a.timeLimit;
+        o.cellTimeoutS = a.cellTimeout;
         bench::SweepSummary s = bench::runSweep(config, o, nullptr,
                                                 [&](const nlohmann::json& row, const Image* image) {
             if (image) frames.push_back({rows.size(), *image});
             rows.push_back(row);
         });
         meta = s.meta;
+        timedOut = s.timedOut;
     }
     if (!a.importDirs.empty()) {
         if (shardCount > 0) {
@@ -361,6 +372,11 @@ int runSweepCommand() {
     std::printf("wrote %s and %s.csv (%zu rows)\n", json.string().c_str(),
                 (out / config.name).string().c_str(), rows.size());
     if (!a.noCharts) drawCharts(json);
+    if (timedOut) {
+        std::fprintf(stderr, "rtlab sweep: %d cell(s) timed out (their rows say where)\n",
+                     timedOut);
+        return 1;
+    }
     return 0;
 }
 

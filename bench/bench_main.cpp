@@ -14,18 +14,22 @@
 #include <chrono>
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <map>
 #include <memory>
+#include <set>
 #include <string>
 #include <string_view>
 #include <vector>
 
 #include "bench/measure.h"
 #include "bench/pfm.h"
+#include "bench/smoke.h"
 #include "bench/sweep_config.h"
 #include "bench/sweep_runner.h"
+#include "bench/watchdog.h"
 #include "core/accel.h"
 #include "core/error.h"
 #include "core/scene_loader.h"
@@ -55,6 +59,12 @@ Google Benchmark mode (every --benchmark_* flag works, e.g. --benchmark_filter=R
                         not auto-iterate for minutes) [5]
   --warmup=N            untimed frames before timing [2]
   --count-rays=yes|no   one untimed frame with device ray counters [yes]
+  --cell-timeout=SECONDS  a benchmark repetition or sweep cell (program builds included) that
+                        has not finished by then fails with "timeout"; 0 = no limit [600].
+                        Google Benchmark mode: the later benchmarks are then not run. Sweep
+                        mode: after a stuck compiler the sweep goes on in a fresh context; after
+                        a stuck device it stops with every row so far written, and --resume
+                        goes on past the cell. Either way the exit status is 1
 Sweep mode (no Google Benchmark; what `rtlab sweep --import` reads):
   --sweep=SWEEP --out=DIR [--time-limit=SECONDS] [--device=SPEC | --devices=SPEC]
         [--shard=i/N] [--resume=ROWS,...]
@@ -66,6 +76,14 @@ Sweep mode (no Google Benchmark; what `rtlab sweep --import` reads):
                         `rtlab sweep --import` both output folders afterwards. Groups with
                         stop-after-failure (bench/sweeps/limits) skip the settings no smaller
                         than one that failed and write them as rows with status "skipped"
+Smoke check (scripts/gpu-smoke runs it on a GPU host before any GPU result is called done):
+  --smoke [--scenes=...] [--sizes=...] [--pipelines=...] [--accels=...] [--shard=i/N]
+                        one frame of every scene x size x pipeline (both megakernel layouts) x
+                        structure, one line each: PASS when it ran, every pixel is finite and
+                        it agrees with the megakernel's frame (tree layout, the scene's own
+                        structure) as two structures must; FAIL and why otherwise. Defaults:
+                        empty,spheres,shadows,cornell,mesh,envmap,divergence at 160x90 and
+                        1920x1080, every pipeline and structure. Exit status 1 when a cell fails
 Both:
   --scene-dir=DIR       where <scene>.json are [scenes/ of the checkout]; cubemap faces must be
                         .pfm (rtlab-bench reads no PNG: see `rtlab sweep --export-scenes`)
@@ -93,8 +111,10 @@ struct Flags {
     std::string cells, sweep, out, device, sceneDir, kernelDir, resume, shard;
     std::vector<std::string> devices;
     int repeats = 5, warmup = 2, frames = 5;
-    bool countRays = true, listDevices = false;
+    bool countRays = true, listDevices = false, smoke = false;
+    std::set<std::string> given;  // the flags on the command line
     double timeLimit = 0;
+    double cellTimeout = kDefaultCellTimeoutS;
 };
 
 std::vector<std::string> split(const std::string& s) {
@@ -125,6 +145,10 @@ Flags parseFlags(int argc, char** argv) {
             f.listDevices = true;
             continue;
         }
+        if (a == "--smoke") {
+            f.smoke = true;
+            continue;
+        }
         size_t eq = a.find('=');
         std::string key = a.substr(0, eq);
         std::string value;
@@ -142,6 +166,14 @@ Flags parseFlags(int argc, char** argv) {
                             std::to_string(hi));
             return v;
         };
+        auto seconds = [&] {
+            char* end = nullptr;
+            double v = std::strtod(value.c_str(), &end);
+            if (value.empty() || *end || !(v >= 0) || v > 1e7)
+                throw Error(key + " " + value + ": expected seconds, 0 or more (0: no limit)");
+            return v;
+        };
+        f.given.insert(key);
         if (key == "--scenes") f.scenes = split(value);
         else if (key == "--pipelines") f.pipelines = split(value);
         else if (key == "--sizes") f.sizes = split(value);
@@ -161,6 +193,7 @@ Flags parseFlags(int argc, char** argv) {
         else if (key == "--warmup") f.warmup = integer(0, 100);
         else if (key == "--count-rays") f.countRays = value == "yes" || value == "true";
         else if (key == "--time-limit") f.timeLimit = std::atof(value.c_str());
+        else if (key == "--cell-timeout") f.cellTimeout = seconds();
         else throw Error("unknown flag " + key + " (see --help)");
     }
     return f;
@@ -201,13 +234,16 @@ int sweepCommand(const Flags& f) {
     o.readImage = readFace;
     o.sources = KernelSources(f.kernelDir);
     o.timeLimitS = f.timeLimit;
+    o.cellTimeoutS = f.cellTimeout;
     for (const std::string& file : split(f.resume)) {
         std::ifstream in(file);
         if (!in) throw Error("--resume " + file + ": cannot read");
         std::string line;
         while (std::getline(in, line)) {
             nlohmann::json row = nlohmann::json::parse(line, nullptr, false);
-            if (!row.is_discarded() && row.value("status", "") == "ok" && row.contains("cell"))
+            // A cell that timed out is not run again either: it would most likely hang again.
+            if (!row.is_discarded() && row.contains("cell") &&
+                (row.value("status", "") == "ok" || row.value("failure", "") == "timeout"))
                 o.skip.insert(row["cell"].get<std::string>());
         }
     }
@@ -233,16 +269,46 @@ int sweepCommand(const Flags& f) {
         unexpectedErrors += row.value("status", "") == "error" && !row.value("stop_after_failure", false);
     });
     writeMeta(s.meta);
+    std::string stopped = s.complete ? ""
+                          : s.meta.contains("stopped_by") ? " (stopped by a timeout on the device)"
+                                                          : " (stopped by the time limit)";
     std::fprintf(stderr, "sweep %s: %d of %d cells measured, %d failed, %d not run after a failure, "
                          "%d done before, in %s%s -> %s\n",
                  config.name.c_str(), s.measured, s.cells, s.failed, s.notRun, s.skipped,
-                 formatDuration(s.seconds).c_str(), s.complete ? "" : " (stopped by the time limit)",
-                 out.string().c_str());
+                 formatDuration(s.seconds).c_str(), stopped.c_str(), out.string().c_str());
+    if (s.timedOut) {
+        std::fprintf(stderr, "rtlab-bench: %d cell(s) timed out (their rows say where)\n",
+                     s.timedOut);
+        return 1;
+    }
     if (unexpectedErrors) {
         std::fprintf(stderr, "rtlab-bench: %d cell(s) failed (their rows say why)\n", unexpectedErrors);
         return 1;
     }
     return 0;
+}
+
+// ---- smoke check ----
+
+int smokeCommand(const Flags& f) {
+    for (const char* only : {"--sweep", "--cells", "--bounces", "--resume", "--devices"})
+        if (f.given.count(only)) throw Error(std::string(only) + ": not with --smoke");
+    SmokeOptions o = defaultSmokeOptions();
+    if (f.given.count("--scenes")) o.scenes = f.scenes;
+    if (f.given.count("--sizes")) o.sizes = f.sizes;
+    if (f.given.count("--pipelines")) o.pipelines = f.pipelines;
+    if (f.given.count("--accels")) o.accels = f.accels;
+    for (const std::string& a : o.accels) (void)parseAccel(a);  // a bad name ends here, in one line
+    o.sceneDir = f.sceneDir;
+    o.readImage = readFace;
+    o.sources = KernelSources(f.kernelDir);
+    o.device = f.device;
+    if (!f.shard.empty()) o.shard = parseShard(f.shard);
+    o.cellTimeoutS = f.cellTimeout;
+    SmokeSummary s = runSmoke(o, stdout);
+    std::printf("smoke: %d of %d cells passed%s\n", s.passed, s.cells,
+                s.stopped ? " (stopped: a device call did not return)" : "");
+    return s.failed ? 1 : 0;
 }
 
 // ---- Google Benchmark mode ----
@@ -277,11 +343,20 @@ void reportProgress(const std::string& name, double msPerFrame, bool ok) {
                  formatDuration(left).c_str());
 }
 
+// --cell-timeout, and the benchmark that passed it (the later ones are then not run: the
+// device's state after a stuck call is unknown).
+double cellTimeoutS = kDefaultCellTimeoutS;
+std::string timedOut;
+
 void renderBenchmark(benchmark::State& state, const std::string& name, ClContext* cl,
                      const Scene* scene, std::string kind, RenderOptions o, int warmup,
                      bool countRays) {
     if (interrupted) {
         state.SkipWithError("interrupted");
+        return;
+    }
+    if (!timedOut.empty()) {
+        state.SkipWithError(("not run: " + timedOut + " timed out before it").c_str());
         return;
     }
     struct Report {  // one progress line per repetition, however it ends
@@ -290,12 +365,35 @@ void renderBenchmark(benchmark::State& state, const std::string& name, ClContext
         double ms = 0;
         ~Report() { reportProgress(name, ms, !state.error_occurred()); }
     } report{state, name};
+    // Every device call of the repetition runs under the cell time limit; work that overruns it
+    // keeps the pipeline (shared) and is never waited for again.
+    const auto deadline = std::chrono::steady_clock::now() +
+                          std::chrono::duration<double>(cellTimeoutS);
+    auto guarded = [&](auto work) {
+        double left = cellTimeoutS <= 0 ? 0
+                      : std::max(1e-3, std::chrono::duration<double>(
+                                           deadline - std::chrono::steady_clock::now()).count());
+        if (withinSeconds(left, work)) return true;
+        timedOut = name;
+        std::string building = cl->building();
+        char why[128];
+        std::snprintf(why, sizeof why, "timeout: did not finish within %g s (--cell-timeout): ",
+                      cellTimeoutS);
+        state.SkipWithError((why + (building.empty() ? "the device or its driver did not return"
+                                                     : "the OpenCL compiler did not finish "
+                                                       "building " + building)).c_str());
+        return false;
+    };
     size_t before = cl->allocatedBytes();
-    std::unique_ptr<Pipeline> pipeline;
+    std::shared_ptr<Pipeline> pipeline;
     try {
         pipeline = makePipeline(kind, cl);
         o.countRays = false;
-        for (int i = 0; i < warmup; ++i) pipeline->render(*scene, o);
+        if (!guarded([pipeline, scene, o, warmup] {
+                for (int i = 0; i < warmup; ++i) pipeline->render(*scene, o);
+                return true;
+            }))
+            return;
     } catch (const std::exception& e) {
         state.SkipWithError(e.what());
         return;
@@ -308,7 +406,11 @@ void renderBenchmark(benchmark::State& state, const std::string& name, ClContext
             break;
         }
         try {
-            pipeline->render(*scene, o);
+            if (!guarded([pipeline, scene, o] {
+                    pipeline->render(*scene, o);
+                    return true;
+                }))
+                break;
         } catch (const std::exception& e) {
             state.SkipWithError(e.what());
             break;
@@ -343,7 +445,11 @@ void renderBenchmark(benchmark::State& state, const std::string& name, ClContext
         m.deviceMs = state.iterations() ? devSum / double(state.iterations()) : 0;
         try {
             o.countRays = true;
-            pipeline->render(*scene, o);
+            if (!guarded([pipeline, scene, o] {
+                    pipeline->render(*scene, o);
+                    return true;
+                }))
+                return;
             m.rays = pipeline->stats().rays;
             m.raysCounted = pipeline->stats().raysCounted;
             m.extras = pipeline->stats().extras;
@@ -462,6 +568,7 @@ int benchmarkCommand(const Flags& f) {
         }
     if (cells.empty()) throw Error("no benchmark matches the selection (see --help)");
     progress.total = int(cells.size() * targets.size()) * f.repeats;
+    cellTimeoutS = f.cellTimeout;
     std::signal(SIGINT, onInterrupt);
     size_t ran = benchmark::RunSpecifiedBenchmarks();
     benchmark::Shutdown();
@@ -471,6 +578,13 @@ int benchmarkCommand(const Flags& f) {
         return 130;
     }
     if (ran == 0) throw Error("no benchmark matches --benchmark_filter");
+    if (!timedOut.empty()) {
+        // The stuck call may still use its context: it must outlive this function.
+        for (Target& t : targets) (void)t.cl.release();
+        std::fprintf(stderr, "rtlab-bench: %s timed out (--cell-timeout %g); the benchmarks after "
+                             "it were not run\n", timedOut.c_str(), cellTimeoutS);
+        return 1;
+    }
     if (progress.failed) {
         std::fprintf(stderr, "rtlab-bench: %d of %d repetitions failed (their errors are above)\n",
                      progress.failed, progress.done);
@@ -495,10 +609,22 @@ int main(int argc, char** argv) {
         benchmark::Initialize(&argc, argv);
         Flags f = parseFlags(argc, argv);
         if (f.listDevices) return listDevicesCommand();
-        if (!f.sweep.empty()) return sweepCommand(f);
-        return benchmarkCommand(f);
+        int status = f.smoke            ? smokeCommand(f)
+                     : !f.sweep.empty() ? sweepCommand(f)
+                                        : benchmarkCommand(f);
+        // A thread is still stuck in the driver: exit without destructors or exit handlers,
+        // which could wait on it.
+        if (workAbandoned()) {
+            std::fflush(nullptr);
+            std::_Exit(status);
+        }
+        return status;
     } catch (const std::exception& e) {
         std::fprintf(stderr, "rtlab-bench: %s\n", e.what());
+        if (workAbandoned()) {
+            std::fflush(nullptr);
+            std::_Exit(1);
+        }
         return 1;
     }
 }

@@ -14,8 +14,10 @@
 #include <optional>
 #include <thread>
 
+#include "bench/frame_check.h"
 #include "bench/measure.h"
 #include "bench/sweep_schedule.h"
+#include "bench/watchdog.h"
 #include "core/accel.h"
 #include "core/error.h"
 #include "core/version.h"
@@ -223,30 +225,10 @@ nlohmann::json rowJson(const SweepConfig& config, const Cell& c, const Measureme
     return row;
 }
 
-// The largest |difference| of two frames of one size (NaN in both at one place counts as equal,
-// in one only as infinite), or -1 when the sizes differ.
+// The largest |difference| of two frames of one size, or -1 when the sizes differ.
 double maxDifference(const Image& a, const Image& b) {
-    if (a.width != b.width || a.height != b.height || a.rgb.size() != b.rgb.size()) return -1;
-    double worst = 0;
-    for (size_t i = 0; i < a.rgb.size(); ++i) {
-        float x = a.rgb[i], y = b.rgb[i];
-        if (std::isnan(x) || std::isnan(y)) {
-            if (std::isnan(x) != std::isnan(y)) worst = INFINITY;
-            continue;
-        }
-        worst = std::max(worst, x == y ? 0.0 : std::fabs(double(x) - double(y)));
-    }
-    return worst;
-}
-
-// Pixels with a channel that is NaN or infinite: never right, whatever the scene.
-long long nonFinitePixels(const Image& image) {
-    long long bad = 0;
-    for (size_t i = 0; i + 2 < image.rgb.size(); i += 3)
-        if (!std::isfinite(image.rgb[i]) || !std::isfinite(image.rgb[i + 1]) ||
-            !std::isfinite(image.rgb[i + 2]))
-            ++bad;
-    return bad;
+    FrameAgreement d = compareFrames(a, b, 0);
+    return d.sameSize ? d.maxAbs : -1;
 }
 
 // The host's load averages: other work on the machine skews CPU-device timings (PoCL) most.
@@ -354,16 +336,18 @@ struct SweepState {
 SweepSummary runSweep(const SweepConfig& config, const SweepRunOptions& options,
                       const std::function<void(const nlohmann::json&)>& onStart,
                       const RowSink& sink) {
-    std::map<std::string, Scene> scenes;
+    // Shared: a measurement that overruns the cell time limit keeps its scene and context.
+    std::map<std::string, std::shared_ptr<const Scene>> scenes;
     std::map<std::string, nlohmann::json> sceneInfo;
     for (const std::string& name : sweepScenes(config)) {
-        scenes.emplace(name, loadScene(scenePath(name, options.sceneDir), options.readImage));
-        sceneInfo[name] = sceneJson(scenes.at(name));
+        scenes.emplace(name, std::make_shared<const Scene>(
+                                 loadScene(scenePath(name, options.sceneDir), options.readImage)));
+        sceneInfo[name] = sceneJson(*scenes.at(name));
     }
     // The whole sweep's cells and units, whatever shard and resume leave of them: cell and unit
     // indices are then the same on every machine.
     const std::vector<Cell> cells =
-        expandCells(config, [&](const std::string& n) -> const Scene& { return scenes.at(n); });
+        expandCells(config, [&](const std::string& n) -> const Scene& { return *scenes.at(n); });
     std::vector<WorkUnit> units;
     std::vector<char> inShard(cells.size(), 0);
     {
@@ -386,8 +370,9 @@ SweepSummary runSweep(const SweepConfig& config, const SweepRunOptions& options,
     std::vector<DeviceInfo> devices = options.devices.empty()
                                           ? std::vector<DeviceInfo>{selectDevice(options.device)}
                                           : selectDevices(options.devices);
-    std::vector<std::unique_ptr<ClContext>> contexts;
-    for (const DeviceInfo& d : devices) contexts.push_back(std::make_unique<ClContext>(d, options.sources));
+    std::vector<std::shared_ptr<ClContext>> contexts;
+    for (const DeviceInfo& d : devices)
+        contexts.push_back(std::make_shared<ClContext>(d, options.sources));
     nlohmann::json device = deviceJson(devices.front());
     summary.cells = int(state.order.size());
     summary.meta = {{"sweep", config.name},
@@ -398,6 +383,7 @@ SweepSummary runSweep(const SweepConfig& config, const SweepRunOptions& options,
                     {"started", utcNow()},
                     {"host_load_start", loadAverage()},
                     {"cells", state.order.size()},
+                    {"cell_timeout_s", options.cellTimeoutS},
                     {"skipped_as_done", summary.skipped}};
     summary.meta.update(device);
     if (!options.shard.whole()) {
@@ -444,9 +430,9 @@ SweepSummary runSweep(const SweepConfig& config, const SweepRunOptions& options,
     };
 
     auto worker = [&](size_t w) {
-        ClContext& cl = *contexts[w];
-        nlohmann::json where = deviceJson(cl.device());
-        where["device_index"] = cl.device().index;
+        std::shared_ptr<ClContext> cl = contexts[w];  // replaced after a stuck program build
+        nlohmann::json where = deviceJson(cl->device());
+        where["device_index"] = cl->device().index;
         std::string tag = devices.size() > 1 ? " on d" + std::to_string(w) : "";
         for (;;) {
             size_t u;
@@ -505,13 +491,56 @@ SweepSummary runSweep(const SweepConfig& config, const SweepRunOptions& options,
                     // (NVIDIA reserves private memory for the largest kernel it ran), and on the
                     // H100 that made a wavefront cell fail after the megakernel's B=11 cells, yet
                     // run in a new process.
-                    std::optional<ClContext> own;
-                    if (c.stopAfterFailure) own.emplace(cl.device(), options.sources);
-                    std::vector<Measurement> got =
-                        measureCells(own ? *own : cl, scenes.at(c.scene), variants, c.warmup,
-                                     c.repeats, c.countRays, keep, cap);
+                    std::shared_ptr<ClContext> ctx =
+                        c.stopAfterFailure
+                            ? std::make_shared<ClContext>(cl->device(), options.sources)
+                            : cl;
+                    std::shared_ptr<const Scene> scene = scenes.at(c.scene);
+                    const double limit = options.cellTimeoutS * double(run.size());
+                    auto got = withinSeconds(limit, [=, warmup = c.warmup, repeats = c.repeats,
+                                                     countRays = c.countRays] {
+                        return measureCells(*ctx, *scene, variants, warmup, repeats, countRays,
+                                            keep, cap);
+                    });
                     seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-                    for (size_t r = 0; r < run.size(); ++r) ms[run[r]] = std::move(got[r]);
+                    if (got) {
+                        for (size_t r = 0; r < run.size(); ++r) ms[run[r]] = std::move((*got)[r]);
+                    } else {
+                        // The thread keeps ctx and scene; this worker never touches ctx again.
+                        const std::string compiling = ctx->building();
+                        char head[160];
+                        std::snprintf(head, sizeof head, "did not finish within %g s (cell time "
+                                      "limit %g s%s): ", limit, options.cellTimeoutS,
+                                      run.size() > 1 ? (" x " + std::to_string(run.size()) +
+                                                        " cells measured together").c_str()
+                                                     : "");
+                        std::string why = head + (compiling.empty()
+                                                      ? std::string("the device or its driver "
+                                                                    "did not return")
+                                                      : "the OpenCL compiler did not finish "
+                                                        "building " + compiling);
+                        for (size_t k : run) {
+                            Measurement& m = ms[k];
+                            m.error = why;
+                            m.failure = FailureKind::Timeout;
+                        }
+                        std::lock_guard<std::mutex> hold(state.lock);
+                        summary.timedOut += int(run.size());
+                        if (!compiling.empty() && ctx == cl) {
+                            // Nothing of this context runs on the device: go on in a new one.
+                            cl = std::make_shared<ClContext>(cl->device(), options.sources);
+                        } else if (compiling.empty()) {
+                            // What the device runs, or the driver's state, is unknown: what is
+                            // measured after it could not be trusted. Stop here.
+                            std::fprintf(stderr, "\nsweep %s: %s timed out on the device; "
+                                                 "stopping (rows so far are written; --resume "
+                                                 "goes on past it)\n",
+                                         config.name.c_str(), cells[run.front()].label().c_str());
+                            summary.complete = false;
+                            summary.meta["stopped_by"] = "timeout: " + cells[run.front()].label();
+                            state.stop = true;
+                        }
+                    }
                 }
                 double batchCost = 0;
                 for (size_t k : run) batchCost += cellCost(cells[k]);
@@ -607,6 +636,7 @@ SweepSummary runSweep(const SweepConfig& config, const SweepRunOptions& options,
     summary.meta["complete"] = summary.complete;
     summary.meta["measured"] = summary.measured;
     summary.meta["failed"] = summary.failed;
+    summary.meta["timed_out"] = summary.timedOut;
     summary.meta["not_run"] = summary.notRun;
     return summary;
 }

@@ -29,6 +29,12 @@ struct SweepRunOptions {
     ImageReader readImage;              // for cubemap faces
     KernelSources sources;
     double timeLimitS = 0;              // stop before a cell that would end past this; 0 = none
+    // A cell that has not finished after this many seconds (k cells measured interleaved: k
+    // times as long) is recorded as failed with "timeout". When the OpenCL compiler was what
+    // did not return, the sweep goes on in a fresh context; when the device or driver did, it
+    // stops there with every row so far written (--resume then goes on past that cell).
+    // 0 = no limit.
+    double cellTimeoutS = 0;
     std::set<std::string> skip;         // Cell::key()s measured by an earlier run (--resume)
 };
 
@@ -40,7 +46,8 @@ struct SweepSummary {
     nlohmann::json meta;   // sweep, config text, device, commit, settings, start and end time
     int cells = 0, measured = 0, failed = 0, skipped = 0;
     int notRun = 0;        // skipped by stop-after-failure (a row with status "skipped" each)
-    bool complete = true;  // false when the time limit stopped it
+    int timedOut = 0;      // cells over the cell time limit (counted in `failed` too)
+    bool complete = true;  // false when the time limit or a timeout on the device stopped it
     double seconds = 0;
 };
 
@@ -60,6 +67,10 @@ nlohmann::json sweepSettingsJson(const SweepConfig& config);
 
 // "2m05s"
 std::string formatDuration(double seconds);
+
+// The default cell time limit: far above what any cell of the standard sweeps takes on a GPU,
+// program builds included, and above the longest PoCL cells of the cpu and limits sweeps.
+constexpr double kDefaultCellTimeoutS = 600;
 
 // How a row's cell ended, for the limits sweep: "ran", "ran (tiled into K tiles)" (a global
 // ray tree did not fit the device's max allocation or the memory budget in one piece),

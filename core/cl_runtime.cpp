@@ -5,6 +5,8 @@
 
 #include <algorithm>
 #include <cctype>
+#include <chrono>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -296,9 +298,30 @@ cl::Program ClContext::program(const std::string& mainFile, const std::vector<st
     }
 
     cl::Program p;
+    const std::string what = mainFile + " for " + device_.name;
+    {
+        std::lock_guard<std::mutex> hold(buildingLock_);
+        building_ = what;
+    }
+    struct Done {  // clears building_ however the build ends
+        ClContext& cl;
+        ~Done() {
+            std::lock_guard<std::mutex> hold(cl.buildingLock_);
+            cl.building_.clear();
+        }
+    } done{*this};
+    const auto start = std::chrono::steady_clock::now();
+    if (announce_) {
+        std::fprintf(stderr, "compiling %s ...\n", what.c_str());
+        std::fflush(stderr);
+    }
     try {
         p = cl::Program(context_, source);
         p.build({device_.device}, options.c_str());
+        if (announce_)
+            std::fprintf(stderr, "compiled %s in %.1f s\n", mainFile.c_str(),
+                         std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
+                             .count());
     } catch (const cl::Error& e) {
         std::string log = buildLog(p);
         throw Error("building " + mainFile + " for " + device_.name + " failed with " +
@@ -328,6 +351,11 @@ cl::Program ClContext::program(const std::string& mainFile, const std::vector<st
         }
     }
     return p;
+}
+
+std::string ClContext::building() const {
+    std::lock_guard<std::mutex> hold(buildingLock_);
+    return building_;
 }
 
 static std::string mib(double bytes) {

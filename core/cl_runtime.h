@@ -4,8 +4,10 @@
 
 #include <CL/opencl.hpp>
 
+#include <atomic>
 #include <cstdint>
 #include <map>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -58,6 +60,13 @@ public:
     cl::Program program(const std::string& mainFile, const std::vector<std::string>& defines);
     // How the last program() call was satisfied: "memory", "disk" or "built".
     const std::string& lastProgramSource() const { return lastSource_; }
+    // The program being compiled from source right now ("megakernel.cl for NVIDIA H200"), or
+    // empty. Safe to call from another thread: a watchdog tells a stuck compiler from a stuck
+    // device by it.
+    std::string building() const;
+    // Source builds print "compiling FILE for DEVICE ..." and their time on stderr (off by
+    // default; front ends turn it on, so that a cold first run is not silent).
+    static void announceBuilds(bool on) { announce_ = on; }
 
     // Checks size against CL_DEVICE_MAX_MEM_ALLOC_SIZE and the global memory left before
     // allocating; `what` names the buffer in the error. Zero bytes allocates a 16-byte stub.
@@ -74,6 +83,9 @@ private:
     std::map<std::string, cl::Program> programs_;
     std::string lastSource_;
     size_t allocated_ = 0;
+    mutable std::mutex buildingLock_;
+    std::string building_;
+    static inline std::atomic<bool> announce_{false};
 };
 
 }  // namespace rt

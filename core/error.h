@@ -18,6 +18,7 @@ enum class FailureKind {
     OpenCl,         // "opencl"        any other OpenCL error
     InvalidOption,  // "invalid_option"
     Skipped,        // "skipped"       not run (stop-after-failure)
+    Timeout,        // "timeout"       did not finish within the cell time limit
     Other,          // "other"
 };
 
@@ -30,6 +31,7 @@ inline const char* failureKindName(FailureKind k) {
         case FailureKind::OpenCl: return "opencl";
         case FailureKind::InvalidOption: return "invalid_option";
         case FailureKind::Skipped: return "skipped";
+        case FailureKind::Timeout: return "timeout";
         case FailureKind::Other: return "other";
     }
     return "other";

@@ -18,22 +18,7 @@ GBENCH_S=${RTLAB_GPU_GBENCH_S:-60}  # time for the Google Benchmark cells at the
 export LD_LIBRARY_PATH=$C/bin${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}
 export RTLAB_CACHE_DIR=/tmp/rtlab-cache
 
-find_nvidia_opencl() {
-    # The ICD loader (the machine's own; none is carried) finds vendors through .icd files, which a
-    # container image may lack although the driver brings libnvidia-opencl.
-    grep -qsi nvidia /etc/OpenCL/vendors/*.icd && return 0
-    local lib
-    lib=$(ldconfig -p 2>/dev/null | awk '/libnvidia-opencl\.so\.1/ { print $NF; exit }')
-    [ -n "$lib" ] || lib=$(find /usr/local/nvidia /usr/lib /usr/lib64 /usr/local /opt \
-                               -name 'libnvidia-opencl.so.1' 2>/dev/null | head -1)
-    if [ -z "$lib" ]; then
-        echo "== no libnvidia-opencl.so.1 on this machine: no NVIDIA OpenCL platform"
-        return 1
-    fi
-    mkdir -p /tmp/icd && echo "$lib" >/tmp/icd/nvidia.icd
-    export OCL_ICD_VENDORS=/tmp/icd
-    echo "== NVIDIA OpenCL: $lib (through OCL_ICD_VENDORS=/tmp/icd)"
-}
+source "$C/gpu-env.sh"  # find_nvidia_opencl
 
 pack_frames() {
     local w=$1

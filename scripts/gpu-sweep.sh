@@ -8,7 +8,8 @@
 #       commit) in build-gpu/, and fills carry/gpu-sweep/ (git-ignored) with rtlab-bench, the
 #       libraries it needs beside it (libbenchmark.so.1debian, libtinyobjloader; not libOpenCL.so.1:
 #       the GPU host's own ICD loader is used),
-#       the scenes with .pfm cubemap faces, the sweep file and run.sh. --resume DIR (a folder
+#       the scenes with .pfm cubemap faces, the sweep file, run.sh and smoke.sh (scripts/gpu-smoke,
+#       the check to pass before any GPU result is called done). --resume DIR (a folder
 #       copied back from an earlier run) makes the new run skip the cells that one measured.
 #   scripts/gpu-sweep.sh command
 #       Prints the steps below.
@@ -21,6 +22,7 @@
 #       sweep's cell order.
 #
 # On the GPU host (from the folder that holds carry/gpu-sweep/):
+#   OUT=/path/to/out bash carry/gpu-sweep/smoke.sh     (the smoke check: every cell must PASS)
 #   OUT=/path/to/out bash carry/gpu-sweep/run.sh
 # The sweep stops itself after RTLAB_GPU_TIME_LIMIT seconds (480 by default; a session or job
 # with a time limit sets it below that) and `prepare --resume` continues it. RTLAB_GPU_DEVICES=all
@@ -85,6 +87,8 @@ prepare() {
         i=$((i + 1))
     done
     cp "$BUILD/src/scripts/gpu-sweep-run.sh" "$CARRY/run.sh"
+    cp "$BUILD/src/scripts/gpu-smoke" "$CARRY/smoke.sh"
+    cp "$BUILD/src/scripts/gpu-env.sh" "$CARRY/gpu-env.sh"
     echo "gpu-sweep: $CARRY ready ($(du -sh "$CARRY" | cut -f1)), commit" \
          "$(git -C "$BUILD/src" rev-parse --short=12 HEAD), sweep $sweep"
     command_help

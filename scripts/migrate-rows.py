@@ -18,7 +18,7 @@ import sys
 
 TITLES = {"mega": "megakernel", "wave": "wavefront"}
 KINDS = ("private_tree", "tree_row", "out_of_memory", "opencl", "invalid_option", "skipped",
-         "other")
+         "timeout", "other")
 # The few spellings the limits sweep used before the vocabulary was fixed.
 OLD_KINDS = {"private tree": "private_tree", "tree row": "tree_row", "allocation": "out_of_memory",
              "OpenCL error": "opencl"}

@@ -20,10 +20,12 @@ FAILURES = {"private_tree": "private ray tree over rtlab's 256 KiB cap",
             "opencl": "OpenCL error",
             "invalid_option": "invalid option",
             "skipped": "not run",
+            "timeout": "did not finish within the cell time limit",
             "other": "error"}
 FAILURES_SHORT = {"private_tree": "private tree > limit", "tree_row": "tree row > budget",
                   "out_of_memory": "out of memory", "opencl": "OpenCL error",
-                  "invalid_option": "invalid option", "skipped": "not run", "other": "error"}
+                  "invalid_option": "invalid option", "skipped": "not run",
+                  "timeout": "timed out", "other": "error"}
 # Rows written before issue 14 do not record their tree's bytes per pixel; their tree had one
 # 48-byte node (flags inside) per slot and nothing else. Newer rows carry tree_pixel_bytes.
 LEGACY_NODE_BYTES = 48

@@ -232,6 +232,7 @@ TEST(LimitsSweep, FailureKindsAreSetWhereThrown) {
     EXPECT_EQ(std::string(failureKindName(FailureKind::OutOfMemory)), "out_of_memory");
     EXPECT_EQ(std::string(failureKindName(FailureKind::OpenCl)), "opencl");
     EXPECT_EQ(std::string(failureKindName(FailureKind::InvalidOption)), "invalid_option");
+    EXPECT_EQ(std::string(failureKindName(FailureKind::Timeout)), "timeout");
     EXPECT_EQ(std::string(failureKindName(FailureKind::None)), "");
 }
 
