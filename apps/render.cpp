@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -42,17 +43,17 @@ std::string mib(double bytes) {
 
 // Which acceleration structure ran (issue 5); its size and build time when the pipeline
 // reported them (DeviceScene::accelStats).
-void printAccel(const AccelStats& a, RenderOptions::Accel chosen) {
+void printAccel(std::FILE* out, const AccelStats& a, RenderOptions::Accel chosen) {
     if (a.name.empty()) {
-        std::printf("  accel        %s\n", accelName(chosen));
+        std::fprintf(out, "  accel        %s\n", accelName(chosen));
         return;
     }
     if (a.name == "none") {
-        std::printf("  accel        none (preliminary checks only)\n");
+        std::fprintf(out, "  accel        none (preliminary checks only)\n");
         return;
     }
     const char* unit = a.name == "bvh" || a.name == "wide" || a.name == "cwbvh" ? "nodes" : a.name == "grid" ? "cells" : "volumes";
-    std::printf("  accel        %s, %lld %s (%s), %s; built in %.1f ms\n", a.name.c_str(), a.nodes,
+    std::fprintf(out, "  accel        %s, %lld %s (%s), %s; built in %.1f ms\n", a.name.c_str(), a.nodes,
                 unit, mib(double(a.bytes)).c_str(), a.detail.c_str(), a.buildMs);
 }
 
@@ -126,6 +127,32 @@ int runDevices() {
     return 0;
 }
 
+// A statistic for people and scripts alike: milliseconds and other floats to 3 decimals (a
+// microsecond), the rest as they are, arrays and objects element by element.
+nlohmann::json rounded(const nlohmann::json& v) {
+    if (v.is_number_float()) return std::round(v.get<double>() * 1e3) / 1e3;
+    if (v.is_array() || v.is_object()) {
+        nlohmann::json out = v;
+        for (auto& x : out) x = rounded(x);
+        return out;
+    }
+    return v;
+}
+
+// "2 built (13.2 s), 1 from the disk cache": how a frame's programs were obtained.
+std::string describePrograms(const ClContext::ProgramCounts& c) {
+    std::string out;
+    auto part = [&](int n, const char* what) {
+        if (n) out += (out.empty() ? "" : ", ") + std::to_string(n) + " " + what;
+    };
+    part(c.built, "built");
+    part(c.fromDisk, "from the disk cache");
+    part(c.fromMemory, "already in memory");
+    char ms[48];
+    std::snprintf(ms, sizeof ms, " (%.1f ms)", c.ms);
+    return (out.empty() ? "none" : out) + (c.built || c.fromDisk ? ms : "");
+}
+
 int runRender() {
     RenderArgs& a = renderArgs;
     const PipelineInfo& info = pipelineInfo(a.pipeline);
@@ -138,24 +165,30 @@ int runRender() {
     std::optional<ClContext> cl;
     if (!info.reference) cl.emplace(selectDevice(a.flags.device), a.flags.kernelSources());
     std::unique_ptr<Pipeline> pipeline = makePipeline(info.name, cl ? &*cl : nullptr);
-    if (!a.statsJson.empty()) {
+    const bool jsonToStdout = a.statsJson == "-";
+    if (!a.statsJson.empty() && !jsonToStdout) {
         std::ofstream probe(a.statsJson, std::ios::app);
         if (!probe) throw Error("--stats-json " + a.statsJson + ": cannot write there");
     }
     Image image;
+    ClContext::ProgramCounts before = cl ? cl->programCounts() : ClContext::ProgramCounts{};
     {
         ProgressBar bar("rendering");
         pipeline->setProgress(bar.callback());
         image = pipeline->render(scene, options);
         pipeline->setProgress({});
     }
+    ClContext::ProgramCounts programs = cl ? cl->programCounts() : ClContext::ProgramCounts{};
+    programs.built -= before.built;
+    programs.fromDisk -= before.fromDisk;
+    programs.fromMemory -= before.fromMemory;
+    programs.ms -= before.ms;
     writeImage(image, output);
-    FrameStats timed = pipeline->stats();
+    FrameStats s = pipeline->stats();
+    // The frame's host time without the program builds and loads it waited for.
+    const double frameHostMs = std::max(0.0, s.hostMs - programs.ms);
     if (a.stats || !a.statsJson.empty()) {
-        FrameStats& s = timed;
         // Ray counts come from one more, untimed frame: the device counters' atomics cost time.
-        RayCounts rays{};
-        bool counted = false;
         if (!info.reference) {
             RenderOptions counting = options;
             counting.countRays = true;
@@ -163,73 +196,108 @@ int runRender() {
             pipeline->setProgress(bar.callback());
             pipeline->render(scene, counting);
             pipeline->setProgress({});
-            rays = pipeline->stats().rays;
-            counted = pipeline->stats().raysCounted;
-            s.rays = rays;
-            s.raysCounted = counted;
+            s.rays = pipeline->stats().rays;
+            s.raysCounted = pipeline->stats().raysCounted;
         }
-        uint64_t totalRays = 0;
-        for (uint64_t n : rays) totalRays += n;
-        const double raysPerS = s.deviceMs > 0 ? double(totalRays) / (s.deviceMs * 1e-3) : 0;
-        if (!a.statsJson.empty()) {
-            nlohmann::json j = {{"scene", scene.name}, {"pipeline", info.name},
-                                {"width", options.width}, {"height", options.height},
-                                {"bounces", options.bounces}, {"commit", RTLAB_COMMIT},
-                                {"device", cl ? cl->device().name : std::string("cpu reference")},
-                                {"driver", cl ? cl->device().driver : std::string()},
-                                {"device_ms", s.deviceMs}, {"host_ms", s.hostMs},
-                                {"launches", s.launches}, {"longest_launch_ms", s.longestLaunchMs},
-                                {"tiles", s.tiles}, {"private_bytes", s.privateBytes},
-                                {"extras", s.extras}};
-            for (const auto& [name, ms] : s.kernelMs) j["kernel_ms"][name] = ms;
-            for (const auto& [name, bytes] : s.buffers) j["buffers"][name] = bytes;
-            if (counted) {
-                for (int t = 0; t < RT_RAY_TYPES; ++t) j["rays"][rayTypeName(t)] = rays[t];
-                j["rays_per_s"] = raysPerS;
-            }
+    }
+    uint64_t totalRays = 0;
+    for (uint64_t n : s.rays) totalRays += n;
+    const double raysPerS = s.deviceMs > 0 ? double(totalRays) / (s.deviceMs * 1e-3) : 0;
+    const bool capped = options.maxLaunchMs > 0;
+    if (!a.statsJson.empty()) {
+        nlohmann::json j = {
+            {"scene", scene.name},
+            {"pipeline", info.name},
+            {"width", options.width},
+            {"height", options.height},
+            {"bounces", options.bounces},
+            {"shadow_samples", options.shadowSamples},
+            {"aa", options.aa},
+            {"adaptive", options.adaptiveAa},
+            {"accel", accelName(options.accel)},
+            {"layout", info.supports.layouts
+                           ? (options.layout == RenderOptions::Layout::Tree ? "tree" : "weighted")
+                           : "-"},
+            {"max_launch_ms", options.maxLaunchMs},
+            {"commit", RTLAB_COMMIT},
+            {"device", cl ? cl->device().name : std::string("cpu reference")},
+            {"driver", cl ? cl->device().driver : std::string()},
+            {"device_ms", rounded(s.deviceMs)},
+            {"host_ms", rounded(frameHostMs)},
+            {"programs", {{"built", programs.built},
+                          {"from_disk", programs.fromDisk},
+                          {"in_memory", programs.fromMemory},
+                          {"ms", rounded(programs.ms)}}},
+            {"launches", s.launches},
+            {"longest_launch_ms", rounded(s.longestLaunchMs)},
+            {"private_bytes", s.privateBytes},
+            {"extras", rounded(s.extras)}};
+        if (info.supports.tiling) j["tiles"] = s.tiles;
+        for (const auto& [name, ms] : s.kernelMs) j["kernel_ms"][name] = rounded(ms);
+        for (const auto& [name, bytes] : s.buffers) j["buffers"][name] = bytes;
+        if (s.raysCounted) {
+            for (int t = 0; t < RT_RAY_TYPES; ++t) j["rays"][rayTypeName(t)] = s.rays[t];
+            j["rays_per_s"] = std::round(raysPerS);
+        }
+        if (jsonToStdout) {
+            std::printf("%s\n", j.dump(2).c_str());
+        } else {
             std::ofstream f(a.statsJson);
             f << j.dump(2) << "\n";
             if (!f) throw Error("--stats-json " + a.statsJson + ": cannot write");
         }
     }
     if (a.stats) {
-        const FrameStats& s = timed;
-        std::printf("scene %s, %dx%d, bounces %d, C=%d, N=%lld nodes/pixel, pipeline %s\n",
+        // With the JSON on standard output, the table goes to standard error.
+        std::FILE* out = jsonToStdout ? stderr : stdout;
+        std::fprintf(out, "scene %s, %dx%d, bounces %d, shadow samples %d, aa %d%s, accel %s, C=%d, "
+                    "N=%lld nodes/pixel, pipeline %s",
                     scene.name.c_str(), options.width, options.height, options.bounces,
-                    scene.branching(), treeNodeCount(scene.branching(), options.bounces),
-                    info.name.c_str());
-        if (cl)
-            std::printf("device %s, program %s\n", cl->device().label().c_str(),
-                        s.program.c_str());
+                    options.shadowSamples, options.aa, options.adaptiveAa ? " adaptive" : "",
+                    accelName(options.accel), scene.branching(),
+                    treeNodeCount(scene.branching(), options.bounces), info.name.c_str());
+        if (info.supports.layouts)
+            std::fprintf(out, " (layout %s)",
+                        options.layout == RenderOptions::Layout::Tree ? "tree" : "weighted");
+        std::fprintf(out, "\n");
+        if (cl) {
+            std::fprintf(out, "device %s\n", cl->device().label().c_str());
+            std::fprintf(out, "  programs     %s\n", describePrograms(programs).c_str());
+        }
         for (const auto& [name, ms] : s.kernelMs)
-            std::printf("  %-12s %10.3f ms\n", name.c_str(), ms);
-        if (!info.reference) std::printf("  %-12s %10.3f ms\n", "device total", s.deviceMs);
-        std::printf("  %-12s %10.3f ms\n", "host", s.hostMs);
+            std::fprintf(out, "  %-12s %10.3f ms\n", name.c_str(), ms);
+        if (!info.reference) std::fprintf(out, "  %-12s %10.3f ms\n", "device total", s.deviceMs);
+        std::fprintf(out, "  %-12s %10.3f ms%s\n", "host", frameHostMs,
+                    programs.ms > 0 ? " (the frame alone: program builds and loads not counted)" : "");
         for (const auto& [name, bytes] : s.buffers)
-            std::printf("  %-12s %zu bytes (%s)\n", name.c_str(), bytes, mib(double(bytes)).c_str());
+            std::fprintf(out, "  %-12s %zu bytes (%s)\n", name.c_str(), bytes, mib(double(bytes)).c_str());
         if (info.supports.tiling)
-            std::printf("  tiles        %d\n", s.tiles);  // the tree's bytes a pixel: in extras
+            std::fprintf(out, "  tiles        %d (launches of rows; memory_tiles: those the tree's memory "
+                        "needed)\n",
+                        s.tiles);
         if (!info.reference) {
-            std::printf("  private      %zu bytes per work-item\n", s.privateBytes);
-            printAccel(s.accel, options.accel);
+            std::fprintf(out, "  private      %zu bytes per work-item\n", s.privateBytes);
+            printAccel(out, s.accel, options.accel);
         }
         for (const auto& [key, value] : s.extras.items())
-            std::printf("  %-12s %s\n", key.c_str(), value.dump().c_str());
-        std::printf("  launches     %d, longest %.3f ms", s.launches, s.longestLaunchMs);
-        if (options.maxLaunchMs > 0) std::printf(" (--max-launch-ms %g caps each launch)", options.maxLaunchMs);
-        std::printf("\n");
+            std::fprintf(out, "  %-12s %s\n", key.c_str(), rounded(value).dump().c_str());
+        std::fprintf(out, "  launches     %d, longest %.3f ms", s.launches, s.longestLaunchMs);
+        if (capped)
+            std::fprintf(out, " (--max-launch-ms %g: %s)", options.maxLaunchMs,
+                        s.longestLaunchMs <= options.maxLaunchMs
+                            ? "every launch kept to it"
+                            : "some launch passed it; pieces are sized from launches timed "
+                              "before them");
+        std::fprintf(out, "\n");
         if (s.raysCounted) {
-            uint64_t total = 0;
-            for (int t = 0; t < RT_RAY_TYPES; ++t) {
-                std::printf("  rays %-7s %llu\n", rayTypeName(t), (unsigned long long)s.rays[t]);
-                total += s.rays[t];
-            }
+            for (int t = 0; t < RT_RAY_TYPES; ++t)
+                std::fprintf(out, "  rays %-7s %llu\n", rayTypeName(t), (unsigned long long)s.rays[t]);
             if (s.deviceMs > 0)
-                std::printf("  rays/s       %.3g (all types, over the timed frame's device time)\n",
-                            double(total) / (s.deviceMs * 1e-3));
+                std::fprintf(out, "  rays/s       %.3g (all types, over the timed frame's device time)\n",
+                            raysPerS);
         }
     }
-    std::printf("wrote %s\n", output.c_str());
+    if (!jsonToStdout) std::printf("wrote %s\n", output.c_str());
     return 0;
 }
 
@@ -250,7 +318,8 @@ void addRender(CLI::App& app) {
                         "Print kernel times (profiling events), memory use, launches and ray "
                         "counts (from one more, untimed frame)");
     renderCmd->add_option("--stats-json", a.statsJson,
-                          "Write the same statistics as JSON to this file, for scripts");
+                          "Write the same statistics as JSON to this file (- for standard output, "
+                          "then nothing else is printed there), for scripts");
 }
 
 void addDevices(CLI::App& app) {
@@ -262,6 +331,7 @@ int run(CLI::App& app) {
     if (renderCmd && renderCmd->parsed()) return runRender();
     if (devicesCmd && devicesCmd->parsed()) return runDevices();
     if (compareParsed()) return runCompare();
+    if (int listed = runLists(); listed >= 0) return listed;
     return runSweepCommand();
 }
 

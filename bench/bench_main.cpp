@@ -228,6 +228,7 @@ int sweepCommand(const Flags& f) {
     o.device = f.device;
     if (!f.devices.empty() && !f.device.empty())
         throw Error("--device and --devices: give one (--devices=" + f.device + " for one device)");
+    ClContext::announceBuilds(true);  // a cold GPU host spends seconds on each program
     for (const std::string& d : f.devices) o.devices += (o.devices.empty() ? "" : ",") + d;
     if (!f.shard.empty()) o.shard = parseShard(f.shard);
     o.sceneDir = f.sceneDir;
@@ -305,6 +306,7 @@ int smokeCommand(const Flags& f) {
     o.device = f.device;
     if (!f.shard.empty()) o.shard = parseShard(f.shard);
     o.cellTimeoutS = f.cellTimeout;
+    ClContext::announceBuilds(true);  // the GPU host's log shows what each process compiles
     SmokeSummary s = runSmoke(o, stdout);
     std::printf("smoke: %d of %d cells passed%s\n", s.passed, s.cells,
                 s.stopped ? " (stopped: a device call did not return)" : "");

@@ -208,6 +208,12 @@ DeviceInfo selectDevice(const std::string& requested) {
     }
     for (const DeviceInfo& d : devices)  // "cpu" / "gpu": the first device of that type
         if (lower(d.type) == lower(spec)) return d;
+    if (lower(spec) == "gpu" || lower(spec) == "cpu") {
+        std::string have;
+        for (const DeviceInfo& d : devices) have += (have.empty() ? "" : ", ") + d.name + " [" + d.type + "]";
+        throw Error(source + " " + spec + ": no " + (lower(spec) == "gpu" ? "GPU" : "CPU") +
+                    " device found (OpenCL sees: " + have + ")");
+    }
     for (const DeviceInfo& d : devices)
         if (lower(d.name).find(lower(spec)) != std::string::npos ||
             lower(d.platformName).find(lower(spec)) != std::string::npos)
@@ -265,8 +271,14 @@ cl::Program ClContext::program(const std::string& mainFile, const std::vector<st
                       options + "|" + source;
     if (auto it = programs_.find(key); it != programs_.end()) {
         lastSource_ = "memory";
+        ++counts_.fromMemory;
         return it->second;
     }
+    const auto start = std::chrono::steady_clock::now();
+    auto spent = [&] {
+        counts_.ms +=
+            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    };
     char hash[32];
     std::snprintf(hash, sizeof hash, "%016llx", (unsigned long long)fnv1a(key));
     std::filesystem::path dir = cacheDir();
@@ -291,6 +303,8 @@ cl::Program ClContext::program(const std::string& mainFile, const std::vector<st
                 p.build({device_.device}, options.c_str());
                 programs_[key] = p;
                 lastSource_ = "disk";
+                ++counts_.fromDisk;
+                spent();
                 return p;
             } catch (const cl::Error&) {
             }
@@ -310,7 +324,6 @@ cl::Program ClContext::program(const std::string& mainFile, const std::vector<st
             cl.building_.clear();
         }
     } done{*this};
-    const auto start = std::chrono::steady_clock::now();
     if (announce_) {
         std::fprintf(stderr, "compiling %s ...\n", what.c_str());
         std::fflush(stderr);
@@ -318,10 +331,17 @@ cl::Program ClContext::program(const std::string& mainFile, const std::vector<st
     try {
         p = cl::Program(context_, source);
         p.build({device_.device}, options.c_str());
-        if (announce_)
-            std::fprintf(stderr, "compiled %s in %.1f s\n", mainFile.c_str(),
+        if (announce_) {
+            size_t kernels = 0;
+            try {
+                kernels = p.getInfo<CL_PROGRAM_NUM_KERNELS>();
+            } catch (const cl::Error&) {
+            }
+            std::fprintf(stderr, "compiled %s (%zu kernels) in %.1f s\n", mainFile.c_str(),
+                         kernels,
                          std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
                              .count());
+        }
     } catch (const cl::Error& e) {
         std::string log = buildLog(p);
         throw Error("building " + mainFile + " for " + device_.name + " failed with " +
@@ -330,6 +350,7 @@ cl::Program ClContext::program(const std::string& mainFile, const std::vector<st
     }
     programs_[key] = p;
     lastSource_ = "built";
+    ++counts_.built;
     if (!file.empty()) {
         try {
             auto bins = p.getInfo<CL_PROGRAM_BINARIES>();
@@ -350,6 +371,7 @@ cl::Program ClContext::program(const std::string& mainFile, const std::vector<st
         } catch (const cl::Error&) {
         }
     }
+    spent();
     return p;
 }
 

@@ -60,6 +60,13 @@ public:
     cl::Program program(const std::string& mainFile, const std::vector<std::string>& defines);
     // How the last program() call was satisfied: "memory", "disk" or "built".
     const std::string& lastProgramSource() const { return lastSource_; }
+    // Every program() call so far, by how it was satisfied, and the wall time spent in builds
+    // and binary loads: what a frame's host time holds besides the frame.
+    struct ProgramCounts {
+        int built = 0, fromDisk = 0, fromMemory = 0;
+        double ms = 0;
+    };
+    const ProgramCounts& programCounts() const { return counts_; }
     // The program being compiled from source right now ("megakernel.cl for NVIDIA H200"), or
     // empty. Safe to call from another thread: a watchdog tells a stuck compiler from a stuck
     // device by it.
@@ -82,6 +89,7 @@ private:
     cl::CommandQueue queue_;
     std::map<std::string, cl::Program> programs_;
     std::string lastSource_;
+    ProgramCounts counts_;
     size_t allocated_ = 0;
     mutable std::mutex buildingLock_;
     std::string building_;

@@ -35,24 +35,22 @@ Image MegakernelPipeline::render(const Scene& scene, const RenderOptions& o) {
         scene_ = std::make_unique<DeviceScene>(cl_, scene, o.accel);
     stats_.accel = scene_->accelStats();
     size_t bytes = size_t(o.width) * o.height * 3 * sizeof(float);
+    const bool adaptive = o.adaptiveAa && o.aa > 1;
+    // The image, and for adaptive anti-aliasing the centre samples. On a new size both are
+    // forgotten before allocating, so that a failure leaves no stale size behind.
     if (bytes != imageBytes_) {
-        // Forget the old size before allocating, so that a failure below leaves no buffer and no
-        // size behind: the next frame then allocates afresh instead of using a stale buffer.
-        if (imageBytes_) cl_.release(2 * imageBytes_);
+        cl_.release(imageBytes_ + centerBytes_);
         image_ = centers_ = cl::Buffer();
-        imageBytes_ = 0;
-        cl::Buffer image = cl_.allocate(bytes, CL_MEM_READ_WRITE, "the image buffer");
-        try {
-            centers_ = cl_.allocate(bytes, CL_MEM_READ_WRITE, "the adaptive-AA centre buffer");
-        } catch (...) {
-            cl_.release(bytes);
-            throw;
-        }
-        image_ = image;
+        imageBytes_ = centerBytes_ = 0;
+        image_ = cl_.allocate(bytes, CL_MEM_READ_WRITE, "the image buffer");
         imageBytes_ = bytes;
     }
+    if (adaptive && centerBytes_ != bytes) {
+        centers_ = cl_.allocate(bytes, CL_MEM_READ_WRITE, "the adaptive-AA centre buffer");
+        centerBytes_ = bytes;
+    }
     stats_.addBuffer("image", bytes);
-    stats_.addBuffer("adaptive-AA centres", bytes);
+    if (adaptive) stats_.addBuffer("adaptive-AA centres", bytes);
 
     dev::RenderSettings settings = makeSettings(scene, o);
     Image out(o.width, o.height);
@@ -64,7 +62,6 @@ Image MegakernelPipeline::render(const Scene& scene, const RenderOptions& o) {
         key += " rows " + std::to_string(first) + "-" + std::to_string(last);
     planner_.begin(o.maxLaunchMs, key + (o.adaptiveAa ? " adaptive" : ""), o.width,
                    columnStep(cl_.device()));
-    const bool adaptive = o.adaptiveAa && o.aa > 1;
     // Progress in rows x passes; the adaptive centres cover one row more on each side.
     const int centreFirst = std::max(0, first - 1), centreLast = std::min(o.height, last + 1);
     const long long total = (last - first) + (adaptive ? centreLast - centreFirst : 0);

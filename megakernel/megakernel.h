@@ -11,7 +11,8 @@ namespace rt {
 class MegakernelPipeline : public Pipeline {
 public:
     explicit MegakernelPipeline(ClContext& cl) : cl_(cl) {}
-    ~MegakernelPipeline() override { cl_.release(2 * imageBytes_); }  // keep the device-memory tally true
+    // Keeps the context's device-memory tally true.
+    ~MegakernelPipeline() override { cl_.release(imageBytes_ + centerBytes_); }
     const char* name() const override { return "mega"; }
     Image render(const Scene& scene, const RenderOptions& options) override;
 
@@ -22,7 +23,7 @@ private:
     ClContext& cl_;
     std::unique_ptr<DeviceScene> scene_;
     cl::Buffer image_, centers_;
-    size_t imageBytes_ = 0;
+    size_t imageBytes_ = 0, centerBytes_ = 0;
     LaunchPlanner planner_;
 };
 

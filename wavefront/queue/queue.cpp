@@ -611,8 +611,7 @@ Image QueuePipeline::render(const Scene& scene, const RenderOptions& o) {
     }
     stats_.addBuffer("pool", queue_.poolBytes);
     stats_.addBuffer("image", buf_.imageBytes);
-    stats_.extras["pool_rays"] = queue_.poolRays;
-    stats_.extras["pool_bytes"] = queue_.poolBytes;
+    stats_.extras["pool_rays"] = queue_.poolRays;  // its bytes: buffers["pool"]
     stats_.extras["bounces_run"] = queue_.iterations;
     stats_.extras["restarted_paths"] = queue_.restartedPaths;
     stats_.extras["queue_lengths"] = queue_.queueLengths;  // [depth][miss, diffuse, mirror, glass]
