@@ -14,5 +14,7 @@ int runCompare();
 void addSweep(CLI::App& app);  // apps/sweep.cpp
 int run(CLI::App& app);
 int runSweepCommand();  // apps/sweep.cpp
+void addLists(CLI::App& app);  // apps/list.cpp: rtlab scenes, rtlab sweeps
+int runLists();                // -1 when neither was parsed
 
 }  // namespace rt::cli

@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <regex>
+#include <sstream>
+#include <cstdlib>
 #include <string>
 #include <vector>
 
@@ -36,25 +39,71 @@ std::string nearestFlag(const CLI::App& cmd, int argc, char** argv) {
     std::vector<std::string> known;
     for (const CLI::Option* opt : cmd.get_options())
         for (const std::string& name : opt->get_lnames()) known.push_back("--" + name);
-    std::string best;
-    size_t bestDistance = 3;  // at most two edits away
     for (int i = 1; i < argc; ++i) {
         std::string arg = argv[i];
         if (arg.rfind("--", 0) != 0) continue;
         arg = arg.substr(0, arg.find('='));
         if (std::find(known.begin(), known.end(), arg) != known.end()) continue;
-        for (const std::string& k : known) {
-            size_t d = editDistance(arg, k);
-            if (d < bestDistance || (k.rfind(arg, 0) == 0 && best.empty())) {
-                bestDistance = std::min(d, bestDistance);
-                best = k;
-            }
+        if (std::string near = nearestName(arg, known); !near.empty()) return near;
+    }
+    return "";
+}
+
+// "1000000.000000" -> "1e+06", "0.000000" -> "0".
+std::string shortNumber(const std::string& text) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%g", std::atof(text.c_str()));
+    return buf;
+}
+
+}  // namespace
+
+std::string nearestName(const std::string& word, const std::vector<std::string>& known) {
+    std::string best;
+    size_t bestDistance = 3;  // at most two edits away
+    for (const std::string& k : known) {
+        size_t d = editDistance(word, k);
+        if (d < bestDistance || (k.rfind(word, 0) == 0 && best.empty() && !word.empty())) {
+            bestDistance = std::min(d, bestDistance);
+            best = k;
         }
     }
     return best;
 }
 
-}  // namespace
+std::string plainValueError(const CLI::App& cmd, const std::string& message) {
+    std::smatch m;
+    static const std::regex convert("Could not convert: (-[-\\w]+) = (.*)");
+    if (std::regex_match(message, m, convert)) {
+        std::string flag = m[1], value = m[2], kind = "not a number";
+        for (const CLI::Option* opt : cmd.get_options())
+            for (const std::string& name : opt->get_lnames())
+                if ("--" + name == flag) {
+                    std::string type = opt->get_type_name();
+                    if (type == "INT" || type == "UINT") kind = "not a whole number";
+                }
+        return flag + " " + value + ": " + kind;
+    }
+    static const std::regex range("(-[-\\w]+): Value (.*) not in range (\\S+) to (\\S+)");
+    if (std::regex_match(message, m, range)) {
+        const std::string value = m[2];
+        char* end = nullptr;
+        std::strtod(value.c_str(), &end);
+        bool number = !value.empty() && end && *end == 0;
+        return std::string(m[1]) + " " + value + ": " + (number ? "must be in " : "not a number; expected ") +
+               shortNumber(m[3]) + ".." + shortNumber(m[4]);
+    }
+    static const std::regex member("(-[-\\w]+): (.*) not in \\{(.*)\\}");
+    if (std::regex_match(message, m, member)) {
+        std::string choices = m[3];
+        std::replace(choices.begin(), choices.end(), ',', ' ');
+        std::string list;
+        std::istringstream words(choices);
+        for (std::string w; words >> w;) list += (list.empty() ? "" : ", ") + w;
+        return std::string(m[1]) + " " + std::string(m[2]) + ": must be one of " + list;
+    }
+    return message;
+}
 
 int reportParseError(const CLI::App& app, const CLI::ParseError& error, const char* prog, int argc,
                      char** argv) {
@@ -63,7 +112,7 @@ int reportParseError(const CLI::App& app, const CLI::ParseError& error, const ch
     std::string help = prog;
     if (cmd != &app) help += " " + cmd->get_name();
     std::string hint = nearestFlag(*cmd, argc, argv);
-    std::fprintf(stderr, "%s: %s%s (see %s --help)\n", prog, error.what(),
+    std::fprintf(stderr, "%s: %s%s (see %s --help)\n", prog, plainValueError(*cmd, error.what()).c_str(),
                  hint.empty() ? "" : (" (did you mean " + hint + "?)").c_str(), help.c_str());
     return kUsageError;
 }

@@ -4,6 +4,9 @@
 
 #include <CLI/CLI.hpp>
 
+#include <string>
+#include <vector>
+
 namespace rt::cli {
 
 // Exit status of every usage error (bad flag, bad value, unknown command), as the README says.
@@ -13,5 +16,14 @@ constexpr int kUsageError = 1;
 // kUsageError; for --help (exit code 0) prints the help and returns 0.
 int reportParseError(const CLI::App& app, const CLI::ParseError& error, const char* prog, int argc,
                      char** argv);
+
+// The name in `known` at most two edits from `word` (or that it begins), nearest first; empty
+// when none is close. "rendr" -> "render".
+std::string nearestName(const std::string& word, const std::vector<std::string>& known);
+
+// CLI11's wording of a bad value, in rtlab's: "--bounces four: not a whole number" for
+// "Could not convert: --bounces = four", "--layout foo: must be one of tree, weighted" for
+// "--layout: foo not in {tree,weighted}". Other messages pass unchanged.
+std::string plainValueError(const CLI::App& cmd, const std::string& message);
 
 }  // namespace rt::cli

@@ -2,6 +2,7 @@
 // Every failure, a usage error included, ends in one line on stderr ("rtlab: <reason>") and exit
 // status 1.
 #include <CLI/CLI.hpp>
+#include <unistd.h>
 
 #include <cstdio>
 #include <cstdlib>
@@ -11,6 +12,7 @@
 #include "apps/commands.h"
 #include "apps/parse_error.h"
 #include "bench/watchdog.h"
+#include "core/cl_runtime.h"
 #include "core/error.h"
 #include "core/version.h"
 #include "pipelines/registry.h"
@@ -29,6 +31,7 @@ int mainCommand(int argc, char** argv) {
     rt::cli::addDevices(app);
     rt::cli::addCompare(app);
     rt::cli::addSweep(app);
+    rt::cli::addLists(app);
     std::string names;
     bool known = false;
     for (const CLI::App* sub : app.get_subcommands({})) {
@@ -36,8 +39,12 @@ int mainCommand(int argc, char** argv) {
         known |= argc > 1 && sub->get_name() == argv[1];
     }
     if (argc > 1 && argv[1][0] != '-' && !known) {
-        std::fprintf(stderr, "rtlab: unknown command '%s' (commands: %s; see rtlab --help)\n",
-                     argv[1], names.c_str());
+        std::vector<std::string> commands;
+        for (const CLI::App* sub : app.get_subcommands({})) commands.push_back(sub->get_name());
+        std::string near = rt::cli::nearestName(argv[1], commands);
+        std::fprintf(stderr, "rtlab: unknown command '%s'%s (commands: %s; see rtlab --help)\n",
+                     argv[1], near.empty() ? "" : (" (did you mean " + near + "?)").c_str(),
+                     names.c_str());
         return rt::cli::kUsageError;
     }
     try {
@@ -57,6 +64,8 @@ int mainCommand(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
+    // On a terminal a cold first run says what it compiles (seconds each on a fresh machine).
+    rt::ClContext::announceBuilds(isatty(STDERR_FILENO) == 1);
     int status = mainCommand(argc, argv);
     // A sweep left a thread stuck in the driver (a cell timed out): exit without destructors
     // or exit handlers, which could wait on it.

@@ -17,6 +17,7 @@
 
 #include "apps/commands.h"
 #include "apps/sweep_accuracy.h"
+#include "bench/measure.h"
 #include "bench/pfm.h"
 #include "bench/sweep_config.h"
 #include "bench/sweep_runner.h"
@@ -33,7 +34,7 @@ struct SweepArgs {
     std::vector<std::string> importDirs;
     double timeLimit = 0;
     double cellTimeout = bench::kDefaultCellTimeoutS;
-    bool noCharts = false;
+    bool noCharts = false, force = false;
 } sweepArgs;
 
 CLI::App* sweepCmd = nullptr;
@@ -217,9 +218,11 @@ void addSweep(CLI::App& app) {
     SweepArgs& a = sweepArgs;
     sweepCmd = app.add_subcommand(
         "sweep", "Run a named benchmark sweep and write results/<device>/ (CSV, JSON, charts, README)");
+    std::string names;
+    for (const auto& [name, what] : bench::listSweeps()) names += "\n  " + name + ": " + what;
     sweepCmd->add_option("config", a.config,
-                         "Sweep file, or a name in bench/sweeps/ (quick, full, cpu, limits); format in "
-                         "bench/sweeps/README.md");
+                         "Sweep file, or a name in bench/sweeps/ (format and purposes in "
+                         "bench/sweeps/README.md; `rtlab sweeps` lists them):" + names);
     sweepCmd->add_option("--device", a.device,
                          "OpenCL device: index or name substring [$RTLAB_DEVICE, else first GPU]");
     sweepCmd->add_option("--devices", a.devices,
@@ -229,7 +232,10 @@ void addSweep(CLI::App& app) {
     sweepCmd->add_option("--shard", a.shard,
                          "Run only share i of N (i/N: work units u with u % N == i), e.g. one task "
                          "of a cluster array job; merge the shards with --import DIR0 DIR1 ...");
-    sweepCmd->add_option("--out", a.out, "Output folder [results/<device-slug>]");
+    sweepCmd->add_option("--out", a.out,
+                         "Output folder [results/<device-slug>]; a folder that holds this sweep's "
+                         "results already is refused unless --force is given");
+    sweepCmd->add_flag("--force", a.force, "Overwrite this sweep's results in the output folder");
     sweepCmd->add_option("--import", a.importDirs,
                          "Do not measure: score and chart what `rtlab-bench --sweep CONFIG --out DIR` "
                          "wrote to DIR on another machine; several folders: runs continued with "
@@ -260,6 +266,16 @@ int runSweepCommand() {
     nlohmann::json meta, rows = nlohmann::json::array();
     std::vector<PendingFrame> frames;
     int timedOut = 0;
+    // Results already in the output folder are kept unless --force: checked before measuring.
+    auto outputFolder = [&](const std::string& slug) {
+        fs::path out = a.out.empty() ? fs::path("results") / slug : fs::path(a.out);
+        fs::path json = out / (config.name + ".json");
+        if (!a.force && fs::exists(json))
+            throw Error("--out " + out.string() + ": holds " + config.name + " results already (" +
+                        json.string() + "); --force overwrites them, or give another --out");
+        return out;
+    };
+    fs::path out;
     std::map<std::string, bool> shardComplete;  // by --shard spec ("" for none)
     int shardCount = 0;
     if (!a.importDirs.empty()) {
@@ -282,6 +298,7 @@ int runSweepCommand() {
             if (meta.is_null()) {
                 meta = part;
                 meta.erase("shard");
+                out = outputFolder(meta.value("device_slug", "unknown-device"));
             } else if (firstOfShard) {
                 for (const char* k : {"measured", "failed", "not_run", "seconds", "cells",
                                       "skipped_as_done"})
@@ -337,6 +354,10 @@ int runSweepCommand() {
                                       : a.kernelDir);
         o.timeLimitS = a.timeLimit;
         o.cellTimeoutS = a.cellTimeout;
+        out = outputFolder(a.out.empty() ? bench::deviceSlug(o.devices.empty()
+                                                                 ? selectDevice(o.device)
+                                                                 : bench::selectDevices(o.devices).front())
+                                         : "");
         bench::SweepSummary s = bench::runSweep(config, o, nullptr,
                                                 [&](const nlohmann::json& row, const Image* image) {
             if (image) frames.push_back({rows.size(), *image});
@@ -363,8 +384,6 @@ int runSweepCommand() {
     }
     if (!frames.empty()) scoreFrames(rows, frames, config, a.sceneDir);
 
-    fs::path out = a.out.empty() ? fs::path("results") / meta.value("device_slug", "unknown-device")
-                                 : fs::path(a.out);
     fs::create_directories(out);
     fs::path json = out / (config.name + ".json");
     std::ofstream(json) << nlohmann::json{{"meta", meta}, {"rows", rows}}.dump(1) << "\n";

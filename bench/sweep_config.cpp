@@ -256,7 +256,31 @@ fs::path findSweep(const std::string& nameOrPath) {
     if (fs::is_regular_file(p)) return p;
     for (fs::path dir : {fs::path("bench/sweeps"), fs::path(RTLAB_SOURCE_DIR) / "bench/sweeps"})
         if (fs::is_regular_file(dir / p)) return dir / p;
-    throw Error(nameOrPath + ": no such sweep file (give a path, or a name in bench/sweeps/)");
+    std::string names;
+    for (const auto& [name, what] : listSweeps()) names += (names.empty() ? "" : ", ") + name;
+    throw Error(nameOrPath + ": no such sweep file (give a path, or one of " + names + ")");
+}
+
+std::vector<std::pair<std::string, std::string>> listSweeps() {
+    fs::path dir = fs::is_directory("bench/sweeps") ? fs::path("bench/sweeps")
+                                                    : fs::path(RTLAB_SOURCE_DIR) / "bench/sweeps";
+    std::vector<std::pair<std::string, std::string>> out;
+    std::error_code ec;
+    for (const auto& entry : fs::directory_iterator(dir, ec)) {
+        if (!entry.is_regular_file() || entry.path().has_extension()) continue;  // README.md
+        // The header comment's first sentence, without "# name — ".
+        std::ifstream f(entry.path());
+        std::string what;
+        for (std::string line; std::getline(f, line) && line.rfind("#", 0) == 0;)
+            what += (what.empty() ? "" : " ") + line.substr(line.find_first_not_of("# "));
+        if (size_t dash = what.find(" — "); dash != std::string::npos)
+            what = what.substr(dash + std::string(" — ").size());
+        if (size_t stop = what.find(". "); stop != std::string::npos) what = what.substr(0, stop);
+        if (what.size() > 96) what = what.substr(0, what.rfind(' ', 93)) + " ...";
+        out.emplace_back(entry.path().filename().string(), what);
+    }
+    std::sort(out.begin(), out.end());
+    return out;
 }
 
 std::string Cell::settingKey() const {

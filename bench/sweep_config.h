@@ -59,6 +59,10 @@ SweepConfig loadSweep(const std::filesystem::path& path);
 // A sweep named by path, or by bare name under bench/sweeps/ of the source tree.
 std::filesystem::path findSweep(const std::string& nameOrPath);
 
+// The sweeps in bench/sweeps/ (of the working directory, else of the source tree), each with
+// the first line of its header comment: {"quick", "a first look: ..."}.
+std::vector<std::pair<std::string, std::string>> listSweeps();
+
 // One measured cell: a scene, a pipeline and fully resolved render options.
 struct Cell {
     std::string scene;

@@ -137,7 +137,7 @@ import() {
     mkdir -p "$dest"
     # Scenes and the reference renderer come from the commit that was measured.
     (cd "$BUILD/src" && "$BUILD/build/bin/rtlab" sweep "bench/sweeps/$sweep" \
-        --import "${staged[@]}" --out "$dest" --no-charts)
+        --import "${staged[@]}" --out "$dest" --no-charts --force)
     n=0
     for dir in "$@"; do
         n=$((n + 1))

@@ -146,7 +146,19 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"compare scenes/spheres.json -o /no/such/dir/p", "--output-prefix /no/such/dir/p"},
         BadCase{"render scenes/spheres.json --stats-json /no/such/dir/s.json -o /tmp/x.png",
                 "--stats-json /no/such/dir/s.json"},
-        BadCase{"bogus", "unknown command 'bogus'"}),
+        BadCase{"bogus", "unknown command 'bogus'"},
+        // Values CLI11 cannot convert, said as rtlab says the others.
+        BadCase{"render scenes/spheres.json --bounces four -o /tmp/x.png",
+                "--bounces four: not a whole number"},
+        BadCase{"render scenes/spheres.json --max-launch-ms soon -o /tmp/x.png",
+                "--max-launch-ms soon: not a number; expected 0..1e+06"},
+        BadCase{"render scenes/spheres.json --max-launch-ms -3 -o /tmp/x.png",
+                "--max-launch-ms -3: must be in 0..1e+06"},
+        BadCase{"render scenes/spheres.json --layout diagonal -o /tmp/x.png",
+                "--layout diagonal: must be one of tree, weighted"},
+        BadCase{"rendr scenes/spheres.json", "unknown command 'rendr' (did you mean render?)"},
+        BadCase{"sweep nosuchsweep", "nosuchsweep: no such sweep file (give a path, or one of "},
+        BadCase{"sweep quick --cell-timeout -2", "--cell-timeout -2: must be in 0..1e+07"}),
     caseName);
 
 TEST(Cli, RendersWithEveryPipeline) {
@@ -226,8 +238,92 @@ TEST(Cli, StatsJsonCarriesTimesLaunchesAndRays) {
     EXPECT_GT(j.at("device_ms").get<double>(), 0);
     EXPECT_GE(j.at("launches").get<int>(), 1);
     EXPECT_EQ(j.at("pipeline"), "mega");
+    // Every setting that decides the frame, and how its programs were obtained.
+    EXPECT_EQ(j.at("aa"), 1);
+    EXPECT_EQ(j.at("shadow_samples"), 16);  // scenes/shadows.json's render.shadow_samples
+    EXPECT_EQ(j.at("layout"), "tree");
+    EXPECT_TRUE(j.at("accel").is_string());
+    const nlohmann::json& programs = j.at("programs");
+    EXPECT_EQ(programs.at("built").get<int>() + programs.at("from_disk").get<int>() +
+                  programs.at("in_memory").get<int>(),
+              1)
+        << programs;  // the megakernel is one program
+    EXPECT_FALSE(j.at("buffers").contains("adaptive-AA centres")) << "allocated without --adaptive";
     std::remove(json.c_str());
     std::remove(png.c_str());
+}
+
+// --device gpu (or cpu) on a machine without one names what OpenCL sees instead.
+TEST(Cli, DeviceTypeWithoutSuchDeviceSaysSo) {
+    bool gpu = false;
+    for (const rt::DeviceInfo& d : rt::listDevices()) gpu = gpu || d.isGpu();
+    if (gpu) GTEST_SKIP() << "this machine has a GPU";
+    Result r = run("render scenes/spheres.json --device gpu -o " + rt::test::scratchPath("g.png"));
+    EXPECT_EQ(r.status, 1);
+    EXPECT_NE(r.err.find("--device gpu: no GPU device found (OpenCL sees: "), std::string::npos)
+        << r.err;
+    EXPECT_EQ(lines(r.err), 1) << r.err;
+}
+
+// rtlab scenes and rtlab sweeps list what exists, a line each; the sweep help lists every sweep.
+TEST(Cli, ScenesAndSweepsAreListed) {
+    Result scenes = run("scenes");
+    EXPECT_EQ(scenes.status, 0) << scenes.err;
+    for (const auto& e : std::filesystem::directory_iterator("scenes"))
+        if (e.path().extension() == ".json")
+            EXPECT_NE(scenes.out.find("  " + e.path().stem().string() + " "), std::string::npos)
+                << e.path() << "\n" << scenes.out;
+    EXPECT_NE(scenes.out.find("Cornell box from triangles"), std::string::npos) << scenes.out;
+    EXPECT_NE(scenes.out.find("divergence/: "), std::string::npos) << scenes.out;
+    Result sweeps = run("sweeps");
+    Result help = run("sweep --help");
+    EXPECT_EQ(sweeps.status, 0) << sweeps.err;
+    for (const auto& e : std::filesystem::directory_iterator("bench/sweeps")) {
+        if (e.path().has_extension()) continue;  // README.md
+        std::string name = e.path().filename().string();
+        EXPECT_NE(sweeps.out.find("  " + name + " "), std::string::npos) << name << "\n" << sweeps.out;
+        EXPECT_NE(help.out.find(" " + name + ": "), std::string::npos) << name << "\n" << help.out;
+    }
+    EXPECT_NE(sweeps.out.find("a first look at a device"), std::string::npos) << sweeps.out;
+}
+
+// A sweep does not overwrite results already in its output folder unless --force is given, and
+// says so before measuring anything.
+TEST(Cli, SweepKeepsEarlierResultsWithoutForce) {
+    std::filesystem::path dir = rt::test::scratchPath("keep/");
+    std::ofstream(dir / "one") << "repeats = 1\nwarmup = 0\ncount-rays = no\n[x]\nscenes = spheres\n"
+                                  "pipelines = mega\nsizes = 8x6\nbounces = 0\n";
+    std::string cmd = "sweep " + (dir / "one").string() + " --no-charts --out " + (dir / "o").string();
+    Result first = run(cmd);
+    ASSERT_EQ(first.status, 0) << first.err;
+    std::ofstream(dir / "o" / "one.json", std::ios::app) << "kept";
+    Result again = run(cmd);
+    EXPECT_EQ(again.status, 1);
+    EXPECT_NE(again.err.find("holds one results already"), std::string::npos) << again.err;
+    EXPECT_EQ(lines(again.err), 1) << again.err;
+    std::ifstream kept(dir / "o" / "one.json");
+    std::string text((std::istreambuf_iterator<char>(kept)), {});
+    EXPECT_NE(text.find("kept"), std::string::npos) << "the old file was overwritten";
+    Result forced = run(cmd + " --force");
+    EXPECT_EQ(forced.status, 0) << forced.err;
+}
+
+// --stats-json - writes the JSON, and nothing else, to standard output (no file named "-").
+TEST(Cli, StatsJsonToStandardOutput) {
+    std::filesystem::path dir = rt::test::scratchPath("stdout_json/");
+    std::string cmd = "cd " + dir.string() + " && " + std::string(RTLAB_BIN_DIR) + "/rtlab render " +
+                      std::string(RTLAB_SOURCE_DIR) + "/scenes/spheres.json --size 16x12 --stats-json - -o " +
+                      (dir / "x.png").string() + " 2>/dev/null";
+    FILE* p = popen(cmd.c_str(), "r");
+    std::string out;
+    std::array<char, 4096> buf;
+    while (size_t n = fread(buf.data(), 1, buf.size(), p)) out.append(buf.data(), n);
+    EXPECT_EQ(pclose(p), 0);
+    nlohmann::json j = nlohmann::json::parse(out, nullptr, false);
+    ASSERT_FALSE(j.is_discarded()) << out;
+    EXPECT_EQ(j.at("width"), 16);
+    EXPECT_GE(j.at("rays").at("primary").get<long long>(), 16 * 12);
+    EXPECT_FALSE(std::filesystem::exists(dir / "-"));
 }
 
 TEST(Cli, DevicesListsEveryDevice) {
