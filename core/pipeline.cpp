@@ -215,8 +215,8 @@ DeviceScene::DeviceScene(ClContext& cl, const Scene& scene, RenderOptions::Accel
             cells_ = upload(cl, accel.cwbvhPrims, "the leaf-primitive buffer", bytes_);
         else
             cells_ = upload(cl, accel.cells, "the grid buffer", bytes_);
-        rayCounts_ = cl.allocate(RT_RAY_TYPES * sizeof(cl_uint), CL_MEM_READ_WRITE, "the ray counters");
-        bytes_ += RT_RAY_TYPES * sizeof(cl_uint);
+        rayCounts_ = cl.allocate(RT_COUNTERS * sizeof(cl_uint), CL_MEM_READ_WRITE, "the ray counters");
+        bytes_ += RT_COUNTERS * sizeof(cl_uint);
     } catch (...) {
         cl_.release(bytes_);
         throw;
@@ -226,7 +226,7 @@ DeviceScene::DeviceScene(ClContext& cl, const Scene& scene, RenderOptions::Accel
 DeviceScene::~DeviceScene() { cl_.release(bytes_); }
 
 void DeviceScene::resetRayCounts(cl::CommandQueue& queue) const {
-    queue.enqueueFillBuffer(rayCounts_, cl_uint(0), 0, RT_RAY_TYPES * sizeof(cl_uint));
+    queue.enqueueFillBuffer(rayCounts_, cl_uint(0), 0, RT_COUNTERS * sizeof(cl_uint));
 }
 
 RayCounts DeviceScene::readRayCounts(cl::CommandQueue& queue) const {
@@ -235,6 +235,12 @@ RayCounts DeviceScene::readRayCounts(cl::CommandQueue& queue) const {
     RayCounts out{};
     for (int i = 0; i < RT_RAY_TYPES; ++i) out[i] = c[i];
     return out;
+}
+
+WarpCounts DeviceScene::readWarpCounts(cl::CommandQueue& queue) const {
+    cl_uint c[2];
+    queue.enqueueReadBuffer(rayCounts_, CL_TRUE, RT_RAY_TYPES * sizeof(cl_uint), sizeof c, c);
+    return {c[0], c[1]};
 }
 
 void DeviceScene::setArgs(cl::Kernel& k, const dev::RenderSettings& settings) const {

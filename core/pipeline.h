@@ -24,6 +24,11 @@ namespace rt {
 
 // Rays by type (RT_RAY_* in core/types.h): primary, reflection, refraction, shadow.
 using RayCounts = std::array<uint64_t, RT_RAY_TYPES>;
+// A ray loop's SIMD use, counted on the device (RT_COUNT_LANES): lanes active summed over warp
+// steps, and the steps; lanesActive / steps is the mean number of busy lanes of a warp.
+struct WarpCounts {
+    uint64_t lanesActive = 0, steps = 0;
+};
 const char* rayTypeName(int type);  // "primary", "reflection", "refraction", "shadow"
 // --offset names: fixed, scaled, bound. parseOffset throws rt::Error naming the flag.
 RenderOptions::Offset parseOffset(const std::string& name);
@@ -120,6 +125,7 @@ public:
     // Device ray counters (RenderOptions::countRays): zero them before a frame, read them after.
     void resetRayCounts(cl::CommandQueue& queue) const;
     RayCounts readRayCounts(cl::CommandQueue& queue) const;
+    WarpCounts readWarpCounts(cl::CommandQueue& queue) const;  // zeroed by resetRayCounts
     // True when this copy was made from `scene` with `accel` (by address: scenes are not mutated
     // while a pipeline holds them, except the camera, which travels in the settings).
     bool matches(const Scene& scene, RenderOptions::Accel accel) const {

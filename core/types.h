@@ -42,6 +42,12 @@ RT_DEV_BEGIN
 #define RT_RAY_REFRACTION 2
 #define RT_RAY_SHADOW 3
 #define RT_RAY_TYPES 4
+// After the ray types, the counter buffer holds the warp counters of RT_COUNT_LANES programs
+// (the megakernel's counting frame on NVIDIA): the active lanes summed over every warp step of
+// the ray loop, and the warp steps.
+#define RT_COUNT_LANES_ACTIVE RT_RAY_TYPES
+#define RT_COUNT_WARP_STEPS (RT_RAY_TYPES + 1)
+#define RT_COUNTERS (RT_RAY_TYPES + 2)
 
 typedef struct Float3 {
     float x, y, z;

@@ -12,17 +12,20 @@
 inline float3 Megakernel_Sample(const SceneData* sc, int x, int y, int sample) {
     Node nodes[RT_TREE_NODES];
     float3 colors[RT_TREE_NODES];
+    RT_COUNT_WARP_STEP(sc);
     nodes[0] = RayTree_TraceNode(sc, RayTree_PrimaryRay(sc, x, y, sample), RT_RAY_PRIMARY,
                                  Sampling_PointKey(x, y, sample, 0));
     for (int i = 1; i < RT_TREE_NODES; ++i) {
         int parent = (i - 1) / RT_BRANCH;
         Ray ray;
         if (RayTree_ChildRay(sc, &nodes[parent], RayTree_Depth(parent), i - 1 - parent * RT_BRANCH,
-                             &ray))
+                             &ray)) {
+            RT_COUNT_WARP_STEP(sc);  // the lanes that trace slot i
             nodes[i] = RayTree_TraceNode(sc, ray, RayTree_SlotType(i),
                                          Sampling_PointKey(x, y, sample, RayTree_Depth(i)));
-        else
+        } else {
             nodes[i].flags = 0;
+        }
     }
     return RayTree_Combine(sc, nodes, colors);
 }
@@ -35,6 +38,7 @@ inline float3 Megakernel_Sample(const SceneData* sc, int x, int y, int sample) {
     stack[top++] = PathState_Primary(sc, x, y, sample);
     float3 color = (float3)(0.0f, 0.0f, 0.0f);
     while (top > 0) {
+        RT_COUNT_WARP_STEP(sc);  // the lanes that still have a ray to trace
         Pending p = stack[--top];
         Node node = RayTree_TraceNode(sc, p.ray, p.type, Sampling_PointKey(x, y, sample, p.depth));
         if (node.kind == RT_KIND_MISS) {

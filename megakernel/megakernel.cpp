@@ -28,7 +28,20 @@ Image MegakernelPipeline::render(const Scene& scene, const RenderOptions& o) {
         stats_.privateBytes = size_t(o.bounces * (branching - 1) + 1) * 64;
     }
 
-    cl::Program program = cl_.program("megakernel.cl", defines(scene, o));
+    // The counting frame on NVIDIA also counts the warps' busy lanes (inline PTX); should the
+    // driver refuse that, the frame counts rays alone.
+    cl::Program program;
+    bool countLanes = false;
+    if (o.countRays && cl_.device().vendor.find("NVIDIA") != std::string::npos) {
+        std::vector<std::string> d = defines(scene, o);
+        d.push_back("RT_COUNT_LANES");
+        try {
+            program = cl_.program("megakernel.cl", d);
+            countLanes = true;
+        } catch (const Error&) {
+        }
+    }
+    if (!countLanes) program = cl_.program("megakernel.cl", defines(scene, o));
     stats_.kernelResources = kernelResources(program, cl_.device().device);
     stats_.program = cl_.lastProgramSource();
     if (!scene_ || !scene_->matches(scene, o.accel))
@@ -110,6 +123,13 @@ Image MegakernelPipeline::render(const Scene& scene, const RenderOptions& o) {
         if (o.countRays) {
             stats_.rays = scene_->readRayCounts(cl_.queue());
             stats_.raysCounted = true;
+            if (countLanes) {
+                // Mean busy lanes of a 32-lane warp over the steps of its ray loop.
+                WarpCounts w = scene_->readWarpCounts(cl_.queue());
+                stats_.extras["warp_steps"] = w.steps;
+                stats_.extras["warp_lanes_active"] =
+                    w.steps ? double(w.lanesActive) / double(w.steps) : 0.0;
+            }
         }
     } catch (const cl::Error& e) {
         throwClError(e, "megakernel frame on " + cl_.device().name,

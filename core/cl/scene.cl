@@ -30,6 +30,24 @@ typedef struct SceneData {
 #define RT_COUNT_RAY(sc, type)
 #endif
 
+// One step of a ray loop, as a warp takes it: its lowest active lane adds the number of active
+// lanes and one step (core/types.h, RT_COUNT_LANES_ACTIVE). NVIDIA only (PTX's activemask and
+// laneid), and only in the untimed counting frame: the host asks for it with RT_COUNT_LANES.
+#if defined(RT_COUNT_RAYS) && defined(RT_COUNT_LANES)
+#define RT_COUNT_WARP_STEP(sc)                                                           \
+    do {                                                                                 \
+        uint rtMask_, rtLane_;                                                           \
+        __asm__ volatile("activemask.b32 %0;" : "=r"(rtMask_));                          \
+        __asm__ volatile("mov.u32 %0, %%laneid;" : "=r"(rtLane_));                       \
+        if ((rtMask_ & ((1u << rtLane_) - 1u)) == 0u) {                                  \
+            atomic_add(&(sc)->rayCounts[RT_COUNT_LANES_ACTIVE], popcount(rtMask_));      \
+            atomic_inc(&(sc)->rayCounts[RT_COUNT_WARP_STEPS]);                           \
+        }                                                                                \
+    } while (0)
+#else
+#define RT_COUNT_WARP_STEP(sc)
+#endif
+
 // Kernel parameters and their packing into a SceneData; every kernel takes the scene this way.
 #define RT_SCENE_PARAMS                                                                     \
     global const Sphere *spheres, global const Plane *planes,                               \

@@ -340,5 +340,42 @@ class CommittedChartsTest(unittest.TestCase):
         self.assertEqual(texts_overlap(fig), [])
 
 
+class MapTest(unittest.TestCase):
+    """scripts/charts_map.py: the winner of each map setting, its margin, ties inside the frame
+    spread, and settings some design missed left out of the win count."""
+
+    def rows(self):
+        out = []
+        for scene, times in [("map/map-s4-x50-o8-m16", {"mega": (9.0, 8.8, 9.2), "queue": (3.0, 2.9, 3.1)}),
+                             ("map/map-s64-x0-o8-m16", {"mega": (2.0, 1.9, 2.1), "queue": (2.05, 1.95, 2.2)}),
+                             ("map/map-s256-x0-o8-m16", {"mega": (1.0, 1.0, 1.0)})]:
+            for pipe, (ms, lo, hi) in times.items():
+                r = row(pipe, pipe, "tree", scene, 4, 1920, 1080, group="map")
+                r.update(device_ms=ms, device_ms_min=lo, device_ms_max=hi)
+                out.append(r)
+            if scene.endswith("s256-x0-o8-m16"):
+                out.append(dict(row("queue", "queue", "tree", scene, 4, 1920, 1080, group="map"),
+                                status="error", failure="timeout"))
+        return out
+
+    def test_winner_margin_ties_and_missing(self):
+        spec = importlib.util.spec_from_file_location("charts_map", os.path.join(SCRIPTS, "charts_map.py"))
+        m = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(m)
+        series, grid = m.cells(self.rows())
+        keys = series.keys
+        self.assertEqual(sorted(grid), [(4, 50, 8, 16), (64, 0, 8, 16), (256, 0, 8, 16)])
+        winner, runner, margin, tie = m.verdict(grid[(4, 50, 8, 16)], keys)
+        self.assertEqual((winner, runner, tie), ("queue", "mega", False))
+        self.assertAlmostEqual(margin, 3.0)
+        self.assertTrue(m.verdict(grid[(64, 0, 8, 16)], keys)[3])  # 2.0 vs 2.05, ranges overlap
+        self.assertIsNone(m.verdict(grid[(256, 0, 8, 16)], keys))  # the queue timed out
+        with tempfile.TemporaryDirectory() as d:
+            m.table(META, series, grid, keys, os.path.join(d, "map.md"))
+            text = open(os.path.join(d, "map.md")).read()
+        self.assertIn("Settings where every design ran: 2. Wins there: queue 1, ties 1.", text)
+        self.assertIn("| 256 | 0% | 8 | 1.000 | missing | not all ran | - |", text)
+
+
 if __name__ == "__main__":
     unittest.main()

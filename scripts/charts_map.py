@@ -1,0 +1,169 @@
+#!/usr/bin/env python3
+"""Draws the crossover map of a `map` sweep (bench/sweeps/map, scenes of scripts/make-map.py):
+which design is fastest at each (sphere size on screen, share of mirrors and glass), one panel per
+shading cost, the cell coloured by the winner and labelled with its margin over the runner-up.
+A margin inside the two designs' measured frame spread (their ranges of timed frames overlap)
+is a tie, drawn hatched and labelled "tie". A setting where some design did not run is marked
+missing: wins are counted only where every design ran. Also writes a Markdown table beside the
+chart with every time, the winner, the margin and the megakernel's busy lanes per warp where
+the rows carry them.
+
+Usage: scripts/charts_map.py ROWS.jsonl|SWEEP.json [--out DIR]
+  (the rows of `rtlab-bench --sweep map`, or the JSON `rtlab sweep` writes)
+Needs Debian's python3-matplotlib for the chart; the table needs nothing.
+"""
+import argparse
+import json
+import os
+import re
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from sweep_rows import Series  # noqa: E402
+
+NAME = re.compile(r"map-s(\d+)-x(\d+)-o(\d+)-m(\d+)$")
+
+
+def load(path):
+    if path.endswith(".jsonl"):
+        with open(path) as f:
+            rows = [json.loads(line) for line in f if line.strip()]
+        meta_path = os.path.join(os.path.dirname(path), "sweep.json")
+        meta = json.load(open(meta_path)) if os.path.exists(meta_path) else {}
+        return meta, rows
+    data = json.load(open(path))
+    return data["meta"], data["rows"]
+
+
+def cells(rows):
+    """{(size, special, octaves, materials): {series key: row}} for the map's scenes."""
+    series = Series(rows)
+    out = {}
+    for r in rows:
+        m = NAME.search(r["scene"])
+        if not m:
+            continue
+        out.setdefault(tuple(int(g) for g in m.groups()), {})[series.key(r)] = r
+    return series, out
+
+
+def verdict(by_key, keys):
+    """(winner, runner-up, margin, tie) among rows that ran, or None when one did not."""
+    ran = {k: r for k, r in by_key.items() if r.get("status") == "ok"}
+    if any(k not in ran for k in keys):
+        return None
+    order = sorted(ran, key=lambda k: ran[k]["device_ms"])
+    w, u = ran[order[0]], ran[order[1]]
+    margin = u["device_ms"] / w["device_ms"]
+    # A tie when the winner's slowest frame is no faster than the runner-up's fastest.
+    tie = w.get("device_ms_max", w["device_ms"]) >= u.get("device_ms_min", u["device_ms"])
+    return order[0], order[1], margin, tie
+
+
+def table(meta, series, grid, keys, path):
+    lines = [f"# Crossover map: {meta.get('device', '?')} (driver {meta.get('driver', '?')}, "
+             f"commit {meta.get('commit', '?')})", "",
+             "Device time of a frame (median of the timed frames, ms); the "
+             "winner's margin is the runner-up's time over the winner's, a tie when their frame "
+             "ranges overlap. Lanes: the megakernel's mean busy lanes of a 32-lane warp over the "
+             "steps of its ray loop (counted on NVIDIA only).", ""]
+    head = "| size px | mirrors+glass | octaves | " + " | ".join(series.label(k) for k in keys) + \
+           " | winner | margin | lanes (tree / weighted) |"
+    lines += [head, "|" + "---|" * (head.count("|") - 1)]
+    wins, settings = {}, 0
+    for (size, special, octaves, materials) in sorted(grid):
+        by_key = grid[(size, special, octaves, materials)]
+        v = verdict(by_key, keys)
+        times = []
+        for k in keys:
+            r = by_key.get(k)
+            times.append(f"{r['device_ms']:.3f}" if r and r.get("status") == "ok" else "missing")
+        lanes = []
+        for k in keys:
+            r = by_key.get(k)
+            x = (r or {}).get("extras", {}).get("warp_lanes_active")
+            if x is not None:
+                lanes.append(f"{x:.1f}")
+        if v:
+            settings += 1
+            winner, _, margin, tie = v
+            wins[("tie" if tie else winner)] = wins.get("tie" if tie else winner, 0) + 1
+            who, by = ("tie", f"{margin:.2f} (in spread)") if tie else (series.label(winner), f"{margin:.2f}x")
+        else:
+            who, by = "not all ran", "-"
+        lines.append(f"| {size} | {special}% | {octaves} | " + " | ".join(times) +
+                     f" | {who} | {by} | {' / '.join(lanes) or '-'} |")
+    lines += ["", f"Settings where every design ran: {settings}. Wins there: " +
+              ", ".join(f"{series.label(k) if k != 'tie' else 'ties'} {n}"
+                        for k, n in sorted(wins.items(), key=lambda kv: -kv[1])) + "."]
+    with open(path, "w") as f:
+        f.write("\n".join(lines) + "\n")
+
+
+def chart(meta, series, grid, keys, path):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.patches import Patch
+    from chart_style import figure, legend_row
+
+    sizes = sorted({g[0] for g in grid})
+    specials = sorted({g[1] for g in grid})
+    octaves = sorted({g[2] for g in grid})
+    r0 = next(iter(next(iter(grid.values())).values()))
+    fig, panels, legend_ax = figure(meta, "Fastest design per setting and its margin over the "
+                                    f"runner-up ({r0['width']}x{r0['height']}, B = {r0['bounces']})",
+                                    len(octaves), cols=len(octaves), panel=(4.8, 3.9))
+    for ax, o in zip(panels, octaves):
+        ax.set_xlim(-0.5, len(sizes) - 0.5)
+        ax.set_ylim(-0.5, len(specials) - 0.5)
+        for i, s in enumerate(sizes):
+            for j, x in enumerate(specials):
+                found = [g for g in grid if g[0] == s and g[1] == x and g[2] == o]
+                v = verdict(grid[found[0]], keys) if found else None
+                if v is None:
+                    ax.add_patch(plt.Rectangle((i - 0.5, j - 0.5), 1, 1, facecolor="white",
+                                               edgecolor="#999999", hatch="xx"))
+                    ax.text(i, j, "missing", ha="center", va="center", fontsize=7, color="#555555")
+                    continue
+                winner, runner, margin, tie = v
+                ax.add_patch(plt.Rectangle((i - 0.5, j - 0.5), 1, 1,
+                                           facecolor="#dddddd" if tie else series.color(winner),
+                                           edgecolor="white", hatch="//" if tie else None))
+                text = "tie" if tie else f"{margin:.2f}x"
+                ax.text(i, j, text, ha="center", va="center", fontsize=9,
+                        color="black" if tie else "white", fontweight="bold")
+        ax.set_xticks(range(len(sizes)), [f"{s} px" for s in sizes])
+        ax.set_yticks(range(len(specials)), [f"{x}%" for x in specials])
+        ax.set_xlabel("sphere size on screen")
+        ax.set_ylabel("mirrors and glass")
+        ax.set_title(f"{o} noise octaves", fontsize=10)
+    handles = [Patch(facecolor=series.color(k), label=series.label(k)) for k in keys]
+    handles.append(Patch(facecolor="#dddddd", hatch="//", label="tie (inside the frame spread)"))
+    legend_row(legend_ax, handles, [h.get_label() for h in handles], ncol=len(handles))
+    fig.savefig(path)
+    plt.close(fig)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("rows")
+    ap.add_argument("--out", default=None, help="folder for map.png and map.md [beside ROWS]")
+    a = ap.parse_args()
+    meta, rows = load(a.rows)
+    series, grid = cells(rows)
+    if not grid:
+        sys.exit(f"{a.rows}: no rows of map scenes (map-s<size>-x<share>-o<octaves>-m<materials>)")
+    keys = series.keys
+    out = a.out or os.path.dirname(os.path.abspath(a.rows))
+    os.makedirs(out, exist_ok=True)
+    table(meta, series, grid, keys, os.path.join(out, "map.md"))
+    try:
+        chart(meta, series, grid, keys, os.path.join(out, "map.png"))
+    except ImportError:
+        print("charts_map: no matplotlib (scripts/setup installs it): table only", file=sys.stderr)
+    print(os.path.join(out, "map.md"))
+
+
+if __name__ == "__main__":
+    main()
