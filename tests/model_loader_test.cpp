@@ -1,7 +1,8 @@
 // glTF 2.0 and PLY models through assimp (core/model_loader.cpp): node transforms, the material
 // mapping, the camera and the lights of tests/data/models/scene.gltf (and its .glb twin), PLY
-// vertex colours, the exact one-line errors of tests/data/bad_models, and known values of
-// Debian's assimp-testmodels.
+// vertex colours, models inside a JSON scene, the exact one-line errors of
+// tests/data/bad_models, and known values of Debian's assimp-testmodels. tests/assimp_test.cpp
+// walks every glTF2 and PLY file of that corpus.
 //
 // scene.gltf holds one triangle (0,0,0) (1,0,0) (0,1,0) placed by four nodes:
 //   "red"    translate (2,0,0), scale 2                     material red (base 0.8 0.1 0.1,
@@ -30,6 +31,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "core/scene_loader.h"
 #include "scratch_dir.h"
 #include "tests/test_device.h"
 
@@ -151,6 +153,28 @@ TEST(ModelLoader, GlbHoldsTheSameScene) {
     EXPECT_EQ(glb.lights.size(), 2u);
 }
 
+// rtlab render scene.gltf: the file's materials after default and ground, its camera as yaw and
+// pitch, its lights instead of the default one, and the ground plane under the model.
+TEST(ModelLoader, BareGltfSceneUsesTheFileCameraLightsAndMaterials) {
+    const Scene s = loadScene(kModels / "scene.gltf");
+    EXPECT_EQ(s.name, "scene");
+    EXPECT_EQ(s.materialNames,
+              (std::vector<std::string>{"default", "ground", "red", "mirror", "blend", "glass"}));
+    ASSERT_EQ(s.triangles.size(), 4u);
+    EXPECT_EQ(s.triangles[0].material, 2);
+    EXPECT_EQ(s.triangles[3].material, 5);
+    expectNear(s.camera.position, {0, 1, -10}, "camera");
+    EXPECT_NEAR(s.camera.yaw, 0.f, 1e-6f);
+    EXPECT_NEAR(s.camera.pitch, 0.f, 1e-6f);
+    EXPECT_NEAR(s.camera.fovY, 0.5f, 1e-6f);
+    ASSERT_EQ(s.lights.size(), 2u);
+    expectNear(s.lights[0].position, {0, 10, 0}, "the file's light");
+    ASSERT_EQ(s.planes.size(), 1u);
+    EXPECT_EQ(s.planes[0].material, 1);
+    EXPECT_NEAR(s.planes[0].offset, 0.f, 1e-2f) << "just below the lowest point, y = 0";
+    EXPECT_TRUE(s.hasTransparency());
+}
+
 TEST(ModelLoader, PlyQuadWithVertexColours) {
     const Model m = loadModel(kModels / "quad.ply");
     ASSERT_EQ(m.positions.size(), 2u * 3u) << "one quad, two triangles";
@@ -161,6 +185,31 @@ TEST(ModelLoader, PlyQuadWithVertexColours) {
     for (const glm::vec3& n : m.normals) expectNear(n, {0, 0, 1}, "quad normal");
     EXPECT_FALSE(m.camera.has_value());
     EXPECT_TRUE(m.lights.empty());
+    const Scene s = loadScene(kModels / "quad.ply");
+    ASSERT_EQ(s.lights.size(), 1u) << "the default light";
+    EXPECT_EQ(s.camera.yaw, 0.f) << "the default camera on -z";
+    EXPECT_LT(s.camera.position.z, 0.f);
+}
+
+// A JSON scene places glTF and PLY models as it does OBJ ones: its material, its transform.
+TEST(ModelLoader, JsonSceneMeshesMayBeGltfOrPly) {
+    const fs::path dir = rt::test::scratchPath("json_models/");
+    const fs::path json = dir / "scene.json";
+    std::ofstream(json) << R"({"camera": {"position": [0, 1, -5]},
+        "materials": {"m": {"diffuse": [0.1, 0.2, 0.3]}},
+        "meshes": [{"file": ")"
+                        << fs::absolute(kModels / "quad.ply").string() << R"(",
+                    "material": "m", "transform": {"translate": [10, 0, 0]}},
+                   {"file": ")"
+                        << fs::absolute(kModels / "scene.glb").string() << R"(",
+                    "material": "m"}]})";
+    const Scene s = loadScene(json);
+    ASSERT_EQ(s.triangles.size(), 2u + 4u);
+    ASSERT_EQ(s.meshes.size(), 2u);
+    expectNear(s.triangles[0].v0, {10, 0, 0}, "the quad moved by the scene's transform");
+    expectNear(s.triangles[2].v1, {4, 0, 0}, "the glb's node transform applied");
+    for (const dev::Triangle& t : s.triangles) EXPECT_EQ(t.material, 0) << "the scene's material";
+    EXPECT_EQ(s.lights.size(), 0u) << "a model's lights stay out of a JSON scene";
 }
 
 struct BadModel {
@@ -232,6 +281,20 @@ TEST(ModelLoader, FifoIsRefusedNotRead) {
     ASSERT_EQ(mkfifo(model.c_str(), 0600), 0);
     EXPECT_EQ(loadError(model), model.string() + ": cannot open: not a regular file");
     EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(10));
+}
+
+TEST(ModelLoader, BareModelErrorsAreOneLineFromLoadScene) {
+    for (const char* file : {"points.ply", "truncated.glb", "broken_json.gltf"}) {
+        const fs::path path = fs::path("tests/data/bad_models") / file;
+        try {
+            loadScene(path);
+            ADD_FAILURE() << path << " loaded";
+        } catch (const Error& e) {
+            const std::string msg = e.what();
+            EXPECT_EQ(msg.rfind(path.string() + ": ", 0), 0u) << msg;
+            EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
+        }
+    }
 }
 
 // Known values of Debian's assimp-testmodels (scripts/setup installs it).
