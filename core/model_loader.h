@@ -5,6 +5,7 @@
 // rt::Error "<file>: <reason>" on one line.
 #pragma once
 
+#include <chrono>
 #include <filesystem>
 #include <glm/glm.hpp>
 #include <optional>
@@ -42,6 +43,12 @@ struct Model {
 // True for the extensions loadModel reads: .gltf, .glb, .ply (any case).
 bool isModelFile(const std::filesystem::path& path);
 
+// Reads the file. assimp runs in a child process (core/model_loader.cpp says why): a file on which
+// it crashes, or that it does not finish reading within the time limit, fails with one line.
 Model loadModel(const std::filesystem::path& path);
+
+// The time limit of loadModel's reader process, 120 s unless set; the fuzz targets shorten it
+// below libFuzzer's limit per input.
+void setModelReadTimeLimit(std::chrono::milliseconds limit);
 
 }  // namespace rt
