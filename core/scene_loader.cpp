@@ -1,4 +1,5 @@
-// rtlab — scene files: JSON (format and rules in scenes/README.md) or a bare OBJ, into rt::Scene.
+// rtlab — scene files: JSON (format and rules in scenes/README.md) or a bare OBJ, glTF or PLY
+// model, into rt::Scene.
 // Every rejection is one line, "<file>: <json pointer>: <reason>", thrown as rt::Error; the
 // checks run before anything reaches a device, so kernels may trust the records.
 #include "core/scene_loader.h"
@@ -21,6 +22,7 @@
 
 #include "core/accel.h"
 #include "core/error.h"
+#include "core/model_loader.h"
 #include "core/obj_loader.h"
 
 namespace rt {
@@ -501,8 +503,24 @@ class Loader {
         if (n > 0) scene_.meshes.push_back({0, int(n), -1, 0, {}, {}, {}, 0.f, {}});
     }
 
+    // A model file's triangles: three positions and normals per triangle.
+    struct Geometry {
+        std::vector<glm::vec3> positions, normals;
+    };
+
+    // OBJ through core/obj_loader, glTF and PLY through core/model_loader (in world space, the
+    // file's node transforms applied); the file's materials, cameras and lights are not used.
+    static Geometry geometry(const fs::path& file) {
+        if (isModelFile(file)) {
+            Model model = loadModel(file);
+            return {std::move(model.positions), std::move(model.normals)};
+        }
+        ObjMesh obj = loadObj(file);
+        return {std::move(obj.positions), std::move(obj.normals)};
+    }
+
     void meshes(const Node& list) {
-        std::map<std::string, ObjMesh> cache;  // one parse per file, however often placed
+        std::map<std::string, Geometry> cache;  // one parse per file, however often placed
         for (std::size_t i = 0, n = list.array(kMaxMeshes, "meshes"); i < n; ++i) {
             Node m = list[i];
             m.object({"file", "material", "transform"});
@@ -513,12 +531,12 @@ class Loader {
             auto it = cache.find(file.string());
             if (it == cache.end()) {
                 try {
-                    it = cache.emplace(file.string(), loadObj(file)).first;
+                    it = cache.emplace(file.string(), geometry(file)).first;
                 } catch (const Error& e) {
                     fileNode.fail(e.what());
                 }
             }
-            const ObjMesh& obj = it->second;
+            const Geometry& obj = it->second;
             addTriangles(obj.positions.size() / 3, m);
             glm::mat3 normalXf = glm::transpose(glm::inverse(glm::mat3(xf)));
             dev::MeshInstance inst{};
@@ -661,7 +679,6 @@ class Loader {
     bool accelGiven_ = false;  // else the scene gets defaultAccel
 };
 
-// A bare OBJ: grey model, ground plane under it, camera on -z framing its bounding sphere.
 // An .mtl material as rtlab's: Ka, Kd, Ks and Ns as they are; d as the opacity, with Ni as the
 // index of refraction of what shows through; illumination models 3, 5 and 7 (ray-traced
 // reflection) make the surface a mirror weighted by Ks's mean.
@@ -678,23 +695,55 @@ dev::Material fromObj(const ObjMaterial& m) {
     return out;
 }
 
-Scene wrapObj(const fs::path& path) {
-    ObjMesh obj = loadObj(path);
+// A bare model's scene starts with two materials: `default` (grey) and `ground`; the file's
+// own follow (scenes/README.md, "A bare model").
+Scene bareModelScene(const fs::path& path) {
     Scene scene;
     scene.name = path.stem().string();
     scene.source = path;
-    dev::Material model{}, ground{};
-    model.diffuse = {0.7f, 0.7f, 0.7f};
-    model.specular = {0.2f, 0.2f, 0.2f};
+    dev::Material ground{};
     ground.diffuse = {0.5f, 0.5f, 0.5f};
-    model.ambient = ground.ambient = {0.05f, 0.05f, 0.05f};
-    model.exponent = 32.f;
+    ground.ambient = {0.05f, 0.05f, 0.05f};
     ground.exponent = 8.f;
-    model.opacity = ground.opacity = model.ior = ground.ior = 1.f;
-    scene.materials = {model, ground};
+    ground.opacity = ground.ior = 1.f;
+    scene.materials = {defaultModelMaterial(), ground};
     scene.materialNames = {"default", "ground"};
-    // The file's own materials follow (scenes/README.md, "OBJ models"): faces without one keep
-    // the default.
+    return scene;
+}
+
+constexpr int kGroundMaterial = 1;
+
+// The rest of a bare model's scene, around its triangles (one mesh): the file's camera, or one
+// on -z framing the bounding sphere; the file's lights, or one white point light above, in
+// front and to the right; a ground plane just below the lowest point.
+void finishBareModel(Scene& scene, const ModelCamera* camera) {
+    scene.meshes.push_back({0, int(scene.triangles.size()), -1, 0, {}, {}, {}, 0.f, {}});
+    finalizeScene(scene);
+    scene.defaults.accel = defaultAccel(scene);
+    const dev::MeshInstance& m = scene.meshes[0];
+    const glm::vec3 c = v3(m.sphereCenter);
+    const float r = std::max(m.sphereRadius, 1e-6f);
+    if (camera) {
+        // As a JSON look_at (SHADING.md section 1 inverted for the centre ray).
+        const glm::dvec3 d(camera->direction);
+        const float yaw = float(std::atan2(d.x, d.z));
+        const float pitch = float(std::asin(std::clamp(d.y, -1.0, 1.0)));
+        scene.camera = {f3(camera->position), yaw, pitch, camera->fovY, {0, 0}};
+    } else {
+        const float fov = 45.f * kDegrees;
+        const float distance = 1.1f * r / std::sin(fov / 2);  // 10% margin around the sphere
+        scene.camera = {f3(c - glm::vec3(0, 0, distance)), 0.f, 0.f, fov, {0, 0}};
+    }
+    if (scene.lights.empty())
+        scene.lights.push_back({f3(c + glm::vec3(r, 3 * r, -2 * r)), 0.f, {1, 1, 1}, 0.f});
+    scene.planes.push_back({{0, 1, 0}, m.boundsLo.y - 1e-3f * r, kGroundMaterial, {0, 0, 0}});
+}
+
+// A bare OBJ: faces with a usemtl that a library defines get that material, the others
+// `default`.
+Scene wrapObj(const fs::path& path) {
+    ObjMesh obj = loadObj(path);
+    Scene scene = bareModelScene(path);
     const int firstObjMaterial = int(scene.materials.size());
     for (const ObjMaterial& m : obj.materials) {
         scene.materials.push_back(fromObj(m));
@@ -708,17 +757,28 @@ Scene wrapObj(const fs::path& path) {
         scene.triangles.push_back({f3(p[t]), f3(p[t + 1]), f3(p[t + 2]), f3(n[t]), f3(n[t + 1]),
                                    f3(n[t + 2]), m < 0 ? 0 : firstObjMaterial + m, 0});
     }
-    scene.meshes.push_back({0, int(scene.triangles.size()), -1, 0, {}, {}, {}, 0.f, {}});
-    finalizeScene(scene);
-    scene.defaults.accel = defaultAccel(scene);
-    const dev::MeshInstance& m = scene.meshes[0];
-    const glm::vec3 c = v3(m.sphereCenter);
-    const float r = std::max(m.sphereRadius, 1e-6f);
-    const float fov = 45.f * kDegrees;
-    const float distance = 1.1f * r / std::sin(fov / 2);  // 10% margin around the sphere
-    scene.camera = {f3(c - glm::vec3(0, 0, distance)), 0.f, 0.f, fov, {0, 0}};
-    scene.lights.push_back({f3(c + glm::vec3(r, 3 * r, -2 * r)), 0.f, {1, 1, 1}, 0.f});
-    scene.planes.push_back({{0, 1, 0}, m.boundsLo.y - 1e-3f * r, 1, {0, 0, 0}});
+    finishBareModel(scene, nullptr);
+    return scene;
+}
+
+// A bare glTF or PLY model (core/model_loader.h): its materials, camera and lights where the
+// file has them.
+Scene wrapModel(const fs::path& path) {
+    Model model = loadModel(path);
+    Scene scene = bareModelScene(path);
+    const int first = int(scene.materials.size());
+    scene.materials.insert(scene.materials.end(), model.materials.begin(), model.materials.end());
+    scene.materialNames.insert(scene.materialNames.end(), model.materialNames.begin(),
+                               model.materialNames.end());
+    scene.notes = std::move(model.notes);
+    scene.lights = std::move(model.lights);
+    const auto& p = model.positions;
+    const auto& n = model.normals;
+    scene.triangles.reserve(p.size() / 3);
+    for (std::size_t t = 0; t < p.size(); t += 3)
+        scene.triangles.push_back({f3(p[t]), f3(p[t + 1]), f3(p[t + 2]), f3(n[t]), f3(n[t + 1]),
+                                   f3(n[t + 2]), first + model.triangleMaterial[t / 3], 0});
+    finishBareModel(scene, model.camera ? &*model.camera : nullptr);
     return scene;
 }
 
@@ -730,16 +790,16 @@ std::string lowerExtension(const fs::path& path) {
 
 bool isObj(const fs::path& path) { return lowerExtension(path) == ".obj"; }
 
-// Model formats people try first; rtlab reads OBJ models and its own JSON scenes only.
+// Model formats people try first that rtlab does not read.
 void rejectOtherModelFormats(const fs::path& path) {
-    static const char* const kOthers[] = {".ply", ".gltf", ".glb", ".fbx", ".stl", ".dae",
-                                          ".3ds", ".blend", ".usd", ".usda", ".usdz", ".x3d"};
+    static const char* const kOthers[] = {".fbx", ".stl",  ".dae",  ".3ds", ".blend",
+                                          ".usd", ".usda", ".usdz", ".x3d"};
     const std::string ext = lowerExtension(path);
     for (const char* other : kOthers)
         if (ext == other)
             throw Error(path.string() + ": " + ext.substr(1) +
-                        " files are not supported; rtlab reads .obj models and .json scenes "
-                        "(convert it to OBJ, e.g. with assimp export or Blender)");
+                        " files are not supported; rtlab reads .obj, .gltf, .glb and .ply models "
+                        "and .json scenes (convert it, e.g. with assimp export or Blender)");
 }
 
 }  // namespace
@@ -748,6 +808,7 @@ Scene loadScene(const std::filesystem::path& path, const ImageReader& readImage)
     try {
         rejectOtherModelFormats(path);
         if (isObj(path)) return wrapObj(path);
+        if (isModelFile(path)) return wrapModel(path);
         return Loader(path, readImage).load();
     } catch (const std::bad_alloc&) {
         throw Error(path.string() + ": out of memory");

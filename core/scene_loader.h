@@ -1,4 +1,4 @@
-// rtlab — scene files (JSON, documented in scenes/README.md) and bare OBJ models.
+// rtlab — scene files (JSON, documented in scenes/README.md) and bare OBJ, glTF and PLY models.
 // Every validation failure throws rt::Error with one line: "<file>: <json-pointer>: <reason>",
 // e.g. "scenes/bad.json: /spheres/2/radius: must be > 0, got -1".
 #pragma once
@@ -15,8 +15,9 @@ namespace rt {
 // rtlab_image provides readImage(). Without a reader, a scene with a cubemap is an error.
 using ImageReader = std::function<Image(const std::filesystem::path&)>;
 
-// Loads a .json scene, or wraps a bare .obj in the default scene (camera framing its bounds, one
-// light, a ground plane). Relative paths inside a scene resolve against the scene's directory.
+// Loads a .json scene, or wraps a bare .obj, .gltf, .glb or .ply model in the default scene
+// (camera framing its bounds, one light, a ground plane; a glTF's own camera and lights where it
+// has them). Relative paths inside a scene resolve against the scene's directory.
 Scene loadScene(const std::filesystem::path& path, const ImageReader& readImage = {});
 
 // Fills mesh bounds (box and sphere) and checks limits; the loader calls it, tests may too.

@@ -6,8 +6,8 @@
 #   scripts/gpu-sweep.sh prepare [SWEEP] [--resume DIR]...
 #       Builds rtlab and rtlab-bench from a clean clone of HEAD (so every result names an exact
 #       commit) in build-gpu/, and fills carry/gpu-sweep/ (git-ignored) with rtlab-bench, the
-#       libraries it needs beside it (libbenchmark.so.1debian, libtinyobjloader; not libOpenCL.so.1:
-#       the GPU host's own ICD loader is used),
+#       libraries it needs beside it (libbenchmark.so.1debian, libtinyobjloader, libassimp with
+#       libdraco, libminizip and libz; not libOpenCL.so.1: the GPU host's own ICD loader is used),
 #       the scenes with .pfm cubemap faces, the sweep file, run.sh and smoke.sh (scripts/gpu-smoke,
 #       the check to pass before any GPU result is called done). --resume DIR (a folder
 #       copied back from an earlier run) makes the new run skip the cells that one measured.
@@ -71,7 +71,8 @@ prepare() {
     rm -rf "$CARRY"
     mkdir -p "$CARRY/bin" "$CARRY/sweeps" "$CARRY/resume"
     cp "$BUILD/build/bin/rtlab-bench" "$CARRY/bin/"
-    for lib in libbenchmark.so.1debian libtinyobjloader.so.2rc10; do
+    for lib in libbenchmark.so.1debian libtinyobjloader.so.2rc10 libassimp.so.5 libdraco.so.7 \
+               libminizip.so.1 libz.so.1; do
         path=$(lib_path "$BUILD/build/bin/rtlab-bench" "$lib")
         [ -z "$path" ] || cp -L "$path" "$CARRY/bin/$lib"
     done

@@ -192,14 +192,15 @@ TEST(ObjLoader, MtlLibraryThatIsNoRegularFileIsRefusedNotRead) {
 }
 
 TEST(ObjLoader, OtherModelFormatsAreRefusedByName) {
-    for (const char* file : {"model.ply", "scene.gltf", "scene.GLB", "part.stl"}) {
+    for (const char* file : {"model.fbx", "scene.DAE", "part.stl"}) {
         try {
             loadScene(file);
             ADD_FAILURE() << file << " loaded";
         } catch (const Error& e) {
             const std::string msg = e.what();
             EXPECT_NE(msg.find(file), std::string::npos) << msg;
-            EXPECT_NE(msg.find("files are not supported; rtlab reads .obj models and .json scenes"),
+            EXPECT_NE(msg.find("files are not supported; rtlab reads .obj, .gltf, .glb and .ply "
+                               "models and .json scenes"),
                       std::string::npos) << msg;
         }
     }

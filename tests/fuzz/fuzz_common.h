@@ -1,10 +1,11 @@
-// rtlab fuzz targets — shared by fuzz_scene.cpp and fuzz_obj.cpp: the loaders take paths, so each
-// input is written to a file in a private folder; every failure must be an rt::Error (one clear
-// line), anything else is a bug and aborts so that libFuzzer keeps the input.
+// rtlab fuzz targets — shared by fuzz_scene.cpp, fuzz_obj.cpp and fuzz_model.cpp: the loaders take
+// paths, so each input is written to a file in a private folder; every failure must be an
+// rt::Error (one clear line), anything else is a bug and aborts so that libFuzzer keeps the input.
 #pragma once
 
 #include <stdlib.h>
 
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
@@ -14,7 +15,14 @@
 
 #include "core/accel.h"
 #include "core/error.h"
+#include "core/model_loader.h"
 #include "core/scene_loader.h"
+
+// core/model_loader.cpp's reader process, a fork of the target, resets the crash signals to their
+// default action so that a crash inside assimp ends it quietly and the loader reports one line;
+// ASan keeps its own handlers unless user handlers are allowed. (Without this, the reader's crash
+// would run libFuzzer's death callback and leave a crash file for an input that was handled.)
+extern "C" const char* __asan_default_options() { return "allow_user_segv_handler=1"; }
 
 namespace rt::fuzz {
 
@@ -28,9 +36,13 @@ inline const std::filesystem::path& workDir() {
             std::abort();
         }
         std::filesystem::path d = pattern;
-        // A model the fuzzed scenes can name ("meshes": [{"file": "m.obj", ...}]).
+        // Models the fuzzed scenes can name ("meshes": [{"file": "m.obj", ...}], or "m.ply").
         std::ofstream(d / "m.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n"
                                       "f 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3 4\n";
+        std::ofstream(d / "m.ply") << "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\n"
+                                      "property float y\nproperty float z\nelement face 1\n"
+                                      "property list uchar int vertex_indices\nend_header\n"
+                                      "0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n";
         return d;
     }();
     return dir;
@@ -52,6 +64,9 @@ inline Image fakeImage(const std::filesystem::path&) {
 
 // Loads a scene and builds every acceleration structure over it, as a render would.
 inline void loadAndBuild(const std::filesystem::path& path) {
+    // A model that assimp never finishes fails after 5 s, before libFuzzer's 10 s per input.
+    static const bool limited = (setModelReadTimeLimit(std::chrono::seconds(5)), true);
+    (void)limited;
     try {
         Scene scene = loadScene(path, fakeImage);
         if (scene.spheres.size() + scene.triangles.size() <= 4096)
