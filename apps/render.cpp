@@ -167,6 +167,9 @@ int runRender() {
             counted = pipeline->stats().raysCounted;
             s.rays = rays;
             s.raysCounted = counted;
+            // What only the counted frame knows (the queue's retraced_rays) joins the extras.
+            for (const auto& [key, value] : pipeline->stats().extras.items())
+                if (!s.extras.contains(key)) s.extras[key] = value;
         }
         uint64_t totalRays = 0;
         for (uint64_t n : rays) totalRays += n;
