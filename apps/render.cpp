@@ -198,6 +198,10 @@ int runRender() {
             pipeline->setProgress({});
             s.rays = pipeline->stats().rays;
             s.raysCounted = pipeline->stats().raysCounted;
+            // What only the counted frame knows (the queue's retraced_rays, the megakernel's
+            // busy lanes per warp) joins the extras.
+            for (const auto& [key, value] : pipeline->stats().extras.items())
+                if (!s.extras.contains(key)) s.extras[key] = value;
         }
     }
     uint64_t totalRays = 0;

@@ -126,6 +126,9 @@ public:
     void resetRayCounts(cl::CommandQueue& queue) const;
     RayCounts readRayCounts(cl::CommandQueue& queue) const;
     WarpCounts readWarpCounts(cl::CommandQueue& queue) const;  // zeroed by resetRayCounts
+    // The counters themselves (RT_RAY_TYPES ray counters, then the warp counters), for a kernel
+    // that adds to them outside RT_SCENE_PARAMS.
+    const cl::Buffer& rayCountBuffer() const { return rayCounts_; }
     // True when this copy was made from `scene` with `accel` (by address: scenes are not mutated
     // while a pipeline holds them, except the camera, which travels in the settings).
     bool matches(const Scene& scene, RenderOptions::Accel accel) const {

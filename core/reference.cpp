@@ -1,13 +1,15 @@
 // rtlab — the CPU reference renderer: core/SHADING.md in double precision with plain recursion.
 // Every OpenCL pipeline is judged against this file, so it follows the spec line by line; the
-// only addition is a triangle BVH that visits the same triangles a brute-force loop would hit and
-// breaks exact ties by triangle index, so it returns bit-identical results, only faster.
+// only addition is a BVH over the spheres and one over the triangles (planes are infinite and
+// tested one by one) that visit every primitive a brute-force loop could accept and break exact
+// ties in the brute-force order, so they return bit-identical results, only faster.
 #include "core/reference.h"
 
 #include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <thread>
 #include <utility>
 #include <vector>
@@ -146,8 +148,12 @@ struct Surface {
 
 class Tracer {
   public:
-    Tracer(const Scene& scene, const RenderOptions& options)
-        : scene_(scene), opt_(options), bvh_(scene.triangles) {}
+    Tracer(const Scene& scene, const RenderOptions& options, bool bruteForce)
+        : scene_(scene),
+          opt_(options),
+          bruteForce_(bruteForce),
+          spheres_(bruteForce ? refbvh::Bvh() : refbvh::Bvh::overSpheres(scene.spheres)),
+          triangles_(bruteForce ? refbvh::Bvh() : refbvh::Bvh::overTriangles(scene.triangles)) {}
 
     // AA sample `sample` (sy n + sx, as the device numbers them) at offset (ox, oy) in the pixel.
     dvec3 pixel(int x, int y, int sample, double ox, double oy) const {
@@ -155,7 +161,98 @@ class Tracer {
                      PixelSample{x, y, sample});
     }
 
+    // Section 2: spheres, planes, triangles; replace only on 0 < t < tBest, so exact ties keep
+    // the first object in that order. The BVHs offer primitives in their own order, and planes
+    // go first there to bound the traversals; an exact tie then goes to the object a loop in
+    // section 2's order would have kept (better), so the hit is the same.
+    Hit closestHit(const Ray& ray) const {
+        Hit best;
+        if (bruteForce_) {
+            for (std::size_t i = 0; i < scene_.spheres.size(); ++i) {
+                const auto t = sphereT(ray, scene_.spheres[i]);
+                if (t && *t > 0 && *t < best.t) best = Hit{*t, RT_KIND_SPHERE, int(i)};
+            }
+            for (std::size_t i = 0; i < scene_.planes.size(); ++i) {
+                const auto t = planeT(ray, scene_.planes[i]);
+                if (t && *t > 0 && *t < best.t) best = Hit{*t, RT_KIND_PLANE, int(i)};
+            }
+            for (std::size_t i = 0; i < scene_.triangles.size(); ++i) {
+                const auto h = triangleHit(ray, int(i));
+                if (h && h->t > 0 && h->t < best.t)
+                    best = Hit{h->t, RT_KIND_TRIANGLE, int(i), h->u, h->v};
+            }
+            return best;
+        }
+        for (std::size_t i = 0; i < scene_.planes.size(); ++i) {
+            const auto t = planeT(ray, scene_.planes[i]);
+            if (t && better(*t, RT_KIND_PLANE, int(i), best)) best = Hit{*t, RT_KIND_PLANE, int(i)};
+        }
+        spheres_.traverse(
+            ray,
+            [&](int i) {
+                const auto t = sphereT(ray, scene_.spheres[i]);
+                if (t && better(*t, RT_KIND_SPHERE, i, best)) best = Hit{*t, RT_KIND_SPHERE, i};
+                return best.t;
+            },
+            best.t);
+        triangles_.traverse(
+            ray,
+            [&](int i) {
+                const auto h = triangleHit(ray, i);
+                if (h && better(h->t, RT_KIND_TRIANGLE, i, best))
+                    best = Hit{h->t, RT_KIND_TRIANGLE, i, h->u, h->v};
+                return best.t;
+            },
+            best.t);
+        return best;
+    }
+
+    // Section 4: any hit with 0 < t < length blocks the shadow ray.
+    bool occluded(const Ray& ray, double length) const {
+        auto blocks = [&](const std::optional<double>& t) { return t && *t > 0 && *t < length; };
+        for (const dev::Plane& pl : scene_.planes)
+            if (blocks(planeT(ray, pl))) return true;
+        if (bruteForce_) {
+            for (const dev::Sphere& s : scene_.spheres)
+                if (blocks(sphereT(ray, s))) return true;
+            for (std::size_t i = 0; i < scene_.triangles.size(); ++i) {
+                const auto h = triangleHit(ray, int(i));
+                if (h && blocks(h->t)) return true;
+            }
+            return false;
+        }
+        bool blocked = false;
+        // A negative bound ends a traversal.
+        spheres_.traverse(
+            ray,
+            [&](int i) {
+                blocked = blocks(sphereT(ray, scene_.spheres[i]));
+                return blocked ? -1.0 : length;
+            },
+            length);
+        if (blocked) return true;
+        triangles_.traverse(
+            ray,
+            [&](int i) {
+                const auto h = triangleHit(ray, i);
+                blocked = h && blocks(h->t);
+                return blocked ? -1.0 : length;
+            },
+            length);
+        return blocked;
+    }
+
   private:
+    // Whether a hit at t on object `object` of `kind` replaces `best`: nearer, or exactly as near
+    // and first in section 2's order (spheres, planes, triangles, each by index; the RT_KIND_*
+    // values are in that order). A miss is never tied: nothing is kept at t = infinity.
+    static bool better(double t, int kind, int object, const Hit& best) {
+        if (!(t > 0) || !(t <= best.t)) return false;
+        if (t < best.t) return true;
+        if (best.kind == RT_KIND_MISS) return false;
+        return kind < best.kind || (kind == best.kind && object < best.object);
+    }
+
     // Section 1: camera space, then pitch around x, then yaw around y.
     dvec3 primaryDir(double px, double py) const {
         const dev::Camera& cam = scene_.camera;
@@ -185,54 +282,6 @@ class Tracer {
         return opt_.watertight
                    ? ref::intersectTriangleWatertight(ray, toD(tr.v0), toD(tr.v1), toD(tr.v2))
                    : ref::intersectTriangleMT(ray, toD(tr.v0), toD(tr.v1), toD(tr.v2));
-    }
-
-    // Section 2: spheres, planes, triangles; replace only on 0 < t < tBest. The BVH may offer
-    // triangles out of order, so an equal t among triangles goes to the lower index.
-    Hit closestHit(const Ray& ray) const {
-        Hit best;
-        for (std::size_t i = 0; i < scene_.spheres.size(); ++i) {
-            const auto t = sphereT(ray, scene_.spheres[i]);
-            if (t && *t > 0 && *t < best.t) best = Hit{*t, RT_KIND_SPHERE, int(i)};
-        }
-        for (std::size_t i = 0; i < scene_.planes.size(); ++i) {
-            const auto t = planeT(ray, scene_.planes[i]);
-            if (t && *t > 0 && *t < best.t) best = Hit{*t, RT_KIND_PLANE, int(i)};
-        }
-        bvh_.traverse(
-            ray,
-            [&](int i) {
-                const auto h = triangleHit(ray, i);
-                if (!h || !(h->t > 0)) return best.t;
-                const bool tieWin =
-                    h->t == best.t && best.kind == RT_KIND_TRIANGLE && i < best.object;
-                if (h->t < best.t || tieWin) best = Hit{h->t, RT_KIND_TRIANGLE, i, h->u, h->v};
-                return best.t;
-            },
-            best.t);
-        return best;
-    }
-
-    // Section 4: any hit with 0 < t < length blocks the shadow ray.
-    bool occluded(const Ray& ray, double length) const {
-        for (const dev::Sphere& s : scene_.spheres) {
-            const auto t = sphereT(ray, s);
-            if (t && *t > 0 && *t < length) return true;
-        }
-        for (const dev::Plane& pl : scene_.planes) {
-            const auto t = planeT(ray, pl);
-            if (t && *t > 0 && *t < length) return true;
-        }
-        bool blocked = false;
-        bvh_.traverse(
-            ray,
-            [&](int i) {
-                const auto h = triangleHit(ray, i);
-                if (h && h->t > 0 && h->t < length) blocked = true;
-                return blocked ? -1.0 : length;  // a negative bound ends the traversal
-            },
-            length);
-        return blocked;
     }
 
     // Section 2, normals: the shading normal faces the incoming ray; inside when flipped. Hit
@@ -442,7 +491,8 @@ class Tracer {
 
     const Scene& scene_;
     const RenderOptions& opt_;
-    refbvh::Bvh bvh_;
+    bool bruteForce_;
+    refbvh::Bvh spheres_, triangles_;
 };
 
 // Runs fn(row) for every row, rows handed out by an atomic counter; after each of its own rows
@@ -469,13 +519,11 @@ void store(Image& image, int x, int y, dvec3 c) {
     p[0] = float(c.x), p[1] = float(c.y), p[2] = float(c.z);
 }
 
-}  // namespace
-
-Image renderReference(const Scene& scene, const RenderOptions& options, int threads,
-                      const std::function<void(long long, long long)>& progress) {
+Image render(const Scene& scene, const RenderOptions& options, int threads,
+             const std::function<void(long long, long long)>& progress, bool bruteForce) {
     if (threads <= 0) threads = int(std::max(1u, std::thread::hardware_concurrency()));
     threads = std::min(threads, std::max(1, options.height));
-    const Tracer tracer(scene, options);
+    const Tracer tracer(scene, options, bruteForce);
     const int n = std::max(1, options.aa);
     Image image(options.width, options.height);
 
@@ -527,4 +575,39 @@ Image renderReference(const Scene& scene, const RenderOptions& options, int thre
     return image;
 }
 
+}  // namespace
+
+Image renderReference(const Scene& scene, const RenderOptions& options, int threads,
+                      const std::function<void(long long, long long)>& progress) {
+    return render(scene, options, threads, progress, false);
+}
+
+Image renderReferenceBruteForce(const Scene& scene, const RenderOptions& options, int threads) {
+    return render(scene, options, threads, {}, true);
+}
+
+namespace ref {
+
+struct Queries::Impl {
+    Impl(const Scene& scene, const RenderOptions& options, bool bruteForce)
+        : options(options), tracer(scene, this->options, bruteForce) {}
+    RenderOptions options;
+    Tracer tracer;
+};
+
+Queries::Queries(const Scene& scene, const RenderOptions& options, bool bruteForce)
+    : impl_(std::make_unique<Impl>(scene, options, bruteForce)) {}
+
+Queries::~Queries() = default;
+
+SceneHit Queries::closest(const Ray& ray) const {
+    const Hit h = impl_->tracer.closestHit(ray);
+    return SceneHit{h.t, h.kind, h.object, h.u, h.v};
+}
+
+bool Queries::occluded(const Ray& ray, double length) const {
+    return impl_->tracer.occluded(ray, length);
+}
+
+}  // namespace ref
 }  // namespace rt

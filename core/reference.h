@@ -3,6 +3,7 @@
 #pragma once
 
 #include <functional>
+#include <memory>
 #include <optional>
 
 #include <glm/glm.hpp>
@@ -18,11 +19,39 @@ namespace rt {
 Image renderReference(const Scene& scene, const RenderOptions& options, int threads = 0,
                       const std::function<void(long long done, long long total)>& progress = {});
 
+// The same image with every primitive tested for every ray, in the order of core/SHADING.md
+// section 2 and without the reference's BVHs: the oracle of those structures in the tests.
+// Images are bit-identical to renderReference's, minutes later on a large scene.
+Image renderReferenceBruteForce(const Scene& scene, const RenderOptions& options, int threads = 0);
+
 // Building blocks, exposed for the unit tests. Directions are unit length.
 namespace ref {
 
 struct Ray {
     glm::dvec3 origin, dir;
+};
+
+// A closest hit: kind is RT_KIND_* (RT_KIND_MISS with t = infinity and object -1 on a miss);
+// u, v are a triangle's barycentrics.
+struct SceneHit {
+    double t;
+    int kind, object;
+    double u, v;
+};
+
+// The reference's ray queries on one scene and its intersection options (robust spheres,
+// watertight triangles): through its BVHs, or by brute force over every primitive.
+class Queries {
+  public:
+    Queries(const Scene& scene, const RenderOptions& options, bool bruteForce);
+    ~Queries();
+    SceneHit closest(const Ray& ray) const;
+    // Whether something lies at 0 < t < length along the ray (a shadow ray's test).
+    bool occluded(const Ray& ray, double length) const;
+
+  private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
 };
 
 // Nearest t > 0, or nullopt. Plain = report Algorithm 2 with the "behind the ray" check first.

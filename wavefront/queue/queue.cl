@@ -59,14 +59,43 @@ inline void Queue_Store(const QueueRays* r, int i, const Pending* p, int pixel) 
     r->meta[i] = p->depth << 8 | p->type;
 }
 
+// Ray counts (RT_COUNT_RAYS): a pixel's rays are counted in its own tally of RT_RAY_TYPES words
+// (rayTally + RT_RAY_TYPES (pixel + 1)) while its path of the AA sample runs, not in the frame's
+// counters. A path cut for room is traced again from its camera ray, so the rays of the cut
+// attempt are the queue's extra work, not the image's: when its pixel starts again, generate
+// moves that tally to rayTally[0, RT_RAY_TYPES) (the frame's retraced rays). When a path ends
+// (a bounce leaves it no children), accumulate adds its tally to the frame's counters. The counts
+// are then the rays of the image, the same rays the megakernel and the tree wavefront trace.
+#ifdef RT_COUNT_RAYS
+inline global uint* Queue_PixelRays(global uint* rayTally, int pixel) {
+    return rayTally + RT_RAY_TYPES * (pixel + 1);
+}
+#define QUEUE_COUNT_RAY(rayTally, pixel, type) atomic_inc(&Queue_PixelRays(rayTally, pixel)[type])
+#define QUEUE_COUNT_INTO_PIXEL(sc, rayTally, pixel) \
+    (sc).rayCounts = Queue_PixelRays(rayTally, pixel)
+#else
+#define QUEUE_COUNT_RAY(rayTally, pixel, type)
+#define QUEUE_COUNT_INTO_PIXEL(sc, rayTally, pixel)
+#endif
+
 // From: pixels (retry list first, then a run of new ones) / To: pool slots [first, first + count).
 kernel void Queue_Generate(RT_SCENE_PARAMS, QUEUE_RAYS_PARAMS(rays), int first, int count,
-                           global const int* retry, int retryCount, int nextPixel) {
+                           global const int* retry, int retryCount, int nextPixel,
+                           global uint* rayTally) {
     int k = get_global_id(0);
     if (k >= count) return;
     RT_SCENE_INIT(sc);
     QUEUE_RAYS_INIT(rays);
     int pixel = k < retryCount ? retry[k] : nextPixel + (k - retryCount);
+#ifdef RT_COUNT_RAYS
+    if (k < retryCount) {  // the cut attempt's rays: retraced, not the image's
+        global uint* tally = Queue_PixelRays(rayTally, pixel);
+        for (int t = 0; t < RT_RAY_TYPES; ++t) {
+            if (tally[t]) atomic_add(&rayTally[t], tally[t]);
+            tally[t] = 0;
+        }
+    }
+#endif
     int y = pixel / settings.width, x = pixel - y * settings.width;
     Pending p = PathState_Primary(&sc, x, y, settings.sampleIndex);
     Queue_Store(&rays, first + k, &p, pixel);
@@ -104,7 +133,7 @@ inline void Queue_GroupPushesReserve(local const int* count, local int* base,
 // Pushes are aggregated per work-group in local memory: one global atomic per queue per group.
 kernel void Queue_Extend(RT_SCENE_PARAMS, QUEUE_RAYS_PARAMS(rays), int n, global Node* nodes,
                          global int* classQueues, int pool, global int* shadowQueue,
-                         global int* counters, int nWord) {
+                         global int* counters, int nWord, global uint* rayTally) {
     local int count[RT_Q_CLASSES + 1], base[RT_Q_CLASSES + 1];
     local int histogram[(RT_Q_MAX_DEPTH + 1) * RT_Q_CLASSES];
     int lid = get_local_id(0), size = get_local_size(0), i = get_global_id(0);
@@ -121,6 +150,7 @@ kernel void Queue_Extend(RT_SCENE_PARAMS, QUEUE_RAYS_PARAMS(rays), int n, global
         // Occlusion is the shadow stage's work: with no lights, RayTree_TraceNode casts none.
         sc.settings.lightCount = 0;
         Pending p = Queue_Load(&rays, i);
+        QUEUE_COUNT_INTO_PIXEL(sc, rayTally, rays.pixel[i]);
         Node node = RayTree_TraceNode(&sc, p.ray, p.type, 0u);  // no shadow rays: no key
         nodes[i] = node;
         cls = Queue_Class(&sc, &node);
@@ -139,7 +169,7 @@ kernel void Queue_Extend(RT_SCENE_PARAMS, QUEUE_RAYS_PARAMS(rays), int n, global
 // ray's pixel, AA sample and depth), that RayTree_TraceNode makes when it casts them itself.
 kernel void Queue_Shadow(RT_SCENE_PARAMS, global Node* nodes, global const int* shadowQueue,
                          global const int* counters, global const int* rayPixel,
-                         global const int* rayMeta) {
+                         global const int* rayMeta, global uint* rayTally) {
     int k = get_global_id(0);
     if (k >= counters[RT_Q_SHADOW]) return;
     RT_SCENE_INIT(sc);
@@ -149,6 +179,7 @@ kernel void Queue_Shadow(RT_SCENE_PARAMS, global Node* nodes, global const int* 
     float3 origin = RayTree_SpawnOrigin(&sc, &node, 1.0f);
     int pixel = rayPixel[i], y = pixel / settings.width, x = pixel - y * settings.width;
     uint key = Sampling_PointKey(x, y, settings.sampleIndex, rayMeta[i] >> 8);
+    QUEUE_COUNT_INTO_PIXEL(sc, rayTally, pixel);
     for (int j = 0; j < settings.lightCount; ++j)
         nodes[i].occluded[j] = (uchar)Shade_OcclusionFrom(&sc, p, n, origin, j, key);
 }

@@ -187,6 +187,7 @@ public:
         return fakeItemMs_ > 0 ? fakeItemMs_ * double(l.items) : eventMs(l.event);
     }
     std::vector<QueueLaunch>& launches() { return launches_; }
+    const DeviceScene& scene() const { return scene_; }
 
 private:
     // Items [offset, offset + items) of the queue: work-items from offset / lanes on.
@@ -257,6 +258,7 @@ private:
         cl::Kernel& gen = f_.sceneKernel("Queue_Generate", s);
         QueueFrame::setRays(gen, a, b_.rays);
         gen.setArg(a + 7, b_.retry);
+        gen.setArg(a + 10, b_.rayTally);
         cl::Kernel& ext = f_.sceneKernel(f_.extendKernel(), s);
         int at = QueueFrame::setRays(ext, a, b_.rays);
         ext.setArg(at + 1, b_.nodes);
@@ -265,12 +267,14 @@ private:
         ext.setArg(at + 4, b_.shadowQueue);
         ext.setArg(at + 5, b_.counters);
         ext.setArg(at + 6, cl_int(onDevice_ ? RT_Q_LIVE : -1));
+        ext.setArg(at + 7, b_.rayTally);
         cl::Kernel& sh = f_.sceneKernel(f_.shadowKernel(), s);
         sh.setArg(a, b_.nodes);
         sh.setArg(a + 1, b_.shadowQueue);
         sh.setArg(a + 2, b_.counters);
         sh.setArg(a + 3, b_.rays.pixel);
         sh.setArg(a + 4, b_.rays.meta);
+        sh.setArg(a + 5, b_.rayTally);
         for (const char* name : kShadeKernels) {
             cl::Kernel& k = f_.sceneKernel(name, s);
             at = QueueFrame::setRays(k, a, b_.rays);
@@ -312,6 +316,9 @@ private:
         acc.setArg(4, b_.sums);
         acc.setArg(5, b_.counters);
         acc.setArg(6, cl_int(onDevice_ ? RT_Q_CUT : -1));
+        acc.setArg(7, b_.children);
+        acc.setArg(8, f_.scene().rayCountBuffer());
+        acc.setArg(9, b_.rayTally);
         cl::Kernel& comp = f_.kernel("Queue_Compact");
         int at = QueueFrame::setRays(comp, 0, b_.staging);
         comp.setArg(at, b_.children);
@@ -530,6 +537,7 @@ Image QueuePipeline::render(const Scene& scene, const RenderOptions& o) {
     };
     try {
         prepareBuffers(pool, C, pixels);
+        prepareRayTally((o.countRays ? pixels + 1 : 1) * RT_RAY_TYPES * sizeof(cl_uint));
     } catch (const cl::Error& e) {
         throwClError(e, "preparing queue-pipeline buffers", hint());
     }
@@ -555,7 +563,10 @@ Image QueuePipeline::render(const Scene& scene, const RenderOptions& o) {
     QueueFrame frame(cl_, program, *scene_, group, kernels_, stageCosts_,
                      onDevice ? 0.0 : o.maxLaunchMs, fakeItemMs_, packets);
     try {
-        if (o.countRays) scene_->resetRayCounts(cl_.queue());
+        if (o.countRays) {
+            scene_->resetRayCounts(cl_.queue());
+            cl_.queue().enqueueFillBuffer(buf_.rayTally, cl_uint(0), 0, buf_.rayTallyBytes);
+        }
         cl_.queue().enqueueFillBuffer(buf_.counters, cl_int(0), 0, RT_Q_WORDS * 4);
         cl::Kernel& resolve = frame.kernel("Queue_Resolve");
         resolve.setArg(0, buf_.sums);
@@ -586,7 +597,12 @@ Image QueuePipeline::render(const Scene& scene, const RenderOptions& o) {
             queue_.queueLengths.push_back(row);
         }
         if (o.countRays) {
+            // Every path has ended and added its rays; the tally's first words are the rays
+            // of the cut attempts (queue.cl).
             stats_.rays = scene_->readRayCounts(cl_.queue());
+            cl_uint retraced[RT_RAY_TYPES];
+            cl_.queue().enqueueReadBuffer(buf_.rayTally, CL_TRUE, 0, sizeof retraced, retraced);
+            for (int t = 0; t < RT_RAY_TYPES; ++t) queue_.retracedRays[t] = retraced[t];
             stats_.raysCounted = true;
         }
         if (o.maxLaunchMs > 0) frame.learn(nullptr);  // the last bounce's and resolve's
@@ -614,6 +630,7 @@ Image QueuePipeline::render(const Scene& scene, const RenderOptions& o) {
     stats_.extras["pool_rays"] = queue_.poolRays;  // its bytes: buffers["pool"]
     stats_.extras["bounces_run"] = queue_.iterations;
     stats_.extras["restarted_paths"] = queue_.restartedPaths;
+    if (o.countRays) stats_.extras["retraced_rays"] = queue_.retracedRays;  // by RT_RAY_* type
     stats_.extras["queue_lengths"] = queue_.queueLengths;  // [depth][miss, diffuse, mirror, glass]
     stats_.extras["queue_launch"] = queueLaunchName(o.queueLaunch);
     stats_.extras["queue_packets"] = packets ? kPacket : 0;  // rays per extend/shadow work-item

@@ -28,6 +28,10 @@ struct QueueBuffers {
     size_t pool = 0, pixels = 0;
     int branching = 0;
     size_t poolBytes = 0, imageBytes = 0;  // as tallied in the ClContext
+    // Ray counts (RenderOptions::countRays): the retraced rays by type, then each pixel's rays
+    // of its current path by type (queue.cl, Queue_PixelRays); one stub of 4 words otherwise.
+    cl::Buffer rayTally;
+    size_t rayTallyBytes = 0;
 };
 
 // The kernels of the last program, created once and reused frame after frame (with their
@@ -46,6 +50,9 @@ struct QueueStats {
     size_t poolRays = 0, poolBytes = 0;
     int iterations = 0;
     long long restartedPaths = 0;
+    // Rays by type traced for the paths that were cut and started again (counted frames only):
+    // work the queue does beyond the image's rays, which FrameStats::rays holds.
+    RayCounts retracedRays{};
     // Launch sizing (--queue-launch): blocking reads and writes the host waited on before the
     // frame's last kernel was enqueued (one per bounce with read-backs, none on the device), the
     // device's time from the first kernel's start to the last one's end, and the part of it in
@@ -92,6 +99,7 @@ public:
 
 private:
     void prepareBuffers(size_t pool, int branching, size_t pixels);
+    void prepareRayTally(size_t bytes);
     void releaseBuffers();
 
     ClContext& cl_;

@@ -89,7 +89,8 @@ inline Hit PacketLanes_Hit(const PacketLanes* l, int j) {
 // From: pool [RT_PACKET g, RT_PACKET (g + 1)) of [0, n) / To: as Queue_Extend, ray by ray.
 kernel void Queue_ExtendPacket(RT_SCENE_PARAMS, QUEUE_RAYS_PARAMS(rays), int n,
                                global Node* nodes, global int* classQueues, int pool,
-                               global int* shadowQueue, global int* counters, int nWord) {
+                               global int* shadowQueue, global int* counters, int nWord,
+                               global uint* rayTally) {
     local int count[RT_Q_CLASSES + 1], base[RT_Q_CLASSES + 1];
     local int histogram[(RT_Q_MAX_DEPTH + 1) * RT_Q_CLASSES];
     int lid = get_local_id(0), size = get_local_size(0), g = get_global_id(0);
@@ -110,7 +111,7 @@ kernel void Queue_ExtendPacket(RT_SCENE_PARAMS, QUEUE_RAYS_PARAMS(rays), int n,
                 continue;
             }
             Pending p = Queue_Load(&rays, first + j);
-            RT_COUNT_RAY(&sc, p.type);
+            QUEUE_COUNT_RAY(rayTally, rays.pixel[first + j], p.type);
             PacketLanes_Set(&l, j, p.ray, QueuePacket_Planes(&sc, p.ray, INFINITY, false));
         }
         PacketLanes_Trace(&sc, &l, false);
@@ -138,12 +139,13 @@ kernel void Queue_ExtendPacket(RT_SCENE_PARAMS, QUEUE_RAYS_PARAMS(rays), int n,
 // Queue_Shadow: sample k of light j of every lane goes in one packet.
 kernel void Queue_ShadowPacket(RT_SCENE_PARAMS, global Node* nodes,
                                global const int* shadowQueue, global const int* counters,
-                               global const int* rayPixel, global const int* rayMeta) {
+                               global const int* rayPixel, global const int* rayMeta,
+                               global uint* rayTally) {
     int first = get_global_id(0) * RT_PACKET;
     int lanes = min(counters[RT_Q_SHADOW] - first, RT_PACKET);
     if (lanes <= 0) return;
     RT_SCENE_INIT(sc);
-    int index[RT_PACKET];
+    int index[RT_PACKET], pixel[RT_PACKET];
     float3 point[RT_PACKET], normal[RT_PACKET], origin[RT_PACKET];
     uint key[RT_PACKET];
     for (int j = 0; j < lanes; ++j) {
@@ -153,7 +155,8 @@ kernel void Queue_ShadowPacket(RT_SCENE_PARAMS, global Node* nodes,
         point[j] = f3(node.point);
         normal[j] = f3(node.normal);
         origin[j] = RayTree_SpawnOrigin(&sc, &node, 1.0f);
-        int pixel = rayPixel[i], y = pixel / settings.width, x = pixel - y * settings.width;
+        pixel[j] = rayPixel[i];
+        int y = pixel[j] / settings.width, x = pixel[j] - y * settings.width;
         key[j] = Sampling_PointKey(x, y, settings.sampleIndex, rayMeta[i] >> 8);
     }
     for (int light = 0; light < settings.lightCount; ++light) {
@@ -174,7 +177,7 @@ kernel void Queue_ShadowPacket(RT_SCENE_PARAMS, global Node* nodes,
                 // Shade_OcclusionFrom's ray, and Scene_Query's planes before the BVH.
                 float3 v = Shade_LightPoint(&s[j], key[j], light, k) - origin[j];
                 float len = length(v);
-                RT_COUNT_RAY(&sc, RT_RAY_SHADOW);
+                QUEUE_COUNT_RAY(rayTally, pixel[j], RT_RAY_SHADOW);
                 Ray ray = makeRay(origin[j], v / len);
                 Hit hit = QueuePacket_Planes(&sc, ray, len, true);
                 if (hit.kind != RT_KIND_MISS) hit.t = 0.0f;  // occluded: traced no further

@@ -85,18 +85,33 @@ kernel void Queue_FindCut(global const int* children, global const int* offsets,
 
 // From: contrib of rays [0, cut) (cut: see Queue_Length) / To: the pixel's running sum of this AA sample. The first ray
 // of each path's run adds the run in pool order; a path's first bounce starts the sum from zero,
-// as the megakernel's colour does.
+// as the megakernel's colour does. Ray counts: a run whose rays have no children ends its path,
+// whose rays (the pixel's tally, queue.cl) then join the frame's counters.
 kernel void Queue_Accumulate(global const int* pixels, global const int* meta,
                              global const float* contrib, int cut, global float* sums,
-                             global const int* counters, int cutWord) {
+                             global const int* counters, int cutWord, global const int* children,
+                             global uint* rayCounts, global uint* rayTally) {
     int i = get_global_id(0);
     cut = Queue_Length(cut, cutWord, counters);
     if (i >= cut) return;
     int pixel = pixels[i];
     if (i > 0 && pixels[i - 1] == pixel) return;
     float3 s = (meta[i] >> 8) == 0 ? (float3)(0.0f, 0.0f, 0.0f) : vload3(pixel, sums);
-    for (int j = i; j < cut && pixels[j] == pixel; ++j) s += vload3(j, contrib);
+    int spawned = 0;
+    for (int j = i; j < cut && pixels[j] == pixel; ++j) {
+        s += vload3(j, contrib);
+        spawned += children[j];
+    }
     vstore3(s, pixel, sums);
+#ifdef RT_COUNT_RAYS
+    if (spawned == 0) {
+        global uint* tally = Queue_PixelRays(rayTally, pixel);
+        for (int t = 0; t < RT_RAY_TYPES; ++t) {
+            if (tally[t]) atomic_add(&rayCounts[t], tally[t]);
+            tally[t] = 0;
+        }
+    }
+#endif
 }
 
 // From: staging slots of rays [0, cut) / To: the pool's front, at the prefix-sum offsets.
