@@ -7,7 +7,8 @@
 #       Builds rtlab and rtlab-bench from a clean clone of HEAD (so every result names an exact
 #       commit) in build-gpu/, and fills carry/gpu-sweep/ (git-ignored) with rtlab-bench, the
 #       libraries it needs beside it (libbenchmark.so.1debian, libtinyobjloader, libassimp with
-#       libdraco, libminizip and libz; not libOpenCL.so.1: the GPU host's own ICD loader is used),
+#       libdraco and libminizip; not libOpenCL.so.1, the GPU host's own ICD loader is used, nor
+#       libz, which every host has and its driver libraries load too),
 #       the scenes with .pfm cubemap faces, the sweep file, run.sh and smoke.sh (scripts/gpu-smoke,
 #       the check to pass before any GPU result is called done). --resume DIR (a folder
 #       copied back from an earlier run) makes the new run skip the cells that one measured.
@@ -72,12 +73,13 @@ prepare() {
     mkdir -p "$CARRY/bin" "$CARRY/sweeps" "$CARRY/resume"
     cp "$BUILD/build/bin/rtlab-bench" "$CARRY/bin/"
     for lib in libbenchmark.so.1debian libtinyobjloader.so.2rc10 libassimp.so.5 libdraco.so.7 \
-               libminizip.so.1 libz.so.1; do
+               libminizip.so.1; do
         path=$(lib_path "$BUILD/build/bin/rtlab-bench" "$lib")
         [ -z "$path" ] || cp -L "$path" "$CARRY/bin/$lib"
     done
     missing=$(ldd "$CARRY/bin/rtlab-bench" | grep -v -e libc.so -e libm.so -e libstdc++ \
-              -e libgcc_s -e ld-linux -e vdso -e libOpenCL.so.1 -e "=> $ROOT/$CARRY/bin/" || true)
+              -e libgcc_s -e ld-linux -e vdso -e libOpenCL.so.1 -e libz.so.1 \
+              -e "=> $ROOT/$CARRY/bin/" || true)
     [ -z "$missing" ] || echo "gpu-sweep: rtlab-bench also needs (not carried): $missing" >&2
     (cd "$BUILD/src" && "$BUILD/build/bin/rtlab" sweep --export-scenes "$ROOT/$CARRY/scenes") >/dev/null
     cp "$BUILD/src/bench/sweeps/$sweep" "$CARRY/sweeps/"
