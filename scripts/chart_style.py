@@ -4,6 +4,7 @@ legend covers data), log axes labelled in one style, and labels that must not ov
 Needs Debian's python3-matplotlib (scripts/setup).
 """
 import math
+import textwrap
 
 import matplotlib
 
@@ -41,9 +42,27 @@ def figure(meta, title, n, cols=3, panel=(4.6, 3.6), legend_rows=1.0):
     panels = [fig.add_subplot(gs[i // cols, i % cols]) for i in range(n)]
     legend_ax = fig.add_subplot(gs[rows, :])
     legend_ax.axis("off")
-    fig.suptitle(title, fontsize=11)
+    # Each line of the title wrapped to the figure's width (about 12 characters an inch at 11
+    # points), so that a long note cannot run off both edges and squash the panels.
+    per_line = max(40, int(width * 12))
+    fig.suptitle("\n".join(textwrap.fill(line, per_line) for line in title.split("\n")),
+                 fontsize=11)
     fig.supxlabel(footer_text(meta), fontsize=7, color="#555555")
     return fig, panels, legend_ax
+
+
+def legend_columns(width, labels, ncol):
+    """No more legend columns than a figure `width` inches wide holds for its longest label
+    (about 0.058 in a character at 8 points, plus the marker): a wider legend is cut off."""
+    longest = max((len(lab) for lab in labels), default=1)
+    return max(1, min(ncol, len(labels), int(width / (0.058 * longest + 0.5))))
+
+
+def legend_height(width, labels, ncol):
+    """figure()'s legend_rows for a legend of these labels: about 0.22 in a line of entries at
+    8 points, and room for a line of text above them."""
+    rows = math.ceil(len(set(labels)) / legend_columns(width, list(set(labels)), ncol))
+    return (0.22 * rows + 0.35) / 0.45
 
 
 def legend_row(legend_ax, handles, labels, ncol=None):
@@ -53,7 +72,7 @@ def legend_row(legend_ax, handles, labels, ncol=None):
         seen.setdefault(lab, h)
     if not seen:
         return None
-    ncol = ncol or min(len(seen), 4)
+    ncol = legend_columns(legend_ax.figure.get_figwidth(), list(seen), ncol or min(len(seen), 4))
     return legend_ax.legend(list(seen.values()), list(seen.keys()), loc="center", ncol=ncol,
                             fontsize=8, frameon=False)
 

@@ -25,7 +25,7 @@ import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from chart_style import (DPI, MARKERS, figure, legend_row, log_ticks,  # noqa: E402
+from chart_style import (DPI, MARKERS, figure, legend_height, legend_row, log_ticks,  # noqa: E402
                          place_labels, plt, point_boxes, resolution_axis)
 from matplotlib.lines import Line2D  # noqa: E402
 from matplotlib.patches import Patch  # noqa: E402
@@ -191,9 +191,20 @@ def memory_vs_bounces(meta, rows):
     return fig
 
 
+# Colours for kernels without one of their own: matplotlib's tab20 less the hues KERNEL_COLORS
+# holds, so that no two kernels of a chart share a colour (a queue frame has about a dozen).
+OTHER_KERNEL_COLORS = [c for c in
+                       ["#2ca02c", "#98df8a", "#ff7f0e", "#ffbb78", "#9467bd", "#c5b0d5",
+                        "#8c564b", "#c49c94", "#e377c2", "#f7b6d2", "#bcbd22", "#dbdb8d",
+                        "#17becf", "#9edae5", "#393b79", "#637939", "#8c6d31", "#843c39",
+                        "#7b4173", "#5254a3"]
+                       if c not in KERNEL_COLORS.values()]
+
+
 def kernel_colors(names):
     unknown = sorted(n for n in names if n not in KERNEL_COLORS)
-    return {**{n: PALETTE[i % len(PALETTE)] for i, n in enumerate(unknown)}, **KERNEL_COLORS}
+    return {**{n: OTHER_KERNEL_COLORS[i % len(OTHER_KERNEL_COLORS)] for i, n in enumerate(unknown)},
+            **KERNEL_COLORS}
 
 
 def kernel_breakdown(meta, rows):
@@ -208,9 +219,14 @@ def kernel_breakdown(meta, rows):
         return None
     series, scenes = Series(chosen), scenes_of(chosen)
     colors = kernel_colors({k for r in chosen for k in r["kernel_ms"]})
+    # The legend's row sized for every kernel and every series' frame-time line it will hold.
+    entries = sorted(colors.keys() & {k for r in chosen for k in r["kernel_ms"]}) + \
+        [f"{series.label(k)}: frame ms" for k in series.keys]
+    cols = min(len(scenes), 3)
+    rows_needed = legend_height(max(4.6 * cols, 9), entries, 5)
     fig, panels, legend_ax = figure(meta, "Device time per kernel: share of the frame (bars) "
                                     "and frame time (points, right axis)", len(scenes),
-                                    legend_rows=1.5)
+                                    legend_rows=rows_needed)
     width = 0.8 / len(series.keys)
     handles, labels = [], []
     for ax, scene in zip(panels, scenes):
