@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <fstream>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -802,6 +803,26 @@ void rejectOtherModelFormats(const fs::path& path) {
                         "and .json scenes (convert it, e.g. with assimp export or Blender)");
 }
 
+// A file that is not JSON at all (a README, an image given by mistake) is named as such rather
+// than with the JSON parser's "syntax error at line 1": JSON's first character past white space
+// (and a byte-order mark) starts a value or a comment. JSON that is not an object still reaches
+// the loader, which says what it is.
+void rejectNonJson(const fs::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) return;  // the loader says why it cannot read it
+    char c = 0;
+    int seen = 0;
+    while (in.get(c) && ++seen < 4096) {
+        if (std::isspace(static_cast<unsigned char>(c))) continue;
+        if (seen <= 3 && static_cast<unsigned char>(c) >= 0xEF) continue;  // UTF-8 BOM bytes
+        if (std::strchr("{[\"-0123456789tfn/", c)) return;
+        break;
+    }
+    if (seen == 0 || !in) return;  // empty: the loader's own message
+    throw Error(path.string() + ": not a scene file (a scene is a JSON object; rtlab reads .json "
+                "scenes and .obj, .gltf, .glb and .ply models)");
+}
+
 }  // namespace
 
 Scene loadScene(const std::filesystem::path& path, const ImageReader& readImage) {
@@ -809,6 +830,7 @@ Scene loadScene(const std::filesystem::path& path, const ImageReader& readImage)
         rejectOtherModelFormats(path);
         if (isObj(path)) return wrapObj(path);
         if (isModelFile(path)) return wrapModel(path);
+        rejectNonJson(path);
         return Loader(path, readImage).load();
     } catch (const std::bad_alloc&) {
         throw Error(path.string() + ": out of memory");

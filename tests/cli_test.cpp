@@ -162,7 +162,9 @@ INSTANTIATE_TEST_SUITE_P(
                 "--layout diagonal: must be one of tree, weighted"},
         BadCase{"rendr scenes/spheres.json", "unknown command 'rendr' (did you mean render?)"},
         BadCase{"sweep nosuchsweep", "nosuchsweep: no such sweep file (give a path, or one of "},
-        BadCase{"sweep quick --cell-timeout -2", "--cell-timeout -2: must be in 0..1e+07"}),
+        BadCase{"sweep quick --cell-timeout -2", "--cell-timeout -2: must be in 0..1e+07"},
+        BadCase{"render README.md -o /tmp/x.png", "README.md: not a scene file (a scene is a JSON"},
+        BadCase{"render docs/viewer-split.png -o /tmp/x.png", "viewer-split.png: not a scene file"}),
     caseName);
 
 TEST(Cli, RendersWithEveryPipeline) {
