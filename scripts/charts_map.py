@@ -8,8 +8,9 @@ missing: wins are counted only where every design ran. Also writes a Markdown ta
 chart with every time, the winner, the margin and the megakernel's busy lanes per warp where
 the rows carry them.
 
-Usage: scripts/charts_map.py ROWS.jsonl|SWEEP.json [--out DIR]
-  (the rows of `rtlab-bench --sweep map`, or the JSON `rtlab sweep` writes)
+Usage: scripts/charts_map.py ROWS.jsonl|SWEEP.json... [--out DIR]
+  (the rows of `rtlab-bench --sweep map` or `map-dense`, or the JSON `rtlab sweep` writes; several
+  files are drawn as one map, the first one's meta naming device, driver and commit)
 Needs Debian's python3-matplotlib for the chart; the table needs nothing.
 """
 import argparse
@@ -107,14 +108,15 @@ def chart(meta, series, grid, keys, path):
     from matplotlib.patches import Patch
     from chart_style import figure, legend_row
 
-    sizes = sorted({g[0] for g in grid})
-    specials = sorted({g[1] for g in grid})
     octaves = sorted({g[2] for g in grid})
     r0 = next(iter(next(iter(grid.values())).values()))
     fig, panels, legend_ax = figure(meta, "Fastest design per setting and its margin over the "
                                     f"runner-up ({r0['width']}x{r0['height']}, B = {r0['bounces']})",
                                     len(octaves), cols=len(octaves), panel=(4.8, 3.9))
     for ax, o in zip(panels, octaves):
+        # Each panel spans the sizes and shares measured at its cost.
+        sizes = sorted({g[0] for g in grid if g[2] == o})
+        specials = sorted({g[1] for g in grid if g[2] == o})
         ax.set_xlim(-0.5, len(sizes) - 0.5)
         ax.set_ylim(-0.5, len(specials) - 0.5)
         for i, s in enumerate(sizes):
@@ -147,15 +149,17 @@ def chart(meta, series, grid, keys, path):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("rows")
-    ap.add_argument("--out", default=None, help="folder for map.png and map.md [beside ROWS]")
+    ap.add_argument("rows", nargs="+")
+    ap.add_argument("--out", default=None, help="folder for map.png and map.md [beside the first]")
     a = ap.parse_args()
-    meta, rows = load(a.rows)
+    meta, rows = load(a.rows[0])
+    for more in a.rows[1:]:
+        rows += load(more)[1]
     series, grid = cells(rows)
     if not grid:
-        sys.exit(f"{a.rows}: no rows of map scenes (map-s<size>-x<share>-o<octaves>-m<materials>)")
+        sys.exit(f"{' '.join(a.rows)}: no rows of map scenes (map-s<size>-x<share>-o<octaves>-m<materials>)")
     keys = series.keys
-    out = a.out or os.path.dirname(os.path.abspath(a.rows))
+    out = a.out or os.path.dirname(os.path.abspath(a.rows[0]))
     os.makedirs(out, exist_ok=True)
     table(meta, series, grid, keys, os.path.join(out, "map.md"))
     try:

@@ -18,6 +18,8 @@ committed) rather than into the checkout's tracked files.
   scripts/make-map.py --size 4 --special 0.5 --octaves 8      one scene
   scripts/make-map.py --grid                                  every scene of bench/sweeps/map
   scripts/make-map.py --grid --sizes 16,64                    a subset of the grid
+  scripts/make-map.py --grid --sizes 2,8,32,128 --specials 0,0.1,0.25,0.5,0.75,1 --octaves-list 8
+                                                              bench/sweeps/map-dense's scenes
 Standard library only.
 """
 import argparse
@@ -127,11 +129,15 @@ def main():
     ap.add_argument("--octaves", type=int, default=8, help="noise octaves, 0..64")
     ap.add_argument("--materials", type=int, default=16, help="distinct other materials, 1..16")
     ap.add_argument("--grid", action="store_true", help="write every scene of the map's grid")
-    ap.add_argument("--sizes", help="with --grid: only these sizes, e.g. 16,64")
+    ap.add_argument("--sizes", help="with --grid: these sizes instead, e.g. 16,64")
+    ap.add_argument("--specials", help="with --grid: these shares instead, e.g. 0,0.1,0.75")
+    ap.add_argument("--octaves-list", help="with --grid: these octaves instead, e.g. 0,8")
     a = ap.parse_args()
     if a.grid:
         sizes = [int(s) for s in a.sizes.split(",")] if a.sizes else GRID_SIZES
-        combos = [(s, x, o, m) for s in sizes for x in GRID_SPECIAL for o in GRID_OCTAVES
+        specials = [float(x) for x in a.specials.split(",")] if a.specials else GRID_SPECIAL
+        octaves = [int(o) for o in a.octaves_list.split(",")] if a.octaves_list else GRID_OCTAVES
+        combos = [(s, x, o, m) for s in sizes for x in specials for o in octaves
                   for m in GRID_MATERIALS]
     else:
         combos = [(a.size, a.special, a.octaves, a.materials)]
