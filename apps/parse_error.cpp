@@ -1,6 +1,7 @@
 #include "apps/parse_error.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <regex>
 #include <sstream>
@@ -49,10 +50,14 @@ std::string nearestFlag(const CLI::App& cmd, int argc, char** argv) {
     return "";
 }
 
-// "1000000.000000" -> "1e+06", "0.000000" -> "0".
+// "1048576.000000" -> "1048576", "0.500000" -> "0.5".
 std::string shortNumber(const std::string& text) {
-    char buf[32];
-    std::snprintf(buf, sizeof buf, "%g", std::atof(text.c_str()));
+    char buf[48];
+    double v = std::atof(text.c_str());
+    if (v == std::floor(v) && std::fabs(v) < 1e15)
+        std::snprintf(buf, sizeof buf, "%.0f", v);
+    else
+        std::snprintf(buf, sizeof buf, "%g", v);
     return buf;
 }
 

@@ -808,6 +808,8 @@ void rejectOtherModelFormats(const fs::path& path) {
 // (and a byte-order mark) starts a value or a comment. JSON that is not an object still reaches
 // the loader, which says what it is.
 void rejectNonJson(const fs::path& path) {
+    std::error_code ec;
+    if (!fs::is_regular_file(path, ec)) return;  // a FIFO would block here; the loader refuses it
     std::ifstream in(path, std::ios::binary);
     if (!in) return;  // the loader says why it cannot read it
     char c = 0;
