@@ -16,5 +16,8 @@ int run(CLI::App& app);
 int runSweepCommand();  // apps/sweep.cpp
 void addLists(CLI::App& app);  // apps/list.cpp: rtlab scenes, rtlab sweeps
 int runLists();                // -1 when neither was parsed
+void addPredict(CLI::App& app);  // apps/predict.cpp: rtlab predict
+bool predictParsed();
+int runPredict();
 
 }  // namespace rt::cli

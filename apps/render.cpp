@@ -335,6 +335,7 @@ int run(CLI::App& app) {
     if (renderCmd && renderCmd->parsed()) return runRender();
     if (devicesCmd && devicesCmd->parsed()) return runDevices();
     if (compareParsed()) return runCompare();
+    if (predictParsed()) return runPredict();
     if (int listed = runLists(); listed >= 0) return listed;
     return runSweepCommand();
 }

@@ -32,6 +32,7 @@ int mainCommand(int argc, char** argv) {
     rt::cli::addCompare(app);
     rt::cli::addSweep(app);
     rt::cli::addLists(app);
+    rt::cli::addPredict(app);
     std::string names;
     bool known = false;
     for (const CLI::App* sub : app.get_subcommands({})) {

@@ -461,6 +461,33 @@ class Tracer {
         int x, y, sample;
     };
 
+    // Section 6: the rays a hit spawns below depth B (the reflection of a mirror or of glass, and
+    // glass's refraction unless it reflects totally), and the weights that combine them: f for
+    // the reflection, o for the surface's own colour against the refraction.
+    struct Children {
+        std::optional<Ray> reflected, refracted;
+        double f = 0, o = 1;
+    };
+
+    Children children(const Surface& s, const dev::Material& m, dvec3 d, int depth) const {
+        Children c;
+        if (depth >= opt_.bounces) return c;
+        const bool transparent = m.opacity < 1;
+        const double n1 = s.inside ? double(m.ior) : 1.0;
+        const double n2 = s.inside ? 1.0 : double(m.ior);
+        if (m.reflectance > 0 || transparent) {
+            c.reflected = Ray{spawn(s, 1), ref::reflect(d, s.n)};
+            c.f = transparent ? ref::fresnel(-glm::dot(d, s.n), n1, n2) : double(m.reflectance);
+        }
+        if (transparent) {
+            if (const auto t = ref::refract(d, s.n, n1 / n2)) {
+                c.refracted = Ray{spawn(s, -1), *t};
+                c.o = m.opacity;
+            }
+        }
+        return c;
+    }
+
     dvec3 trace(const Ray& ray, int depth, PixelSample px) const {
         const Hit hit = closestHit(ray);
         if (hit.kind == RT_KIND_MISS) return environment(ray.dir);
@@ -469,24 +496,30 @@ class Tracer {
         const dvec3 d = ray.dir;
         const uint32_t key = dev::Sampling_PointKey(px.x, px.y, px.sample, depth);
         const dvec3 baseColour = base(s, d, m, spawn(s, 1), key);
-        const bool transparent = m.opacity < 1;
-        const double n1 = s.inside ? double(m.ior) : 1.0;
-        const double n2 = s.inside ? 1.0 : double(m.ior);
+        const Children c = children(s, m, d, depth);
+        const dvec3 reflected = c.reflected ? trace(*c.reflected, depth + 1, px) : dvec3(0);
+        const dvec3 refracted = c.refracted ? trace(*c.refracted, depth + 1, px) : dvec3(0);
+        const dvec3 through = c.o * baseColour + (1 - c.o) * refracted;
+        return (1 - c.f) * through + c.f * reflected;
+    }
 
-        double f = 0, o = 1;
-        dvec3 reflected(0), refracted(0);
-        if (depth < opt_.bounces && (m.reflectance > 0 || transparent)) {
-            reflected = trace(Ray{spawn(s, 1), ref::reflect(d, s.n)}, depth + 1, px);
-            f = transparent ? ref::fresnel(-glm::dot(d, s.n), n1, n2) : double(m.reflectance);
-        }
-        if (depth < opt_.bounces && transparent) {
-            if (const auto t = ref::refract(d, s.n, n1 / n2)) {
-                refracted = trace(Ray{spawn(s, -1), *t}, depth + 1, px);
-                o = m.opacity;
-            }
-        }
-        const dvec3 through = o * baseColour + (1 - o) * refracted;
-        return (1 - f) * through + f * reflected;
+  public:
+    // The closest-hit rays of one AA sample's ray tree (itself and every child), without shading
+    // it: the shape of the tree alone.
+    // `hit`, when set, receives the object the camera ray hits (RayTreeSize::object).
+    int treeSize(int x, int y, double ox, double oy, long long* hit = nullptr) const {
+        return treeSize(Ray{toD(scene_.camera.position), primaryDir(x + ox, y + oy)}, 0, hit);
+    }
+
+  private:
+    int treeSize(const Ray& ray, int depth, long long* primary = nullptr) const {
+        const Hit hit = closestHit(ray);
+        if (primary) *primary = hit.kind == RT_KIND_MISS ? -1 : (long long)(hit.kind) << 32 | hit.object;
+        if (hit.kind == RT_KIND_MISS) return 1;
+        const Surface s = surface(ray, hit);
+        const Children c = children(s, scene_.materials[s.material], ray.dir, depth);
+        return 1 + (c.reflected ? treeSize(*c.reflected, depth + 1) : 0) +
+               (c.refracted ? treeSize(*c.refracted, depth + 1) : 0);
     }
 
     const Scene& scene_;
@@ -584,6 +617,41 @@ Image renderReference(const Scene& scene, const RenderOptions& options, int thre
 
 Image renderReferenceBruteForce(const Scene& scene, const RenderOptions& options, int threads) {
     return render(scene, options, threads, {}, true);
+}
+
+std::vector<RayTreeSize> referenceRayTrees(const Scene& scene, const RenderOptions& options,
+                                           const std::vector<glm::ivec2>& pixels, int threads) {
+    if (threads <= 0) threads = int(std::max(1u, std::thread::hardware_concurrency()));
+    const Tracer tracer(scene, options, false);
+    const int n = std::max(1, options.aa);
+    std::vector<RayTreeSize> trees(pixels.size());
+    std::atomic<std::size_t> next{0};
+    constexpr std::size_t kChunk = 64;
+    auto worker = [&] {
+        for (std::size_t begin = next.fetch_add(kChunk); begin < pixels.size();
+             begin = next.fetch_add(kChunk)) {
+            for (std::size_t i = begin; i < std::min(pixels.size(), begin + kChunk); ++i) {
+                RayTreeSize& t = trees[i];
+                for (int sy = 0; sy < n; ++sy)
+                    for (int sx = 0; sx < n; ++sx)
+                        t.rays += tracer.treeSize(pixels[i].x, pixels[i].y, (sx + 0.5) / n,
+                                                  (sy + 0.5) / n, sx + sy == 0 ? &t.object : nullptr);
+            }
+        }
+    };
+    std::vector<std::thread> pool;
+    for (int i = 1; i < threads; ++i) pool.emplace_back(worker);
+    worker();
+    for (std::thread& t : pool) t.join();
+    return trees;
+}
+
+std::vector<int> referenceRayTreeSizes(const Scene& scene, const RenderOptions& options,
+                                       const std::vector<glm::ivec2>& pixels, int threads) {
+    std::vector<int> sizes;
+    for (const RayTreeSize& t : referenceRayTrees(scene, options, pixels, threads))
+        sizes.push_back(t.rays);
+    return sizes;
 }
 
 namespace ref {

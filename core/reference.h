@@ -5,6 +5,7 @@
 #include <functional>
 #include <memory>
 #include <optional>
+#include <vector>
 
 #include <glm/glm.hpp>
 
@@ -23,6 +24,23 @@ Image renderReference(const Scene& scene, const RenderOptions& options, int thre
 // section 2 and without the reference's BVHs: the oracle of those structures in the tests.
 // Images are bit-identical to renderReference's, minutes later on a large scene.
 Image renderReferenceBruteForce(const Scene& scene, const RenderOptions& options, int threads = 0);
+
+// The closest-hit rays (primary, reflection, refraction; shadow rays not counted) of the ray
+// trees of each pixel, summed over its AA grid samples, in the order of `pixels`: the shape of
+// the work each pixel gives a work-item that traces its whole tree (core/predict.h). No shading
+// is done, so this costs a fraction of rendering those pixels.
+std::vector<int> referenceRayTreeSizes(const Scene& scene, const RenderOptions& options,
+                                       const std::vector<glm::ivec2>& pixels, int threads = 0);
+
+// The same with the object each pixel's first camera ray hits: RT_KIND_* << 32 | its index, or -1
+// on a miss.
+struct RayTreeSize {
+    int rays = 0;
+    long long object = -1;
+};
+std::vector<RayTreeSize> referenceRayTrees(const Scene& scene, const RenderOptions& options,
+                                           const std::vector<glm::ivec2>& pixels,
+                                           int threads = 0);
 
 // Building blocks, exposed for the unit tests. Directions are unit length.
 namespace ref {

@@ -1,0 +1,93 @@
+// rtlab predict: which design a scene favours on a GPU, from the busy lanes of a sample of warps
+// traced on the CPU (core/predict.h), before any pipeline runs.
+#include <cstdio>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "apps/commands.h"
+#include "apps/options.h"
+#include "core/error.h"
+#include "core/predict.h"
+#include "core/scene_loader.h"
+#include "image/image_io.h"
+
+namespace rt::cli {
+namespace {
+
+CLI::App* predictCmd = nullptr;
+
+struct PredictArgs {
+    std::vector<std::string> scenes;
+    std::string size;
+    std::optional<int> bounces, aa;
+    int warps = 2048;
+    double threshold = kQueueBelowLanes;
+    bool json = false;
+} args;
+
+}  // namespace
+
+void addPredict(CLI::App& app) {
+    PredictArgs& a = args;
+    predictCmd = app.add_subcommand(
+        "predict",
+        "Say which design should win on a GPU, before any runs: traces the ray trees of a sample\n"
+        "of warps (16x2 pixels) on the CPU, without shading, and counts how many of a warp's 32\n"
+        "lanes would be busy a step in a megakernel that gives each work-item a whole tree");
+    predictCmd->add_option("scenes", a.scenes, "Scene files (.json) or models")->required();
+    predictCmd->add_option("--size", a.size, "Image size WxH (default: the scene's)");
+    predictCmd->add_option("--bounces", a.bounces, "Bounce limit B (default: the scene's)")
+        ->check(CLI::Range(0, 64));
+    predictCmd->add_option("--aa", a.aa, "AA grid n (n x n samples a pixel; default: the scene's)")
+        ->check(CLI::Range(1, 16));
+    predictCmd->add_option("--warps", a.warps, "Warps traced, chosen at random with a fixed seed")
+        ->check(CLI::Range(1, 1 << 20))
+        ->capture_default_str();
+    predictCmd->add_option("--threshold", a.threshold,
+                           "Busy lanes of 32 below which the queue wavefront is predicted")
+        ->check(CLI::Range(0.0, 32.0))
+        ->capture_default_str();
+    predictCmd->add_flag("--json", a.json, "One JSON object a scene on stdout instead of a table");
+}
+
+bool predictParsed() { return predictCmd && predictCmd->parsed(); }
+
+int runPredict() {
+    const PredictArgs& a = args;
+    if (!a.json)
+        std::printf("%-40s %10s %10s %8s %9s %9s  %s\n", "scene", "size", "busy/32", "rays/px",
+                    "largest", "obj/warp", "predicted");
+    for (const std::string& file : a.scenes) {
+        Scene scene = loadScene(file, readImage);
+        RenderOptions o = scene.defaults;
+        if (!a.size.empty()) parseSize(a.size, o.width, o.height);
+        if (a.bounces) o.bounces = *a.bounces;
+        if (a.aa) o.aa = *a.aa;
+        const LaneEstimate e = estimateBusyLanes(scene, o, a.warps);
+        const Prediction p = predictDesign(e, a.threshold);
+        if (a.json) {
+            nlohmann::json j = {{"scene", file},          {"name", scene.name},
+                                {"width", o.width},       {"height", o.height},
+                                {"bounces", o.bounces},   {"aa", o.aa},
+                                {"warps", e.warps},       {"lanes", e.lanes},
+                                {"busy_lanes", e.busyLanes}, {"rays_per_pixel", e.raysPerPixel},
+                                {"largest_tree", e.largestTree},
+                                {"objects_per_warp", e.objectsPerWarp}, {"objects", scene.spheres.size() + scene.planes.size() + scene.triangles.size()},
+                                {"predicted", p.design},  {"threshold", a.threshold},
+                                {"reason", p.reason}};
+            std::printf("%s\n", j.dump().c_str());
+        } else {
+            std::printf("%-40s %10s %10.1f %8.2f %9d %9.1f  %s\n", scene.name.c_str(),
+                        (std::to_string(o.width) + "x" + std::to_string(o.height)).c_str(),
+                        e.busyLanes, e.raysPerPixel, e.largestTree, e.objectsPerWarp,
+                        p.reason.c_str());
+        }
+        std::fflush(stdout);
+    }
+    return 0;
+}
+
+}  // namespace rt::cli

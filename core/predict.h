@@ -1,0 +1,62 @@
+// rtlab — which design a scene favours, said before any of them runs: an estimate of how busy a
+// megakernel's warps would be, from the shapes of the ray trees of a sample of warps traced on
+// the CPU (core/reference.h), and a rule that reads the winner from it.
+//
+// A work-item of the megakernel traces its pixel's whole ray tree, one ray per step of its loop,
+// so a warp runs as many steps as its largest tree while the lanes of smaller trees idle. Over a
+// frame the mean number of busy lanes a step is the sum of the trees' sizes over the sum of each
+// warp's largest: 32 when neighbouring pixels' trees agree, a few when a mirror or a glass sphere
+// gives one lane in the warp a tree of dozens of rays. The queue wavefront traces every live ray
+// of a bounce in compacted launches instead, so it does not pay for that disagreement.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/scene.h"
+
+namespace rt {
+
+// The pixels one warp takes: 32 lanes of a 16x8 work-group (core/pipeline.cpp, launch2d) are 16
+// columns of 2 rows.
+struct WarpShape {
+    int width = 16, height = 2;
+    int lanes() const { return width * height; }
+};
+
+// Mean busy lanes a step: `sizes` holds the tree sizes of consecutive warps, `lanes` each.
+// Empty trees (0) are lanes without work. 0 when nothing was traced.
+double busyLanes(const std::vector<int>& sizes, int lanes);
+
+struct LaneEstimate {
+    double busyLanes = 0;     // of shape.lanes()
+    int lanes = 32;
+    int warps = 0;            // warps traced
+    double raysPerPixel = 0;  // mean closest-hit rays of a pixel's trees
+    int largestTree = 0;      // the largest tree of a pixel seen
+    // Distinct objects the camera rays of a warp hit (a miss counts as one), the mean over warps:
+    // 1 when a warp sees one object, up to 32 when its rays fetch different primitives.
+    double objectsPerWarp = 0;
+};
+
+// Traces the trees of `warps` warps spread over the frame at random (a fixed seed, so the same
+// scene and settings give the same estimate) and counts their busy lanes.
+LaneEstimate estimateBusyLanes(const Scene& scene, const RenderOptions& options, int warps = 2048,
+                               WarpShape shape = {}, std::uint64_t seed = 1, int threads = 0);
+
+// The rule: below `queueBelowLanes` busy lanes of 32, the queue wavefront wins; at or above it a
+// design that gives each work-item a whole tree (the megakernel or the report's tree wavefront)
+// does. The default is fitted to the crossover map measured on an NVIDIA H200
+// (results/nvidia-h200/predictor-*/). A CPU device runs work-items without lock-step lanes: there
+// the map's queue never won, a threshold of 0.
+inline constexpr double kQueueBelowLanes = 27.8;
+
+struct Prediction {
+    std::string design;  // "queue" or "tree-per-work-item"
+    std::string reason;  // one sentence with the numbers
+};
+
+Prediction predictDesign(const LaneEstimate& estimate, double queueBelowLanes = kQueueBelowLanes);
+
+}  // namespace rt

@@ -1,0 +1,111 @@
+// The warp estimate of core/predict.h: the busy-lane arithmetic, the CPU's tree sizes against the
+// rays a device pipeline counts, and the rule.
+#include <gtest/gtest.h>
+
+#include <numeric>
+#include <vector>
+
+#include "core/predict.h"
+#include "core/reference.h"
+#include "pipelines/registry.h"
+#include "test_device.h"
+#include "test_scenes.h"
+
+namespace rt {
+namespace {
+
+TEST(BusyLanes, AWarpRunsAsLongAsItsLargestTree) {
+    std::vector<int> even(32, 1);
+    EXPECT_DOUBLE_EQ(busyLanes(even, 32), 32.0);
+    // One lane with a tree of 5 rays, 31 with one: 36 rays over 5 steps.
+    std::vector<int> one(32, 1);
+    one[7] = 5;
+    EXPECT_DOUBLE_EQ(busyLanes(one, 32), 36.0 / 5.0);
+    // Warps are weighted by their steps: (32 + 36) rays over (1 + 5) steps.
+    std::vector<int> both = even;
+    both.insert(both.end(), one.begin(), one.end());
+    EXPECT_DOUBLE_EQ(busyLanes(both, 32), 68.0 / 6.0);
+    // Lanes without a pixel trace nothing.
+    std::vector<int> half(32, 0);
+    std::fill(half.begin(), half.begin() + 16, 2);
+    EXPECT_DOUBLE_EQ(busyLanes(half, 32), 16.0);
+    EXPECT_DOUBLE_EQ(busyLanes({}, 32), 0.0);
+}
+
+// The CPU traces the trees the device traces: over every pixel, the sizes add up to the camera,
+// reflection and refraction rays the weighted megakernel counts.
+TEST(RayTreeSizes, AddUpToTheRaysADeviceCounts) {
+    for (const char* name : {"spheres", "cornell"}) {
+        SCOPED_TRACE(name);
+        const Scene scene = test::load(name);
+        RenderOptions o = scene.defaults;
+        o.width = 48, o.height = 32, o.bounces = 4, o.aa = 2;
+        std::vector<glm::ivec2> pixels;
+        for (int y = 0; y < o.height; ++y)
+            for (int x = 0; x < o.width; ++x) pixels.push_back({x, y});
+        const std::vector<int> sizes = referenceRayTreeSizes(scene, o, pixels, 2);
+        const long long cpu = std::accumulate(sizes.begin(), sizes.end(), 0LL);
+
+        o.countRays = true;
+        o.layout = RenderOptions::Layout::Weighted;
+        auto mega = makePipeline("mega", &test::device());
+        mega->render(scene, o);
+        const RayCounts& r = mega->stats().rays;
+        const long long device = (long long)(r[RT_RAY_PRIMARY] + r[RT_RAY_REFLECTION] +
+                                             r[RT_RAY_REFRACTION]);
+        EXPECT_GT(r[RT_RAY_REFLECTION], 0u);
+        EXPECT_EQ(cpu, device);
+        EXPECT_GT(cpu, (long long)pixels.size() * 4) << "no secondary rays to count";
+    }
+}
+
+TEST(LaneEstimate, WallsWithoutMirrorsKeepEveryLaneBusy) {
+    // The empty scene: every camera ray misses, a tree of one ray a pixel.
+    const Scene scene = test::load("empty");
+    RenderOptions o = scene.defaults;
+    o.width = 64, o.height = 20;
+    const LaneEstimate e = estimateBusyLanes(scene, o, 1000);
+    EXPECT_EQ(e.warps, 4 * 10);  // every warp of a small frame
+    EXPECT_DOUBLE_EQ(e.busyLanes, 32.0);
+    EXPECT_DOUBLE_EQ(e.raysPerPixel, 1.0);
+    EXPECT_EQ(e.largestTree, 1);
+    EXPECT_EQ(predictDesign(e).design, "tree-per-work-item");
+}
+
+TEST(LaneEstimate, AFrameThatEndsInsideAWarpLeavesItsLanesIdle) {
+    const Scene scene = test::load("empty");
+    RenderOptions o = scene.defaults;
+    o.width = 8, o.height = 2;  // half of one 16x2 warp
+    const LaneEstimate e = estimateBusyLanes(scene, o, 16);
+    EXPECT_EQ(e.warps, 1);
+    EXPECT_DOUBLE_EQ(e.busyLanes, 16.0);
+}
+
+TEST(LaneEstimate, TheSameSceneGivesTheSameEstimate) {
+    const Scene scene = test::load("spheres");
+    RenderOptions o = scene.defaults;
+    o.width = 160, o.height = 120;
+    const LaneEstimate a = estimateBusyLanes(scene, o, 50);
+    const LaneEstimate b = estimateBusyLanes(scene, o, 50);
+    EXPECT_EQ(a.warps, 50);
+    EXPECT_DOUBLE_EQ(a.busyLanes, b.busyLanes);
+    EXPECT_GT(a.busyLanes, 0.0);
+    EXPECT_LE(a.busyLanes, 32.0);
+    EXPECT_GT(a.largestTree, 1) << "the spheres scene has mirrors";
+}
+
+TEST(Predict, TheRuleSplitsAtTheThreshold) {
+    LaneEstimate e;
+    e.lanes = 32;
+    e.busyLanes = kQueueBelowLanes - 0.1;
+    EXPECT_EQ(predictDesign(e).design, "queue");
+    e.busyLanes = kQueueBelowLanes;
+    EXPECT_EQ(predictDesign(e).design, "tree-per-work-item");
+    e.busyLanes = 10;
+    EXPECT_EQ(predictDesign(e, 8).design, "tree-per-work-item");
+    EXPECT_NE(predictDesign(e).reason.find("10.0 busy lanes of 32"), std::string::npos)
+        << predictDesign(e).reason;
+}
+
+}  // namespace
+}  // namespace rt
