@@ -22,7 +22,7 @@ import sys
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from sweep_rows import Series  # noqa: E402
 
-NAME = re.compile(r"map-s(\d+)-x(\d+)-o(\d+)-m(\d+)$")
+NAME = re.compile(r"map-s(\d+)-x(\d+)-o(\d+)-m(\d+)(?:-f\d+x\d+)?$")
 
 
 def load(path):

@@ -3,7 +3,8 @@
 1920x1080 frame, in front of a backdrop plane, whose knobs are the axes that decide whether a
 warp's lanes agree:
 
-  size     the spheres' diameter on screen, in pixels at 1920x1080 (2 .. 256): how many pixels,
+  size     the spheres' diameter on screen, in pixels of the frame (1920x1080 unless --frame
+           says otherwise; 2 .. 256): how many pixels,
            and so how many lanes of a warp, see the same object
   special  the share of the spheres that are mirrors or glass, half each (0 .. 1), placed at
            random: how much the shapes of neighbouring ray trees differ
@@ -58,8 +59,9 @@ GRID_OCTAVES = [0, 8]
 GRID_MATERIALS = [16]
 
 
-def name_of(size, special, octaves, materials):
-    return f"map-s{size}-x{round(special * 100)}-o{octaves}-m{materials}"
+def name_of(size, special, octaves, materials, frame=(WIDTH, HEIGHT)):
+    name = f"map-s{size}-x{round(special * 100)}-o{octaves}-m{materials}"
+    return name if frame == (WIDTH, HEIGHT) else f"{name}-f{frame[0]}x{frame[1]}"
 
 
 def material(entry, octaves):
@@ -72,23 +74,25 @@ def material(entry, octaves):
     return name, m
 
 
-def scene(size, special, octaves, materials):
+def scene(size, special, octaves, materials, frame=(WIDTH, HEIGHT)):
     if not 1 <= materials <= len(PLAIN):
         raise SystemExit(f"--materials {materials}: must be in 1..{len(PLAIN)}")
     if not 0 <= special <= 1:
         raise SystemExit(f"--special {special}: must be in 0..1")
-    if not 2 <= size <= 540:
-        raise SystemExit(f"--size {size}: must be in 2..540 pixels")
+    width, height = frame
+    if not 2 <= size <= height // 2:
+        raise SystemExit(f"--size {size}: must be in 2..{height // 2} pixels at {width}x{height}")
     rng = random.Random(f"{size}/{special}/{octaves}/{materials}")
     mats = dict(material(e, octaves) for e in PLAIN[:materials])
     mats["mirror"] = MIRROR
     mats["glass"] = GLASS
     plain = list(mats)[:materials]
-    # The wall at z = DISTANCE spans the frame: height 2 d tan(fov / 2), one pixel is that / 1080.
+    # The wall at z = DISTANCE spans the frame: height 2 d tan(fov / 2), one pixel is that over
+    # the frame's height.
     view_h = 2 * DISTANCE * math.tan(math.radians(FOV / 2))
-    pixel = view_h / HEIGHT
+    pixel = view_h / height
     pitch = size * pixel
-    cols, rows = WIDTH // size, HEIGHT // size
+    cols, rows = width // size, height // size
     spheres = []
     for r in range(rows):
         for c in range(cols):
@@ -100,7 +104,7 @@ def scene(size, special, octaves, materials):
                             "radius": round(0.48 * pitch, 6), "material": m})
     return {
         "description": f"crossover map: a wall of {len(spheres)} spheres of about {size} px at "
-                       f"1920x1080, {round(special * 100)}% mirrors and glass, {materials} other "
+                       f"{width}x{height}, {round(special * 100)}% mirrors and glass, {materials} other "
                        f"materials, {octaves} noise octaves (scripts/make-map.py)",
         "camera": {"position": [0, 0, 0], "look_at": [0, 0, DISTANCE], "fov": FOV},
         "materials": mats,
@@ -108,7 +112,7 @@ def scene(size, special, octaves, materials):
         "planes": [{"normal": [0, 0, -1], "offset": -(DISTANCE + 3 * pitch + 1), "material": plain[0]}],
         "lights": [{"position": [-6, 8, -2], "color": [0.8, 0.8, 0.8]},
                    {"position": [7, 5, 1], "color": [0.5, 0.5, 0.55]}],
-        "render": {"width": WIDTH, "height": HEIGHT, "bounces": 4, "accel": "bvh"},
+        "render": {"width": width, "height": height, "bounces": 4, "accel": "bvh"},
     }
 
 
@@ -124,7 +128,7 @@ def write(path, data):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--out", default="scenes/map", help="folder for the scenes [scenes/map]")
-    ap.add_argument("--size", type=int, default=16, help="sphere diameter in pixels at 1920x1080")
+    ap.add_argument("--size", type=int, default=16, help="sphere diameter in pixels of the frame")
     ap.add_argument("--special", type=float, default=0.5, help="share of mirrors and glass, 0..1")
     ap.add_argument("--octaves", type=int, default=8, help="noise octaves, 0..64")
     ap.add_argument("--materials", type=int, default=16, help="distinct other materials, 1..16")
@@ -132,7 +136,16 @@ def main():
     ap.add_argument("--sizes", help="with --grid: these sizes instead, e.g. 16,64")
     ap.add_argument("--specials", help="with --grid: these shares instead, e.g. 0,0.1,0.75")
     ap.add_argument("--octaves-list", help="with --grid: these octaves instead, e.g. 0,8")
+    ap.add_argument("--frame", default=f"{WIDTH}x{HEIGHT}",
+                    help="the frame WxH the wall fills and sizes are measured in; other than "
+                         f"{WIDTH}x{HEIGHT}, names end in -fWxH [%(default)s]")
     a = ap.parse_args()
+    try:
+        frame = tuple(int(v) for v in a.frame.lower().split("x"))
+        if len(frame) != 2 or min(frame) < 4:
+            raise ValueError
+    except ValueError:
+        raise SystemExit(f"--frame {a.frame}: expected WxH, e.g. 480x270")
     if a.grid:
         sizes = [int(s) for s in a.sizes.split(",")] if a.sizes else GRID_SIZES
         specials = [float(x) for x in a.specials.split(",")] if a.specials else GRID_SPECIAL
@@ -142,8 +155,8 @@ def main():
     else:
         combos = [(a.size, a.special, a.octaves, a.materials)]
     for combo in combos:
-        path = os.path.join(a.out, name_of(*combo) + ".json")
-        write(path, scene(*combo))
+        path = os.path.join(a.out, name_of(*combo, frame) + ".json")
+        write(path, scene(*combo, frame))
         print(path)
 
 

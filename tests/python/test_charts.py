@@ -377,5 +377,50 @@ class MapTest(unittest.TestCase):
         self.assertIn("| 256 | 0% | 8 | 1.000 | missing | not all ran | - |", text)
 
 
+class PredictEvalTest(unittest.TestCase):
+    """scripts/predict_eval.py: the busy-lane threshold fitted between the settings the queue won
+    and those it lost, the score on rows it was not fitted to, and ties between two designs of
+    one kind still counted."""
+
+    def load(self):
+        spec = importlib.util.spec_from_file_location("predict_eval", os.path.join(SCRIPTS, "predict_eval.py"))
+        m = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(m)
+        return m
+
+    def rows(self, times):
+        out = []
+        for scene, per in times.items():
+            for pipe, ms in per.items():
+                r = row(pipe, pipe, "tree", scene, 4, 1920, 1080, group="map")
+                r.update(device_ms=ms, device_ms_min=ms * 0.99, device_ms_max=ms * 1.01)
+                out.append(r)
+        return out
+
+    def test_fit_and_score(self):
+        m = self.load()
+        fit = self.rows({"map/a": {"mega": 9.0, "wave": 5.0, "queue": 3.0},   # queue at 10 lanes
+                         "map/b": {"mega": 2.0, "wave": 2.01, "queue": 3.0},  # mega and wave tie
+                         "map/c": {"mega": 4.0, "wave": 3.0, "queue": 2.0}})  # queue at 20 lanes
+        test = self.rows({"map/d": {"mega": 1.0, "wave": 1.2, "queue": 1.1},  # queue loses at 28
+                          "map/e": {"mega": 1.3, "wave": 1.2, "queue": 1.0}}) # queue wins at 30
+        lanes = {"map/a": 10.0, "map/b": 31.0, "map/c": 20.0, "map/d": 28.0, "map/e": 30.0}
+        predictions = {k: {"busy_lanes": v} for k, v in lanes.items()}
+        with tempfile.TemporaryDirectory() as d:
+            for name, rows in (("fit.jsonl", fit), ("test.jsonl", test)):
+                with open(os.path.join(d, name), "w") as f:
+                    f.writelines(json.dumps(r) + "\n" for r in rows)
+            _, fitted = m.settings([os.path.join(d, "fit.jsonl")])
+            _, scored = m.settings([os.path.join(d, "test.jsonl")])
+        points = [(lanes[s], m.is_queue(w)) for s, w, u, _, tie, *_ in fitted if not m.undecided(w, u, tie)]
+        self.assertEqual(sorted(points), [(10.0, True), (20.0, True), (31.0, False)])
+        threshold = m.fit_threshold(points)
+        self.assertAlmostEqual(threshold, 25.5)  # halfway between 20 and 31
+        lines, hits, count, ties, missing, worst = m.score(scored, predictions, threshold)
+        self.assertEqual((hits, count, ties, missing), (1, 2, 0, 0))
+        self.assertAlmostEqual(worst, 1.2)  # map/e: the best tree design (wave, 1.2) over 1.0
+        self.assertIn("**no** (1.20x slower)", "\n".join(lines))
+
+
 if __name__ == "__main__":
     unittest.main()

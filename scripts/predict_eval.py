@@ -1,0 +1,158 @@
+#!/usr/bin/env python3
+"""How often `rtlab predict` names the winner: reads the predictions (`rtlab predict --json`, one
+object a scene) and measured sweep rows, finds the fastest design of every scene where every
+design ran (a tie when the two fastest designs' frame ranges overlap: charts_map.verdict), fits the
+busy-lane threshold on the FIT rows, and scores the rule on them and on the TEST rows, which it
+was not fitted to. The question scored is the one the rule answers: does the queue wavefront win,
+or a design that gives each work-item a whole ray tree (the megakernel in either layout, or the
+report's tree wavefront)? Settings where the queue and a design of the other kind tie are left out of the score and
+counted apart; a tie between two designs of one kind still answers the question.
+
+Usage: scripts/predict_eval.py --predictions P.jsonl --fit ROWS.jsonl... --test ROWS.jsonl...
+                               [--out FILE.md]
+Standard library only.
+"""
+import argparse
+import json
+import os
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from charts_map import load, verdict  # noqa: E402
+from sweep_rows import Series  # noqa: E402
+
+
+def scene_key(path_or_name):
+    """A scene's name as the sweep rows give it: its path under the scene folder, no extension."""
+    p = path_or_name.replace("\\", "/")
+    if "scenes/" in p:
+        p = p.split("scenes/", 1)[1]
+    return p[:-5] if p.endswith(".json") else p
+
+
+def settings(files):
+    """[(scene, winner key, runner-up, margin, tie, series, rows)] where every design ran."""
+    out, meta = [], {}
+    for path in files:
+        m, rows = load(path)
+        meta = meta or m
+        series = Series(rows)
+        by_scene = {}
+        for r in rows:
+            by_scene.setdefault((r["scene"], r["width"], r["height"], r["bounces"]), {})[series.key(r)] = r
+        for (scene, *_), by_key in sorted(by_scene.items()):
+            v = verdict(by_key, series.keys)
+            if v:
+                out.append((scene, v[0], v[1], v[2], v[3], series, by_key))
+                continue
+            # Some design did not run: the question is still settled where a design that ran
+            # beats the queue, since the best of all can only be faster still.
+            ran = [k for k, r in by_key.items() if r.get("status") == "ok"]
+            if "queue" in ran and len(ran) >= 2:
+                v = verdict({k: by_key[k] for k in ran}, ran)
+                if v and v[0] != "queue" and not v[3]:
+                    out.append((scene, v[0], v[1], v[2], False, series, by_key, "partial"))
+    return meta, out
+
+
+def is_queue(key):
+    return key.split("/")[0] == "queue"
+
+
+def undecided(winner, runner, tie):
+    """A tie leaves the question open only between the queue and a design of the other kind."""
+    return tie and is_queue(winner) != is_queue(runner)
+
+
+def fit_threshold(points):
+    """The threshold between two neighbouring lane counts that scores best; the midpoint."""
+    lanes = sorted({p[0] for p in points})
+    candidates = [0.0] + [(a + b) / 2 for a, b in zip(lanes, lanes[1:])] + [32.0]
+    def hits(t):
+        return sum((l < t) == queue for l, queue in points)
+    best = max(hits(t) for t in candidates)
+    good = [t for t in candidates if hits(t) == best]
+    return (good[0] + good[-1]) / 2 if good else 25.0
+
+
+def score(rows, predictions, threshold):
+    lines, hits, scored, ties, missing, worst = [], 0, 0, 0, 0, 1.0
+    for scene, winner, runner, margin, tie, series, by_key, *partial in rows:
+        tie = undecided(winner, runner, tie)
+        p = predictions.get(scene_key(scene))
+        if p is None:
+            missing += 1
+            continue
+        truth = winner.split("/")[0] == "queue"
+        predicted = p["busy_lanes"] < threshold
+        measured = [r.get("extras", {}).get("warp_lanes_active") for k, r in by_key.items()
+                    if k.startswith("mega") and (r.get("layout") == "weighted")]
+        measured = next((m for m in measured if m is not None), None)
+        ok = "tie" if tie else ("yes" if truth == predicted else "**no**")
+        if not tie and truth != predicted:
+            # What the wrong pick costs: the fastest design of the predicted kind over the winner.
+            ran = {k: r["device_ms"] for k, r in by_key.items() if r.get("status") == "ok"}
+            picked = [t for k, t in ran.items() if (k.split("/")[0] == "queue") == predicted]
+            if picked:
+                ok += f" ({min(picked) / ran[winner]:.2f}x slower)"
+                worst = max(worst, min(picked) / ran[winner])
+        if tie:
+            ties += 1
+        else:
+            scored += 1
+            hits += truth == predicted
+        lines.append(f"| {scene_key(scene)} | {p['busy_lanes']:.1f} | "
+                     f"{'-' if measured is None else f'{measured:.1f}'} | "
+                     f"{'queue' if predicted else 'tree a work-item'} | {series.label(winner)}"
+                     f"{' (of those that ran: ' + ', '.join(sorted(by_key)) + ')' if partial else ''} | "
+                     f"{margin:.2f}x | {ok} |")
+    return lines, hits, scored, ties, missing, worst
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--predictions", required=True)
+    ap.add_argument("--fit", nargs="+", required=True)
+    ap.add_argument("--test", nargs="*", default=[])
+    ap.add_argument("--out")
+    a = ap.parse_args()
+    predictions = {}
+    with open(a.predictions) as f:
+        for line in f:
+            if line.strip():
+                p = json.loads(line)
+                predictions[scene_key(p["scene"])] = p
+    meta, fit = settings(a.fit)
+    _, test = settings(a.test) if a.test else ({}, [])
+    points = [(predictions[scene_key(s)]["busy_lanes"], w.split("/")[0] == "queue")
+              for s, w, u, _, tie, _, _, *rest in fit
+              if not undecided(w, u, tie) and scene_key(s) in predictions]
+    if not points:
+        sys.exit("predict_eval: no fitted setting has a prediction (scene names differ?)")
+    t = fit_threshold(points)
+    head = ["| scene | predicted busy lanes | measured (weighted) | predicted | fastest | margin | right |",
+            "|---|---|---|---|---|---|---|"]
+    out = [f"# The predictor on {meta.get('device', '?')} (driver {meta.get('driver', '?')}, "
+           f"commit {meta.get('commit', '?')})", "",
+           f"Rule: the queue wavefront wins below **{t:.1f}** busy lanes of 32 (fitted on the "
+           f"{len(points)} settings of the fit set not tied between the two kinds), a design with one ray tree a "
+           "work-item at or above. Busy lanes predicted by `rtlab predict` (CPU, 2048 warps of "
+           "16x2 pixels, no shading); measured ones from the weighted megakernel's counting frame.",
+           ""]
+    for title, rows in (("Fit", fit), ("Test (not fitted to)", test)):
+        if not rows:
+            continue
+        lines, hits, scored, ties, missing, worst = score(rows, predictions, t)
+        out += [f"## {title}: {hits} of {scored} right" + (f" ({100 * hits / scored:.0f}%)" if scored else "") +
+                f", {ties} ties between the kinds left out" + (f", {missing} without a prediction" if missing else "") +
+                (f"; a wrong pick costs at most {worst:.2f}x" if hits < scored else ""),
+                ""] + head + lines + [""]
+    text = "\n".join(out) + "\n"
+    if a.out:
+        with open(a.out, "w") as f:
+            f.write(text)
+    print(text)
+
+
+if __name__ == "__main__":
+    main()
