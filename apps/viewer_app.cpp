@@ -341,7 +341,10 @@ void App::draw() {
     p.split = haveFrame_ && frame_.pipelines.size() > 1;
     p.divider = divider_;
     p.showDivider = showStats_;
-    int scale = w >= 900 ? 2 : 1;
+    // The overlay's size follows the framebuffer's (a high-DPI one gets larger texels), so that
+    // it is never cut off and leaves most of the image in view; the labels share its scale.
+    const OverlayLayout layout = overlayLayout(w, h, showHelp_);
+    const int scale = layout.scale;
     if (showStats_ || showHelp_) {
         OverlayInfo info;
         info.frame = haveFrame_ ? &frame_ : nullptr;
@@ -356,7 +359,7 @@ void App::draw() {
         for (const Message& m : messages_) info.messages.push_back(m.text);
         info.stats = showStats_;
         info.help = showHelp_;
-        TextCanvas canvas = makeOverlay(info);
+        TextCanvas canvas = makeOverlay(info, layout);
         display_.uploadOverlay(0, canvas.rgba(), canvas.width(), canvas.height());
         p.overlays.push_back({0, 0, 0, scale});
     }

@@ -7,8 +7,6 @@
 namespace rt::view {
 namespace {
 
-constexpr int kMargin = 3;  // pixels around the text block
-
 struct Glyph {
     char c;
     const char* rows;  // "rrrrr|rrrrr|..." top to bottom

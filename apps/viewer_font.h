@@ -16,6 +16,7 @@ struct Rgba {
 class TextCanvas {
 public:
     static constexpr int kCellWidth = 6, kCellHeight = 9;  // glyph 5x7 plus spacing
+    static constexpr int kMargin = 3;                      // pixels around the text block
 
     // A canvas of cols x rows character cells (plus a margin) filled with `background`.
     TextCanvas(int cols, int rows, Rgba background);

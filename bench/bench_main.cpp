@@ -28,6 +28,7 @@
 #include "bench/pfm.h"
 #include "bench/smoke.h"
 #include "bench/sweep_config.h"
+#include "bench/sweep_eta.h"
 #include "bench/sweep_runner.h"
 #include "bench/watchdog.h"
 #include "core/accel.h"
@@ -322,21 +323,31 @@ struct Target {
 
 // Progress over every registered repetition, and Ctrl-C: once interrupted, the running and
 // every later benchmark ends at once with an error, so Google Benchmark still writes
-// --benchmark_out for the ones that finished.
+// --benchmark_out for the ones that finished. The time left is the sweep's estimate
+// (bench/sweep_eta.h) over the repetitions not yet run, in registration order.
 struct Progress {
     int total = 0, done = 0, failed = 0;
     bool filtered = false;  // --benchmark_filter may leave fewer than `total` to run
     std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
+    std::vector<Cell> cells;  // one per registered benchmark
+    std::vector<int> left;    // its repetitions not yet run
+    SweepEta eta;
 } progress;
 volatile std::sig_atomic_t interrupted = 0;
 void onInterrupt(int) { interrupted = 1; }
 
-void reportProgress(const std::string& name, double msPerFrame, bool ok) {
+void reportProgress(size_t slot, const std::string& name, double msPerFrame, bool ok,
+                    double seconds, double buildSeconds) {
     ++progress.done;
     progress.failed += !ok;
+    progress.eta.measured(progress.cells[slot], seconds, buildSeconds, ok);
+    if (progress.left[slot] > 0) --progress.left[slot];
     double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() -
                                                    progress.start).count();
-    double left = elapsed / progress.done * std::max(0, progress.total - progress.done);
+    std::vector<const Cell*> pending;
+    for (size_t i = 0; i < progress.cells.size(); ++i)
+        for (int r = 0; r < progress.left[i]; ++r) pending.push_back(&progress.cells[i]);
+    double left = progress.eta.remaining(pending);
     char result[64] = "failed";
     if (ok) std::snprintf(result, sizeof result, "%.3f ms/frame", msPerFrame);
     std::fprintf(stderr, "[%d/%s%d] %s: %s | elapsed %s, ETA %s%s\n", progress.done,
@@ -350,9 +361,9 @@ void reportProgress(const std::string& name, double msPerFrame, bool ok) {
 double cellTimeoutS = kDefaultCellTimeoutS;
 std::string timedOut;
 
-void renderBenchmark(benchmark::State& state, const std::string& name, ClContext* cl,
-                     const Scene* scene, std::string kind, RenderOptions o, int warmup,
-                     bool countRays) {
+void renderBenchmark(benchmark::State& state, size_t slot, const std::string& name,
+                     ClContext* cl, const Scene* scene, std::string kind, RenderOptions o,
+                     int warmup, bool countRays) {
     if (interrupted) {
         state.SkipWithError("interrupted");
         return;
@@ -363,10 +374,18 @@ void renderBenchmark(benchmark::State& state, const std::string& name, ClContext
     }
     struct Report {  // one progress line per repetition, however it ends
         benchmark::State& state;
+        size_t slot;
         const std::string& name;
+        const ClContext& cl;
         double ms = 0;
-        ~Report() { reportProgress(name, ms, !state.error_occurred()); }
-    } report{state, name};
+        std::chrono::steady_clock::time_point t0 = std::chrono::steady_clock::now();
+        double programMs = cl.programCounts().ms;
+        ~Report() {
+            double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+            reportProgress(slot, name, ms, !state.error_occurred(), s,
+                           (cl.programCounts().ms - programMs) / 1e3);
+        }
+    } report{state, slot, name, *cl};
     // Every device call of the repetition runs under the cell time limit; work that overruns it
     // keeps the pipeline (shared) and is never waited for again.
     const auto deadline = std::chrono::steady_clock::now() +
@@ -559,8 +578,17 @@ int benchmarkCommand(const Flags& f) {
                                std::to_string(o.bounces) + "/s" + std::to_string(o.shadowSamples) +
                                "/aa" + std::to_string(o.aa) + "/" +
                                (c.accelApplies ? accelName(o.accel) : "-") + t.tag;
-            benchmark::RegisterBenchmark(name.c_str(), renderBenchmark, name, t.cl.get(),
-                                         scene(c.scene), c.pipeline, o, f.warmup,
+            // What the estimate knows of it: the frames of one repetition, and a scene name per
+            // device, since each device has its own speed and its own built programs.
+            Cell timed = c;
+            timed.scene += t.tag;
+            timed.warmup = f.warmup;
+            timed.repeats = f.frames;
+            timed.countRays = f.countRays && c.countRays;
+            progress.cells.push_back(timed);
+            progress.left.push_back(f.repeats);
+            benchmark::RegisterBenchmark(name.c_str(), renderBenchmark, progress.cells.size() - 1,
+                                         name, t.cl.get(), scene(c.scene), c.pipeline, o, f.warmup,
                                          f.countRays && c.countRays)
                 ->UseManualTime()
                 ->Iterations(f.frames)

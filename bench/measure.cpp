@@ -73,10 +73,22 @@ std::vector<Measurement> measureCells(ClContext& cl, const Scene& scene,
         o.countRays = false;
         return o;
     };
+    // Program builds happen inside render(): their time is kept apart from the frames'.
+    std::vector<double> programMs(n, 0);
+    auto building = [&](size_t k, auto&& work) {
+        double before = cl.programCounts().ms;
+        struct Count {  // also when work throws
+            double& into;
+            const ClContext& cl;
+            double before;
+            ~Count() { into += cl.programCounts().ms - before; }
+        } count{programMs[k], cl, before};
+        return work();
+    };
     // The first frame allocates the pipeline's buffers: what it adds is the pipeline's memory.
     auto render = [&](size_t k) {
         size_t before = cl.allocatedBytes();
-        Image frame = pipelines[k]->render(scene, timedOptions(k));
+        Image frame = building(k, [&] { return pipelines[k]->render(scene, timedOptions(k)); });
         if (!rendered[k]) out[k].deviceBytes = cl.allocatedBytes() - before;
         rendered[k] = true;
         return frame;
@@ -151,7 +163,7 @@ std::vector<Measurement> measureCells(ClContext& cl, const Scene& scene,
             Failed error = attempt([&] {
                 RenderOptions counting = variants[k].options;
                 counting.countRays = true;
-                pipelines[k]->render(scene, counting);
+                building(k, [&] { return pipelines[k]->render(scene, counting); });
                 m.rays = pipelines[k]->stats().rays;
                 m.raysCounted = pipelines[k]->stats().raysCounted;
                 // What needs the counts; the timed frames' extras (span_ms, idle_ms) stay,
@@ -164,6 +176,7 @@ std::vector<Measurement> measureCells(ClContext& cl, const Scene& scene,
         m.ok = true;
         pipelines[k].reset();
     }
+    for (size_t k = 0; k < n; ++k) out[k].programMs = programMs[k];
     return out;
 }
 

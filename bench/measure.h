@@ -42,6 +42,9 @@ struct Measurement {
     double mrays = 0;           // million rays per second of device time (when counted)
     nlohmann::json extras = nlohmann::json::object();  // FrameStats::extras, counting frame's last
     double accelBuildMs = 0;    // host wall time of the acceleration structure's build
+    // Host wall time this cell spent building or loading OpenCL programs (ClContext's counts):
+    // the first cell of a program pays it, later ones find the program in the context.
+    double programMs = 0;
     Image image;                // the last timed frame, when asked for
 };
 

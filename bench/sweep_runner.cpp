@@ -3,6 +3,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -16,6 +17,7 @@
 
 #include "bench/frame_check.h"
 #include "bench/measure.h"
+#include "bench/sweep_eta.h"
 #include "bench/sweep_schedule.h"
 #include "bench/watchdog.h"
 #include "core/accel.h"
@@ -35,18 +37,6 @@ std::string utcNow() {
     return buf;
 }
 
-// A rough relative cost of a cell, scaled per scene by what was measured so far, for the ETA.
-double cellCost(const Cell& c) {
-    const RenderOptions& o = c.options;
-    double frames = c.warmup + c.repeats + (c.countRays ? 1 : 0);
-    // Rays grow about with the bounce limit; a pipeline with a global tree (one that tiles it)
-    // also walks every slot of that tree.
-    double work = 1.0 + o.bounces;
-    if (pipelineInfo(c.pipeline).supports.tiling)
-        work += double(treeNodeCount(c.branching, o.bounces)) / 16;
-    return double(o.width) * o.height * o.aa * o.aa * work * frames;
-}
-
 // The progress line. Cells run out of order when several devices share a sweep: the count
 // shown is of cells finished, and the time left is the not yet started cells' estimate shared
 // out over the workers. Callers hold the sweep's lock.
@@ -64,22 +54,14 @@ public:
     double elapsed() const {
         return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
     }
-    // Seconds a cell should take, from the rate measured on the same scene and pipeline, else
-    // on the scene, else overall: pipelines differ by far more than the cost model's terms (the
-    // quick sweep's "ETA 2s" came before a 21 s wavefront cell).
-    double estimate(size_t i) const {
-        double rate = doneCost_ > 0 ? spent_ / doneCost_ : 0;
-        if (auto it = rate_.find(cells_[i].scene + "|" + cells_[i].pipeline); it != rate_.end())
-            rate = it->second.first / it->second.second;
-        else if (auto s = rate_.find(cells_[i].scene); s != rate_.end())
-            rate = s->second.first / s->second.second;
-        return rate * cellCost(cells_[i]);
-    }
+    // Seconds a cell should take, its program build included unless a cell of the same program
+    // started before it (bench/sweep_eta.h).
+    double estimate(size_t i) const { return eta_.estimate(cells_[i]); }
     double remaining() const {
-        double eta = 0;
+        std::vector<const Cell*> pending;
         for (size_t i = 0; i < cells_.size(); ++i)
-            if (pending_[i]) eta += estimate(i);
-        return eta / workers_;
+            if (pending_[i]) pending.push_back(&cells_[i]);
+        return eta_.remaining(pending) / workers_;
     }
     // The time left as shown: nothing until two cells were measured (one cell's rate, stretched
     // over a whole sweep, said "ETA <= 7h13m" for a 3-minute run), and a bound ("<=") where
@@ -89,7 +71,10 @@ public:
         return std::string(mayStop_ ? "<= " : "") + formatDuration(remaining());
     }
     void starting(const std::vector<size_t>& run, const std::string& where) {
-        for (size_t i : run) pending_[i] = 0;
+        for (size_t i : run) {
+            pending_[i] = 0;
+            eta_.started(cells_[i]);
+        }
         if (!tty_) return;
         std::string what = cells_[run.front()].label() + where;
         if (run.size() > 1) what += " (+" + std::to_string(run.size() - 1) + " interleaved)";
@@ -106,16 +91,11 @@ public:
                      why.c_str());
         std::fflush(stderr);
     }
-    void finished(size_t i, double seconds, const Measurement& m, const std::string& where) {
+    // seconds: the cell's share of its batch, buildSeconds of them in program builds.
+    void finished(size_t i, double seconds, double buildSeconds, const Measurement& m,
+                  const std::string& where) {
         const Cell& c = cells_[i];
-        double cost = cellCost(c);
-        spent_ += seconds;
-        doneCost_ += cost;
-        for (const std::string& key : {c.scene + "|" + c.pipeline, c.scene}) {
-            auto& r = rate_[key];
-            r.first += seconds;
-            r.second += cost;
-        }
+        eta_.measured(c, seconds, buildSeconds, m.ok);
         ++measured_;
         ++done_;
         char result[96];
@@ -140,10 +120,8 @@ private:
     int workers_;
     bool tty_, mayStop_ = false;
     std::chrono::steady_clock::time_point start_;
-    double spent_ = 0, doneCost_ = 0;
     int measured_ = 0;
-    // Seconds and model cost measured per "scene|pipeline" and per scene.
-    std::map<std::string, std::pair<double, double>> rate_;
+    SweepEta eta_;
 };
 
 nlohmann::json rowJson(const SweepConfig& config, const Cell& c, const Measurement& m,
@@ -205,7 +183,8 @@ nlohmann::json rowJson(const SweepConfig& config, const Cell& c, const Measureme
                     {"launches", m.launches},
                     {"longest_launch_ms", m.longestLaunchMs},
                     {"frames", m.frames},
-                    {"accel_build_ms", m.accelBuildMs}});
+                    {"accel_build_ms", m.accelBuildMs},
+                    {"program_ms", m.programMs}});
         nlohmann::json buffers = nlohmann::json::object();
         for (const auto& [name, bytes] : m.buffers) buffers[name] = bytes;
         row["buffers"] = buffers;
@@ -223,6 +202,25 @@ nlohmann::json rowJson(const SweepConfig& config, const Cell& c, const Measureme
     row["scene_info"] = scene;
     row.update(device);  // device, driver, platform, commit on every row
     return row;
+}
+
+// How a batch's frame time divides among its cells (fractions, parallel to run): by the host
+// wall time each measured per frame times its frames, where every cell of the batch ran (the
+// frames are interleaved, so each took what it measured), else by the rough cost model.
+std::vector<double> batchShares(const std::vector<Cell>& cells, const std::vector<size_t>& run,
+                                std::map<size_t, Measurement>& ms) {
+    std::vector<double> weight, rough;
+    for (size_t k : run) {
+        const Measurement& m = ms[k];
+        const Cell& c = cells[k];
+        weight.push_back(m.ok ? m.wallMs * (c.warmup + m.frames + (c.countRays ? 1 : 0)) : 0);
+        rough.push_back(roughCost(c));
+    }
+    if (std::find(weight.begin(), weight.end(), 0.0) != weight.end()) weight = rough;
+    double sum = 0;
+    for (double w : weight) sum += w;
+    for (double& w : weight) w /= sum;
+    return weight;
 }
 
 // The largest |difference| of two frames of one size, or -1 when the sizes differ.
@@ -542,8 +540,11 @@ SweepSummary runSweep(const SweepConfig& config, const SweepRunOptions& options,
                         }
                     }
                 }
-                double batchCost = 0;
-                for (size_t k : run) batchCost += cellCost(cells[k]);
+                // The batch's time less its program builds, shared out over its cells.
+                const std::vector<double> share = batchShares(cells, run, ms);
+                double framesSeconds = seconds;
+                for (size_t k : run) framesSeconds -= ms[k].programMs / 1e3;
+                framesSeconds = std::max(0.0, framesSeconds);
                 // Frames of the same setting from every pipeline: they must agree (bit-identical
                 // by design), which catches a silent wrong image at a limit (tiling, launch
                 // splitting).
@@ -570,9 +571,10 @@ SweepSummary runSweep(const SweepConfig& config, const SweepRunOptions& options,
                         state.results[k] = {row, std::nullopt};
                         continue;
                     }
-                    // The batch's time, shared out by the cost model (a 4K cell outweighs a
-                    // 640x360 one).
-                    progress.finished(k, seconds * cellCost(cells[k]) / batchCost, m, tag);
+                    double build = m.programMs / 1e3, frames = 0;
+                    for (size_t r = 0; r < run.size(); ++r)
+                        if (run[r] == k) frames = share[r];
+                    progress.finished(k, build + framesSeconds * frames, build, m, tag);
                     ++(m.ok ? summary.measured : summary.failed);
                     row = rowJson(config, cells[k], m, where, sceneInfo.at(c.scene));
                     row["cell_index"] = k;

@@ -50,7 +50,7 @@ SweepRun runSweep(const std::string& devices, bench::Shard shard = {}) {
 nlohmann::json settled(nlohmann::json row) {
     for (const char* k : {"device_ms", "device_ms_min", "device_ms_max", "wall_ms", "frame_ms",
                           "kernel_ms", "longest_launch_ms", "launches", "mrays_per_s",
-                          "accel_build_ms", "kernel_resources"})
+                          "accel_build_ms", "program_ms", "kernel_resources"})
         row.erase(k);
     // The queue pipeline's launch-sizing times (its read-back count stays).
     if (row.contains("extras"))
