@@ -9,8 +9,9 @@ report's tree wavefront)? Settings where the queue and a design of the other kin
 counted apart; a tie between two designs of one kind still answers the question.
 
 Usage: scripts/predict_eval.py --predictions P.jsonl --fit ROWS.jsonl... --test ROWS.jsonl...
-                               [--out FILE.md]
-Standard library only.
+                               [--out FILE.md] [--chart FILE.png]
+The table needs the standard library only; the chart (the queue's time over the best of the
+other kind against the predicted busy lanes, with the fitted threshold) needs matplotlib.
 """
 import argparse
 import json
@@ -109,12 +110,49 @@ def score(rows, predictions, threshold):
     return lines, hits, scored, ties, missing, worst
 
 
+def chart(meta, groups, predictions, threshold, path):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from chart_style import figure, legend_row, log_ticks
+
+    fig, (ax,), legend_ax = figure(meta, "The queue wavefront's frame time over the best design "
+                                   "with one ray tree a work-item, against the busy lanes "
+                                   "`rtlab predict` counts on the CPU", 1, cols=1, panel=(8, 4.2))
+    handles = []
+    for (title, rows), (color, marker) in zip(groups, (("#1f77b4", "o"), ("#d62728", "^"))):
+        xs, ys = [], []
+        for scene, winner, runner, margin, tie, series, by_key, *partial in rows:
+            p = predictions.get(scene_key(scene))
+            ran = {k: r["device_ms"] for k, r in by_key.items() if r.get("status") == "ok"}
+            others = [t for k, t in ran.items() if not is_queue(k)]
+            if p is None or "queue" not in ran or not others:
+                continue
+            xs.append(p["busy_lanes"])
+            ys.append(ran["queue"] / min(others))
+        if xs:
+            handles.append(ax.scatter(xs, ys, s=26, color=color, marker=marker, alpha=0.8,
+                                      label=f"{title} ({len(xs)})"))
+    ax.axhline(1.0, color="#555555", linewidth=0.8)
+    ax.axvline(threshold, color="#555555", linewidth=0.8, linestyle="--")
+    ax.text(threshold, ax.get_ylim()[1], f" threshold {threshold:.1f}", va="top", fontsize=8)
+    ax.set_yscale("log")
+    log_ticks(ax)
+    ax.set_xlim(0, 32.5)
+    ax.set_xlabel("predicted busy lanes of 32 (weighted megakernel)")
+    ax.set_ylabel("queue time / best other (below 1: queue wins)")
+    legend_row(legend_ax, handles, [h.get_label() for h in handles], ncol=len(handles))
+    fig.savefig(path)
+    plt.close(fig)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--predictions", required=True)
     ap.add_argument("--fit", nargs="+", required=True)
     ap.add_argument("--test", nargs="*", default=[])
     ap.add_argument("--out")
+    ap.add_argument("--chart")
     a = ap.parse_args()
     predictions = {}
     with open(a.predictions) as f:
@@ -148,6 +186,8 @@ def main():
                 (f"; a wrong pick costs at most {worst:.2f}x" if hits < scored else ""),
                 ""] + head + lines + [""]
     text = "\n".join(out) + "\n"
+    if a.chart:
+        chart(meta, [("fitted: the map", fit), ("not fitted to", test)], predictions, t, a.chart)
     if a.out:
         with open(a.out, "w") as f:
             f.write(text)
