@@ -183,14 +183,14 @@ void applyGroupKey(SweepGroup& g, const std::string& key, const std::string& val
     } else if (key == "max-launch-ms") {
         g.maxLaunchMs = p.number(value, 0, 1e6);
     } else if (const PipelineOption* opt = pipelineRegistry().findSweepOption(key)) {
-        // "default" stands for the declared default; numbers are checked against the range
-        // as the other integer keys are, names by the declaration (naming its flag).
-        if (value == "default")
-            g.pipelineOptions.reset(opt->name);
-        else if (opt->type == PipelineOption::Type::Integer)
-            opt->set(g.pipelineOptions, p.wholeNumber(value, opt->min, opt->max));
-        else
+        // Numbers are checked against the range as the other integer keys are, "default"
+        // standing for the declared default; names by the declaration (naming its flag).
+        if (opt->type == PipelineOption::Type::Choice)
             p.wrap([&] { opt->set(g.pipelineOptions, value); });
+        else if (value == "default")
+            g.pipelineOptions.reset(opt->name);
+        else
+            opt->set(g.pipelineOptions, p.wholeNumber(value, opt->min, opt->max));
     } else if (key == "stop-after-failure") {
         g.stopAfterFailure = p.boolean(value);
     } else if (key == "max-frame-s") {

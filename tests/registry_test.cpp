@@ -171,16 +171,16 @@ TEST(Registry, OptionValuesReadBackTypedAndAreChecked) {
 }
 
 // Sweep files take every declared option under its sweep key, and cells carry it into their
-// keys and labels by its declaration; "default" is the declared default.
+// keys and labels by its declaration; a number's "default" is the declared default.
 TEST(Registry, SweepFilesTakeEveryDeclaredOption) {
     for (const PipelineOption* opt : pipelineRegistry().options()) {
-        std::string value = opt->type == PipelineOption::Type::Integer
-                                ? std::to_string(opt->max)
-                                : opt->choices.back();
+        const bool number = opt->type == PipelineOption::Type::Integer;
+        std::string value = number ? std::to_string(opt->max) : opt->choices.back();
+        std::string fallback = number ? "default" : opt->text(opt->defaultValue);
         bench::SweepConfig c = bench::parseSweep("[a]\nscenes = spheres\npipelines = wave\n" +
                                                      opt->sweepKey + " = " + value + "\n[b]\n" +
                                                      "scenes = spheres\npipelines = wave\n" +
-                                                     opt->sweepKey + " = default\n",
+                                                     opt->sweepKey + " = " + fallback + "\n",
                                                  "t");
         EXPECT_EQ(opt->text(opt->value(c.groups[0].pipelineOptions)), value) << opt->name;
         EXPECT_TRUE(opt->isDefault(c.groups[1].pipelineOptions)) << opt->name;
