@@ -31,17 +31,14 @@ void SceneFlags::add(CLI::App& cmd) {
     cmd.add_option("--memory-budget", memoryBudget,
                    "Wavefront: bytes the global ray tree may use (e.g. 64M); frames past it are "
                    "rendered in row tiles [device max allocation]");
-    cmd.add_option("--pool", pool,
-                   "Queue pipeline: ray slots in the pool, 1..67108864 (memory does not grow with "
-                   "--bounces) [from the device: 2M on GPUs, 64K on CPUs]");
-    cmd.add_option("--queue-launch", queueLaunch,
-                   "Queue pipeline: how launches are sized: readback (the host reads each "
-                   "bounce's counts) or device (all bounces enqueued at once, counts read on the "
-                   "device) [readback]");
-    cmd.add_option("--queue-packets", queuePackets,
-                   "Queue pipeline: trace the extend and shadow queues 16 rays per work-item "
-                   "through the wide BVH: auto (on a CPU device with --accel wide), on or off "
-                   "[auto]");
+    // Each pipeline's own options, in registration order; checked when applied, by their
+    // declarations, so that every front end says a bad value the same way.
+    for (const PipelineOption* opt : pipelineRegistry().options()) {
+        if (opt->type == PipelineOption::Type::Integer)
+            cmd.add_option(opt->flag(), pipelineIntegers[opt->name], opt->help);
+        else
+            cmd.add_option(opt->flag(), pipelineChoices[opt->name], opt->help);
+    }
     cmd.add_option("--accel", accel,
                    "How rays find spheres and triangles: none (per-mesh bounding sphere only), "
                    "bv (plus 7 slab pairs per mesh), grid (uniform grid), bvh (SAH BVH), wide "
@@ -114,13 +111,13 @@ RenderOptions SceneFlags::apply(RenderOptions o) const {
     if (adaptive) o.adaptiveAa = true;
     o.layout = layout == "weighted" ? RenderOptions::Layout::Weighted : RenderOptions::Layout::Tree;
     if (!memoryBudget.empty()) o.memoryBudget = parseBytes(memoryBudget, "--memory-budget");
-    if (pool) {
-        if (*pool < 1 || *pool > (1ll << 26))
-            throw Error("--pool " + std::to_string(*pool) + ": must be in 1..67108864");
-        o.pool = size_t(*pool);
+    const PipelineRegistry& registry = pipelineRegistry();
+    for (const PipelineOption* opt : registry.options()) {
+        if (auto it = pipelineIntegers.find(opt->name); it != pipelineIntegers.end() && it->second)
+            opt->set(o.pipelineOptions, *it->second);
+        if (auto it = pipelineChoices.find(opt->name); it != pipelineChoices.end() && !it->second.empty())
+            opt->set(o.pipelineOptions, it->second);
     }
-    if (!queueLaunch.empty()) o.queueLaunch = parseQueueLaunch(queueLaunch);
-    if (!queuePackets.empty()) o.queuePackets = parseQueuePackets(queuePackets);
     if (!accel.empty()) o.accel = parseAccel(accel);
     if (plainSphere) o.robustSphere = false;
     if (mollerTrumbore) o.watertight = false;
@@ -131,10 +128,11 @@ RenderOptions SceneFlags::apply(RenderOptions o) const {
         o.offset = RenderOptions::Offset::Fixed;
     }
     o.maxLaunchMs = maxLaunchMs;
-    // The queue's device-sized launches learn no admission limit (that takes a read-back per
-    // bounce): the default cap gives way to them, a cap asked for is refused by the pipeline.
-    bool capGiven = maxLaunchOption && maxLaunchOption->count() > 0;
-    if (o.queueLaunch == RenderOptions::QueueLaunch::Device && !capGiven) o.maxLaunchMs = 0;
+    // A pipeline's own options may not go with the default launch cap (PipelineInfo::
+    // settleDefaults); a cap asked for stays, for the pipeline to accept or refuse.
+    const bool capGiven = maxLaunchOption && maxLaunchOption->count() > 0;
+    for (const PipelineInfo& p : registry.all())
+        if (p.settleDefaults) p.settleDefaults(o, capGiven);
     auto range = [](const char* flag, int v, int lo, int hi) {
         if (v < lo || v > hi)
             throw Error(std::string(flag) + " " + std::to_string(v) + ": must be in " +

@@ -4,6 +4,7 @@
 #include <CLI/CLI.hpp>
 
 #include <filesystem>
+#include <map>
 #include <optional>
 #include <string>
 
@@ -20,9 +21,10 @@ struct SceneFlags {
     bool adaptive = false;
     std::string layout = "tree";
     std::string memoryBudget;  // bytes, with optional K/M/G suffix
-    std::optional<long long> pool;  // queue pipeline: ray slots
-    std::string queueLaunch;        // queue pipeline: readback or device
-    std::string queuePackets;       // queue pipeline: auto, on or off
+    // The flags of the options pipelines declare (PipelineInfo::options), by option name:
+    // whole numbers and choices as given, unset or empty when not.
+    std::map<std::string, std::optional<long long>> pipelineIntegers;
+    std::map<std::string, std::string> pipelineChoices;
     std::string accel;
     std::string offset;  // fixed, scaled or bound; empty = the scene's default
     bool plainSphere = false, mollerTrumbore = false, fixedOffset = false;

@@ -58,6 +58,20 @@ public:
             fail(w + " is out of range " + std::to_string(lo) + ".." + std::to_string(hi));
         return v;
     }
+    // A pipeline option's whole number, whose range may pass an int's.
+    long long wholeNumber(const std::string& w, long long lo, long long hi) const {
+        size_t used = 0;
+        long long v = 0;
+        try {
+            v = std::stoll(w, &used);
+        } catch (const std::exception&) {
+            used = 0;
+        }
+        if (used != w.size() || w.empty()) fail("'" + w + "' is not an integer");
+        if (v < lo || v > hi)
+            fail(w + " is out of range " + std::to_string(lo) + ".." + std::to_string(hi));
+        return v;
+    }
     // "1 2 4", "0..8", or "default" (empty list).
     std::vector<int> integers(const std::string& value, int lo, int hi) const {
         std::vector<int> out;
@@ -117,8 +131,7 @@ const std::set<std::string> kGroupKeys = {"scenes", "pipelines", "sizes",  "boun
                                           "shadow-samples", "aa", "accel", "layout",
                                           "memory-budget", "adaptive", "images",
                                           "repeats", "warmup", "count-rays",
-                                          "max-launch-ms", "stop-after-failure", "max-frame-s",
-                                          "queue-launch", "pool", "queue-packets"};
+                                          "max-launch-ms", "stop-after-failure", "max-frame-s"};
 const std::set<std::string> kTopKeys = {"reference-bounces",
                                         "reference-shadow-samples", "reference-aa"};
 
@@ -169,17 +182,28 @@ void applyGroupKey(SweepGroup& g, const std::string& key, const std::string& val
         g.countRays = p.boolean(value) ? 1 : 0;
     } else if (key == "max-launch-ms") {
         g.maxLaunchMs = p.number(value, 0, 1e6);
-    } else if (key == "queue-launch") {
-        g.queueLaunch = p.wrap([&] { return parseQueueLaunch(value); });
-    } else if (key == "queue-packets") {
-        g.queuePackets = p.wrap([&] { return parseQueuePackets(value); });
-    } else if (key == "pool") {
-        g.pool = value == "default" ? 0 : size_t(p.integer(value, 1, 1 << 26));
+    } else if (const PipelineOption* opt = pipelineRegistry().findSweepOption(key)) {
+        // Numbers are checked against the range as the other integer keys are, "default"
+        // standing for the declared default; names by the declaration (naming its flag).
+        if (opt->type == PipelineOption::Type::Choice)
+            p.wrap([&] { opt->set(g.pipelineOptions, value); });
+        else if (value == "default")
+            g.pipelineOptions.reset(opt->name);
+        else
+            opt->set(g.pipelineOptions, p.wholeNumber(value, opt->min, opt->max));
     } else if (key == "stop-after-failure") {
         g.stopAfterFailure = p.boolean(value);
     } else if (key == "max-frame-s") {
         g.maxFrameS = p.number(value, 0, 1e6);
     }
+}
+
+// "|Qdevice|P4096": each pipeline option that is not at its default, in registration order.
+std::string pipelineOptionsKey(const PipelineOptionValues& values) {
+    std::string k;
+    for (const PipelineOption* opt : pipelineRegistry().options())
+        if (!opt->isDefault(values)) k += "|" + opt->cellTag + opt->text(opt->value(values));
+    return k;
 }
 
 }  // namespace
@@ -207,7 +231,8 @@ SweepConfig parseSweep(const std::string& text, const fs::path& path) {
         size_t eq = line.find('=');
         if (eq == std::string::npos) p.fail("expected 'key = value' or '[group]'");
         std::string key = trim(line.substr(0, eq)), value = trim(line.substr(eq + 1));
-        bool top = kTopKeys.count(key), group = kGroupKeys.count(key);
+        bool top = kTopKeys.count(key),
+             group = kGroupKeys.count(key) || pipelineRegistry().findSweepOption(key);
         if (!top && !group) p.fail("unknown key '" + key + "' (see bench/sweeps/README.md)");
         if (top) {
             if (!groupNames.empty()) p.fail("'" + key + "' belongs before the first [group]");
@@ -290,9 +315,7 @@ std::string Cell::settingKey() const {
       << '|' << o.aa << '|' << (accelApplies ? accelName(o.accel) : "-") << '|' << int(o.layout)
       << '|' << o.memoryBudget << '|' << o.adaptiveAa;
     if (o.maxLaunchMs > 0) k << "|L" << o.maxLaunchMs;  // absent before max-launch-ms existed
-    if (o.queueLaunch != RenderOptions::QueueLaunch::Readback) k << "|Q" << queueLaunchName(o.queueLaunch);
-    if (o.pool) k << "|P" << o.pool;
-    if (o.queuePackets != RenderOptions::QueuePackets::Auto) k << "|K" << queuePacketsName(o.queuePackets);
+    k << pipelineOptionsKey(o.pipelineOptions);
     return k.str();
 }
 
@@ -301,8 +324,7 @@ std::string Cell::batchKey() const {
     std::ostringstream k;
     k << scene << '|' << o.bounces << '|' << o.shadowSamples << '|' << o.aa << '|' << int(o.layout)
       << '|' << o.memoryBudget << '|' << o.adaptiveAa << '|' << repeats << '|' << warmup << '|'
-      << countRays << '|' << images << '|' << o.maxLaunchMs << '|' << int(o.queueLaunch) << '|' << o.pool;
-    if (o.queuePackets != RenderOptions::QueuePackets::Auto) k << "|K" << int(o.queuePackets);
+      << countRays << '|' << images << '|' << o.maxLaunchMs << pipelineOptionsKey(o.pipelineOptions);
     // A cell that may be skipped depends on the smaller sizes' outcome: one size per batch.
     if (stopAfterFailure) k << '|' << o.width << 'x' << o.height;
     return k.str();
@@ -318,11 +340,12 @@ std::string Cell::label() const {
     if (accelApplies) l << ' ' << accelName(o.accel);
     if (o.layout == RenderOptions::Layout::Weighted) l << " weighted";
     if (o.adaptiveAa) l << " adaptive";
-    if (o.queueLaunch != RenderOptions::QueueLaunch::Readback)
-        l << ' ' << queueLaunchName(o.queueLaunch) << "-sized";
-    if (o.pool) l << " pool " << o.pool;
-    if (o.queuePackets != RenderOptions::QueuePackets::Auto)
-        l << " packets " << queuePacketsName(o.queuePackets);
+    for (const PipelineOption* opt : pipelineRegistry().options()) {
+        if (opt->isDefault(o.pipelineOptions)) continue;
+        std::string text = opt->label;
+        text.replace(text.find("{}"), 2, opt->text(opt->value(o.pipelineOptions)));
+        l << ' ' << text;
+    }
     if (o.memoryBudget)
         l << " budget "
           << (o.memoryBudget % (1 << 20) ? std::to_string(o.memoryBudget >> 10) + "K"
@@ -371,9 +394,7 @@ std::vector<Cell> expandCells(const SweepConfig& config,
                                     c.options.memoryBudget = g.memoryBudget;
                                     c.options.adaptiveAa = g.adaptive;
                                     c.options.maxLaunchMs = g.maxLaunchMs;
-                                    c.options.queueLaunch = g.queueLaunch;
-                                    c.options.pool = g.pool;
-                                    c.options.queuePackets = g.queuePackets;
+                                    c.options.pipelineOptions = g.pipelineOptions;
                                     c.accelApplies = prims;
                                     c.branching = scene.branching();
                                     c.groups = {g.name};

@@ -29,11 +29,9 @@ struct SweepGroup {
     int repeats = -1, warmup = -1;  // -1: the sweep's
     int countRays = -1;             // -1: the sweep's, else 0 or 1
     double maxLaunchMs = 0;         // split frames so no launch runs past this (0: one launch)
-    // How the queue pipeline sizes its launches (--queue-launch); the other pipelines ignore it.
-    RenderOptions::QueueLaunch queueLaunch = RenderOptions::QueueLaunch::Readback;
-    size_t pool = 0;  // the queue pipeline's ray slots (--pool); 0: chosen from the device
-    // Whether the queue pipeline traces packets on CPU devices (--queue-packets).
-    RenderOptions::QueuePackets queuePackets = RenderOptions::QueuePackets::Auto;
+    // The pipelines' own options given by the group's keys (PipelineInfo::options: the queue's
+    // pool, for one); the pipelines that do not declare one ignore it.
+    PipelineOptionValues pipelineOptions;
     // Once a pipeline fails at a setting (or a frame takes longer than maxFrameS), the group's
     // settings of that pipeline that are no smaller (size, bounce limit) are skipped.
     bool stopAfterFailure = false;

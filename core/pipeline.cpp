@@ -26,32 +26,6 @@ RenderOptions::Offset parseOffset(const std::string& name) {
     throw Error("--offset " + name + ": must be one of fixed, scaled, bound");
 }
 
-RenderOptions::QueueLaunch parseQueueLaunch(const std::string& name) {
-    if (name == "readback") return RenderOptions::QueueLaunch::Readback;
-    if (name == "device") return RenderOptions::QueueLaunch::Device;
-    throw Error("--queue-launch " + name + ": must be readback or device");
-}
-
-const char* queueLaunchName(RenderOptions::QueueLaunch launch) {
-    return launch == RenderOptions::QueueLaunch::Device ? "device" : "readback";
-}
-
-RenderOptions::QueuePackets parseQueuePackets(const std::string& name) {
-    if (name == "auto") return RenderOptions::QueuePackets::Auto;
-    if (name == "on") return RenderOptions::QueuePackets::On;
-    if (name == "off") return RenderOptions::QueuePackets::Off;
-    throw Error("--queue-packets " + name + ": must be auto, on or off");
-}
-
-const char* queuePacketsName(RenderOptions::QueuePackets packets) {
-    switch (packets) {
-        case RenderOptions::QueuePackets::Auto: return "auto";
-        case RenderOptions::QueuePackets::On: return "on";
-        case RenderOptions::QueuePackets::Off: return "off";
-    }
-    return "?";
-}
-
 const char* offsetName(RenderOptions::Offset offset) {
     switch (offset) {
         case RenderOptions::Offset::Fixed: return "fixed";

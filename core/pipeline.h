@@ -33,12 +33,6 @@ const char* rayTypeName(int type);  // "primary", "reflection", "refraction", "s
 // --offset names: fixed, scaled, bound. parseOffset throws rt::Error naming the flag.
 RenderOptions::Offset parseOffset(const std::string& name);
 const char* offsetName(RenderOptions::Offset offset);
-// --queue-launch names: readback, device. parseQueueLaunch throws rt::Error naming the flag.
-RenderOptions::QueueLaunch parseQueueLaunch(const std::string& name);
-const char* queueLaunchName(RenderOptions::QueueLaunch launch);
-// --queue-packets names: auto, on, off. parseQueuePackets throws rt::Error naming the flag.
-RenderOptions::QueuePackets parseQueuePackets(const std::string& name);
-const char* queuePacketsName(RenderOptions::QueuePackets packets);
 
 // What one frame cost, in terms every pipeline shares; what only one pipeline has goes in extras.
 struct FrameStats {

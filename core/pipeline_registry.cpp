@@ -12,6 +12,18 @@ namespace rt {
 void PipelineRegistry::add(PipelineInfo info) {
     if (info.name.empty() || !info.make) throw Error("a pipeline registered without a name or factory");
     if (find(info.name)) throw Error("pipeline '" + info.name + "' is registered twice");
+    std::vector<const PipelineOption*> known = options();
+    for (const PipelineOption& o : info.options) {
+        if (o.name.empty() || o.sweepKey.empty() || o.cellTag.empty() ||
+            o.label.find("{}") == std::string::npos)
+            throw Error("pipeline '" + info.name + "' declares an option without a name, sweep "
+                        "key, cell tag or label with {}");
+        for (const PipelineOption* k : known)
+            if (k->name == o.name || k->sweepKey == o.sweepKey || k->cellTag == o.cellTag)
+                throw Error("pipeline '" + info.name + "' declares option " + o.name +
+                            ", whose name, sweep key or cell tag another option has");
+        known.push_back(&o);
+    }
     entries_.push_back(std::move(info));
 }
 
@@ -47,6 +59,19 @@ std::string PipelineRegistry::help() const {
         out += "  " + p.name + std::string(width - p.name.size() + 2, ' ') + p.title + ": " +
                p.description + "\n";
     return out;
+}
+
+std::vector<const PipelineOption*> PipelineRegistry::options() const {
+    std::vector<const PipelineOption*> out;
+    for (const PipelineInfo& p : entries_)
+        for (const PipelineOption& o : p.options) out.push_back(&o);
+    return out;
+}
+
+const PipelineOption* PipelineRegistry::findSweepOption(const std::string& sweepKey) const {
+    for (const PipelineOption* o : options())
+        if (o->sweepKey == sweepKey) return o;
+    return nullptr;
 }
 
 std::unique_ptr<Pipeline> PipelineRegistry::make(const std::string& name, ClContext* cl) const {

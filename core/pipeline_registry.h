@@ -1,6 +1,6 @@
 // rtlab — the registry of pipelines: what a front end (CLI, viewer, sweeps, benchmarks) may know
-// about a pipeline is its entry here: a name, a one-line title and description, a factory, and what
-// it supports. The core declares the registry and registers only its own CPU reference; each
+// about a pipeline is its entry here: a name, a one-line title and description, a factory, what
+// it supports, and the options it declares for itself (core/pipeline_options.h). The core declares the registry and registers only its own CPU reference; each
 // pipeline folder registers itself (pipelines/registry.h holds the filled registry).
 #pragma once
 
@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "core/pipeline.h"
+#include "core/pipeline_options.h"
 
 namespace rt {
 
@@ -27,13 +28,22 @@ struct PipelineInfo {
     std::string description;  // what makes it different, for --help
     bool reference = false;   // the CPU oracle: compared against, never measured
     PipelineSupport supports;
+    // Options only this pipeline reads: front ends make a flag, a sweep key and their parts of
+    // sweep cells from each. Every pipeline's options apply to every cell of a sweep group and
+    // to every --pipeline, as shared options do; the others' pipelines ignore them.
+    std::vector<PipelineOption> options;
+    // Called by the command line after it applied the flags, for every pipeline: lets one
+    // settle a shared option whose command-line default its own options cannot honour.
+    // launchCapGiven says whether --max-launch-ms was given (else it holds the CLI default).
+    std::function<void(RenderOptions& options, bool launchCapGiven)> settleDefaults;
     // cl is null only for the reference, which needs no device.
     std::function<std::unique_ptr<Pipeline>(ClContext* cl)> make;
 };
 
 class PipelineRegistry {
 public:
-    // Throws rt::Error on an empty or duplicate name: two folders may not claim one name.
+    // Throws rt::Error on an empty or duplicate name: two folders may not claim one name, nor
+    // two pipelines one option name, sweep key or cell tag.
     void add(PipelineInfo info);
     const std::vector<PipelineInfo>& all() const { return entries_; }
     const PipelineInfo* find(const std::string& name) const;
@@ -45,6 +55,10 @@ public:
     std::string joinedNames(bool devicesOnly = false) const;
     // One line per pipeline, "  NAME  TITLE: DESCRIPTION", for --help.
     std::string help() const;
+    // Every pipeline's declared options, in registration order (the order of cell keys).
+    std::vector<const PipelineOption*> options() const;
+    // The option declared with this sweep-file key, or null.
+    const PipelineOption* findSweepOption(const std::string& sweepKey) const;
     // Creates a pipeline by name; throws when it needs a device and cl is null.
     std::unique_ptr<Pipeline> make(const std::string& name, ClContext* cl) const;
 

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "core/image.h"
+#include "core/pipeline_options.h"
 #include "core/types.h"
 
 namespace rt {
@@ -39,17 +40,9 @@ struct RenderOptions {
     bool countRays = false;         // count rays by type on the device (slower; benchmarks)
     // Split frames into row tiles so no launch runs past this (display watchdogs); 0 = off.
     double maxLaunchMs = 0;
-    size_t pool = 0;  // queue pipeline: ray slots in the pool (0 = chosen from the device)
-    // Queue pipeline: how each bounce's launches are sized. Readback: the host reads the counts
-    // once per bounce (blocking). Device: every bounce is enqueued at once over a bound the host
-    // knows, and each kernel reads its real count from the device (wavefront/queue/README.md).
-    enum class QueueLaunch { Readback, Device };
-    QueueLaunch queueLaunch = QueueLaunch::Readback;
-    // Queue pipeline: trace the extend and shadow queues 16 rays per work-item (packets of the
-    // wide BVH, for CPU devices). Auto: when the device is a CPU, --accel wide and the scene
-    // has no spheres outside the BVH's reach (wavefront/queue/README.md); On refuses otherwise.
-    enum class QueuePackets { Auto, On, Off };
-    QueuePackets queuePackets = QueuePackets::Auto;
+    // The values of the options pipelines declare for themselves (PipelineInfo::options), by
+    // name; an option not set has its declared default. Each pipeline reads its own.
+    PipelineOptionValues pipelineOptions;
     // Render only rows [rowBegin, rowEnd) of the frame (rowEnd 0: every row); the other rows of
     // the image returned are unspecified. Pipelines whose registry entry says supports.rowWindow
     // render just those rows (the viewer's progressive frames); the others render every row.

@@ -186,6 +186,21 @@ TEST(Cli, RendersWithEveryPipeline) {
     }
 }
 
+// The queue's own flags reach it through the registry's option map: the pool it was given, the
+// sizing it was asked for, and device sizing without the default launch cap (which it refuses).
+TEST(Cli, QueueFlagsReachThePipeline) {
+    const std::string out = rt::test::scratchPath("queue-flags.png");
+    Result r = run("render scenes/shadows.json --size 32x24 --pipeline queue --pool 4096 "
+                   "--queue-launch device --queue-packets off --stats-json - -o " + out);
+    ASSERT_EQ(r.status, 0) << r.err;
+    const nlohmann::json j = nlohmann::json::parse(r.out);
+    EXPECT_EQ(j.at("extras").at("pool_rays"), 4096);
+    EXPECT_EQ(j.at("extras").at("queue_launch"), "device");
+    EXPECT_EQ(j.at("extras").at("queue_packets"), 0);
+    EXPECT_EQ(j.at("max_launch_ms"), 0) << "the default cap gives way to device sizing";
+    std::remove(out.c_str());
+}
+
 // --version names the commit the binary was built from (the one every result row records), and
 // exits 0 without asking for a subcommand.
 TEST(Cli, VersionNamesTheBuildCommit) {
@@ -201,6 +216,11 @@ TEST(Cli, PipelineHelpListsTheRegistry) {
     EXPECT_EQ(r.status, 0);
     for (const rt::PipelineInfo& p : rt::pipelineRegistry().all()) {
         EXPECT_NE(r.out.find(p.name + ": " + p.title), std::string::npos) << p.name << "\n" << r.out;
+        // Each pipeline's own options are flags of every front end, with their help.
+        for (const rt::PipelineOption& o : p.options) {
+            EXPECT_NE(r.out.find(o.flag()), std::string::npos) << o.flag() << "\n" << r.out;
+            EXPECT_NE(r.out.find(o.help.substr(0, 30)), std::string::npos) << o.help << "\n" << r.out;
+        }
     }
     Result c = run("compare --help");
     for (const std::string& name : rt::pipelineRegistry().names(true))

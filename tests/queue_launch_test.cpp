@@ -20,7 +20,7 @@ namespace {
 
 using test::kScenes;
 using test::load;
-using Launch = RenderOptions::QueueLaunch;
+using Launch = QueueLaunchMode;
 
 bool sameBits(const Image& a, const Image& b) {
     return a.rgb.size() == b.rgb.size() &&
@@ -48,11 +48,11 @@ TEST_P(QueueLaunchSizing, DeviceSizedLaunchesGiveTheSameBits) {
             std::string what = std::string(GetParam()) + " B=" + std::to_string(b) +
                                " aa=" + std::to_string(aa);
             RenderOptions o = tiny(scene, b, aa);
-            o.queueLaunch = Launch::Readback;
+            setQueueLaunch(o, Launch::Readback);
             Image host = queue.render(scene, o);
             const int hostBounces = queue.queueStats().iterations;
             EXPECT_EQ(queue.queueStats().readbacks, hostBounces) << what << ": one per bounce";
-            o.queueLaunch = Launch::Device;
+            setQueueLaunch(o, Launch::Device);
             Image device = queue.render(scene, o);
             const QueueStats& q = queue.queueStats();
             EXPECT_FALSE(q.fellBack) << what << ": the default pool holds every bounce";
@@ -70,17 +70,17 @@ INSTANTIATE_TEST_SUITE_P(StandardScenes, QueueLaunchSizing, ::testing::ValuesIn(
 TEST(QueueLaunch, PoolTooSmallForABounceFallsBackToReadbacks) {
     Scene scene = load("spheres");
     RenderOptions o = tiny(scene, 6, 1);
-    o.pool = 64;
+    setQueuePool(o, 64);
     QueuePipeline queue(test::device());
     Image host = queue.render(scene, o);
     ASSERT_GT(queue.queueStats().restartedPaths, 0) << "the pool must be too small to hold a bounce";
-    o.queueLaunch = Launch::Device;
+    setQueueLaunch(o, Launch::Device);
     Image device = queue.render(scene, o);
     EXPECT_TRUE(queue.queueStats().fellBack);
     EXPECT_EQ(queue.stats().extras.at("queue_launch"), "device, fell back to readback");
     EXPECT_TRUE(sameBits(host, device));
     // A pool that holds every bounce of the frame does not fall back.
-    o.pool = 4096;
+    setQueuePool(o, 4096);
     EXPECT_TRUE(sameBits(host, queue.render(scene, o)));
     EXPECT_FALSE(queue.queueStats().fellBack);
 }
@@ -91,10 +91,10 @@ TEST(QueueLaunch, DeviceSizingRunsTheFrameInWaves) {
     RenderOptions o = tiny(scene, 3, 1);
     o.width = 40;
     o.height = 30;  // 1200 pixels
-    o.pool = 512;
+    setQueuePool(o, 512);
     QueuePipeline queue(test::device());
     Image host = queue.render(scene, o);
-    o.queueLaunch = Launch::Device;
+    setQueueLaunch(o, Launch::Device);
     Image device = queue.render(scene, o);
     EXPECT_FALSE(queue.queueStats().fellBack);
     EXPECT_EQ(queue.queueStats().iterations, 3 * (3 + 1)) << "ceil(1200 / 512) waves of B + 1";
@@ -108,7 +108,7 @@ TEST(QueueLaunch, FrameReportsIdleTimeAndReadbacks) {
     QueuePipeline queue(test::device());
     for (Launch launch : {Launch::Readback, Launch::Device}) {
         RenderOptions o = tiny(scene, 4, 1);
-        o.queueLaunch = launch;
+        setQueueLaunch(o, launch);
         queue.render(scene, o);
         const FrameStats& s = queue.stats();
         std::string what = queueLaunchName(launch);
@@ -188,7 +188,7 @@ TEST(QueueLaunch, StageLaunchesOverTheCapGoInPiecesWithTheSameBits) {
 TEST(QueueLaunch, DeviceSizingRefusesMaxLaunchMs) {
     Scene scene = load("cornell");
     RenderOptions o = tiny(scene, 2, 1);
-    o.queueLaunch = Launch::Device;
+    setQueueLaunch(o, Launch::Device);
     o.maxLaunchMs = 5;
     QueuePipeline queue(test::device());
     try {
@@ -223,7 +223,7 @@ TEST(QueueLaunch, SweepRunsBothSizings) {
     int device = 0, readback = 0;
     for (const bench::Cell& cell : cells) {
         ASSERT_EQ(cell.pipeline, "queue");
-        (cell.options.queueLaunch == Launch::Device ? device : readback) += 1;
+        (queueLaunch(cell.options) == Launch::Device ? device : readback) += 1;
         EXPECT_EQ(cell.options.bounces, 8);
     }
     EXPECT_GT(device, 0);
@@ -235,8 +235,8 @@ TEST(QueueLaunch, SweepRunsBothSizings) {
              return scenes.try_emplace(name, load(name)).first->second;
          })) {
         EXPECT_EQ(cell.options.width, 640);
-        if (cell.options.pool) {
-            EXPECT_GE(cell.options.pool, size_t(640 * 360));
+        if (queuePool(cell.options)) {
+            EXPECT_GE(queuePool(cell.options), size_t(640 * 360));
             ++pooled;
         }
     }

@@ -22,7 +22,7 @@
 namespace rt {
 namespace {
 
-using Packets = RenderOptions::QueuePackets;
+using Packets = QueuePacketMode;
 
 bool sameBits(const Image& a, const Image& b) {
     return a.rgb.size() == b.rgb.size() &&
@@ -49,10 +49,10 @@ Scene bunny() {
 void expectSameBits(const Scene& scene, const RenderOptions& base, const std::string& what,
                     QueuePipeline& queue) {
     RenderOptions o = base;
-    o.queuePackets = Packets::Off;
+    setQueuePackets(o, Packets::Off);
     Image single = queue.render(scene, o);
     EXPECT_EQ(queue.stats().extras.at("queue_packets"), 0) << what;
-    o.queuePackets = Packets::On;
+    setQueuePackets(o, Packets::On);
     if (!deviceIsCpu()) {
         EXPECT_THROW(queue.render(scene, o), Error) << what;
         return;
@@ -85,7 +85,7 @@ TEST(QueuePackets, StandardScenesGiveTheSameBitsWithAndWithoutPackets) {
     RenderOptions o = small(cornell, 40, 30, 3);
     o.shadowSamples = 4;
     expectSameBits(cornell, o, "cornell 4 shadow samples", queue);
-    o.queueLaunch = RenderOptions::QueueLaunch::Device;
+    setQueueLaunch(o, QueueLaunchMode::Device);
     o.maxLaunchMs = 0;
     expectSameBits(cornell, o, "cornell, launches sized on the device", queue);
 }
@@ -99,9 +99,9 @@ TEST(QueuePackets, ALaneWhoseHitIsDroppedChangesTheImage) {
     Scene scene = bunny();
     RenderOptions o = small(scene, 77, 41, 2);
     QueuePipeline queue(test::device());
-    o.queuePackets = Packets::Off;
+    setQueuePackets(o, Packets::Off);
     Image single = queue.render(scene, o);
-    o.queuePackets = Packets::On;
+    setQueuePackets(o, Packets::On);
     EXPECT_TRUE(sameBits(single, queue.render(scene, o)));
     queue.setDropLaneForTest(5);
     Image dropped = queue.render(scene, o);
@@ -116,7 +116,7 @@ TEST(QueuePackets, SplitLaunchesKeepTheBits) {
     if (!deviceIsCpu()) GTEST_SKIP() << "packets run on CPU devices only";
     Scene scene = test::load("mesh");
     RenderOptions o = small(scene, 96, 64, 2);
-    o.queuePackets = Packets::On;
+    setQueuePackets(o, Packets::On);
     QueuePipeline queue(test::device());
     Image whole = queue.render(scene, o);
     const int wholeLaunches = queue.stats().launches;
@@ -139,9 +139,9 @@ TEST(QueuePackets, AutoUsesPacketsOnCpuDevicesForTriangleScenesOnly) {
     RenderOptions o = small(mesh, 8, 8, 1);
     EXPECT_EQ(QueuePipeline::usesPackets(dev, mesh, o), dev.type == "CPU");
     EXPECT_FALSE(QueuePipeline::usesPackets(dev, cornell, o)) << "spheres: single rays";
-    o.queuePackets = Packets::Off;
+    setQueuePackets(o, Packets::Off);
     EXPECT_FALSE(QueuePipeline::usesPackets(dev, mesh, o));
-    o.queuePackets = Packets::Auto;
+    setQueuePackets(o, Packets::Auto);
     o.accel = RenderOptions::Accel::Bvh;
     EXPECT_FALSE(QueuePipeline::usesPackets(dev, mesh, o));
 }
@@ -162,7 +162,7 @@ TEST(QueuePackets, ImpossibleChoicesAreRefusedInOneLine) {
     cpu.type = "CPU";
     cpu.name = "some CPU";
     RenderOptions o = small(mesh, 8, 8, 1);
-    o.queuePackets = Packets::On;
+    setQueuePackets(o, Packets::On);
     o.accel = RenderOptions::Accel::Bvh;
     expectRefused(mesh, o, cpu,
                   "--queue-packets on: packets traverse the wide BVH only (use --accel wide)");
@@ -204,9 +204,9 @@ TEST(QueuePackets, SweepGroupsChooseThem) {
     ASSERT_EQ(cells.size(), 2u);
     std::set<Packets> seen;
     for (const bench::Cell& cell : cells) {
-        seen.insert(cell.options.queuePackets);
+        seen.insert(queuePackets(cell.options));
         EXPECT_NE(cell.label().find(std::string("packets ") +
-                                    queuePacketsName(cell.options.queuePackets)),
+                                    queuePacketsName(queuePackets(cell.options))),
                   std::string::npos)
             << cell.label();
     }

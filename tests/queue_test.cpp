@@ -89,12 +89,12 @@ TEST(Queue, SameBitsFromRunToRunAndForAnyPoolSize) {
     Image first = queue.render(scene, o);
     EXPECT_EQ(queue.queueStats().restartedPaths, 0);
     EXPECT_TRUE(sameBits(first, queue.render(scene, o)));
-    o.pool = 64;  // C^B = 64: the least that holds one path's widest bounce
+    setQueuePool(o, 64);  // C^B = 64: the least that holds one path's widest bounce
     Image tiny = queue.render(scene, o);
     EXPECT_GT(queue.queueStats().restartedPaths, 0) << "a 64-ray pool must cut paths";
     EXPECT_TRUE(sameBits(first, tiny));
     EXPECT_TRUE(sameBits(tiny, queue.render(scene, o)));
-    o.pool = 1024;
+    setQueuePool(o, 1024);
     EXPECT_TRUE(sameBits(first, queue.render(scene, o)));
 }
 
@@ -117,10 +117,10 @@ TEST(Queue, DeviceMemoryDoesNotGrowWithTheBounceLimit) {
     Scene scene = load("spheres");
     QueuePipeline queue(test::device());
     RenderOptions o = small(scene, 1);
-    o.pool = 1 << 16;
+    setQueuePool(o, 1 << 16);
     queue.render(scene, o);
     size_t shallow = queue.queueStats().poolBytes;
-    EXPECT_EQ(shallow, o.pool * QueuePipeline::bytesPerRay(2) + 4 + RT_Q_WORDS * 4);
+    EXPECT_EQ(shallow, queuePool(o) * QueuePipeline::bytesPerRay(2) + 4 + RT_Q_WORDS * 4);
     o.bounces = 16;
     queue.render(scene, o);
     EXPECT_EQ(queue.queueStats().poolBytes, shallow);
@@ -156,7 +156,7 @@ TEST(Queue, RunsItsStagesOverClassQueues) {
 TEST(Queue, RejectsAPoolThatCannotHoldOnePath) {
     Scene scene = load("spheres");  // C = 2
     RenderOptions o = small(scene, 12);
-    o.pool = 1024;
+    setQueuePool(o, 1024);
     QueuePipeline queue(test::device());
     try {
         queue.render(scene, o);

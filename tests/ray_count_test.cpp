@@ -86,7 +86,7 @@ std::string typesText(const RayCounts& r) {
 // with the small pool.
 long long expectSameCounts(const Scene& scene, const RenderOptions& base) {
     using Layout = RenderOptions::Layout;
-    using Packets = RenderOptions::QueuePackets;
+    using Packets = QueuePacketMode;
     RenderOptions o = base;
     o.countRays = true;
     o.accel = RenderOptions::Accel::Wide;  // the structure the queue's packets traverse
@@ -121,7 +121,8 @@ long long expectSameCounts(const Scene& scene, const RenderOptions& base) {
             for (size_t pool : {size_t(0), size_t(512)})
                 for (Packets packets : {Packets::Off, Packets::On}) {
                     if (packets == Packets::On && !packetsPossible) continue;
-                    v.pool = pool, v.queuePackets = packets;
+                    setQueuePool(v, pool);
+                    setQueuePackets(v, packets);
                     const std::string what = "queue, pool " + std::to_string(pool) +
                                              (packets == Packets::On ? ", packets" : "");
                     const RayCounts got = counted(what, v, *p);

@@ -4,11 +4,14 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <fstream>
+#include <map>
 #include <set>
 #include <string>
 
 #include "bench/sweep_config.h"
 #include "core/error.h"
+#include "core/pipeline_options.h"
 #include "core/scene_loader.h"
 #include "image/compare.h"
 #include "image/image_io.h"
@@ -101,6 +104,119 @@ TEST(Registry, SweepFilesTakeTheirPipelinesFromTheRegistry) {
             EXPECT_NE(std::string(e.what()).find(bad), std::string::npos) << e.what();
         }
     }
+}
+
+// A pipeline's own options come from its entry: two pipelines may not claim one option name,
+// sweep key or cell tag, since flags, sweep files and cell keys are one namespace.
+TEST(Registry, RefusesAnOptionTwoPipelinesDeclare) {
+    auto withOption = [](const std::string& pipeline, PipelineOption o) {
+        PipelineInfo p = referencePipelineInfo();
+        p.name = pipeline;
+        p.options = {std::move(o)};
+        return p;
+    };
+    const PipelineOption mine{.name = "gain", .type = PipelineOption::Type::Integer,
+                              .help = "h", .defaultValue = 1ll, .min = 1, .max = 4,
+                              .sweepKey = "gain", .cellTag = "G", .label = "gain {}"};
+    PipelineRegistry r;
+    r.add(withOption("a", mine));
+    for (auto change : {+[](PipelineOption& o) { o.sweepKey = "other"; o.cellTag = "X"; },
+                        +[](PipelineOption& o) { o.name = "other"; o.cellTag = "X"; },
+                        +[](PipelineOption& o) { o.name = "other"; o.sweepKey = "other"; }}) {
+        PipelineOption clash = mine;
+        change(clash);
+        EXPECT_THROW(r.add(withOption("b", clash)), Error) << clash.name;
+    }
+    PipelineOption unlabelled = mine;
+    unlabelled.name = unlabelled.sweepKey = "other";
+    unlabelled.cellTag = "X";
+    unlabelled.label = "gain";
+    EXPECT_THROW(r.add(withOption("c", unlabelled)), Error);
+    ASSERT_EQ(r.options().size(), 1u);
+    EXPECT_EQ(r.findSweepOption("gain"), r.options()[0]);
+}
+
+// Values are read back typed, with the declared default when unset, and checked when set, the
+// error naming the flag.
+TEST(Registry, OptionValuesReadBackTypedAndAreChecked) {
+    const PipelineOption count{.name = "count", .type = PipelineOption::Type::Integer,
+                               .help = "h", .defaultValue = 0ll, .min = 1, .max = 9,
+                               .sweepKey = "count", .cellTag = "C", .label = "count {}"};
+    const PipelineOption mode{.name = "mode", .type = PipelineOption::Type::Choice, .help = "h",
+                              .defaultValue = "slow", .choices = {"slow", "fast", "odd"},
+                              .sweepKey = "mode", .cellTag = "M", .label = "{}"};
+    PipelineOptionValues v;
+    EXPECT_EQ(count.integer(v), 0);
+    EXPECT_EQ(mode.index(v), 0u);
+    EXPECT_TRUE(mode.isDefault(v));
+    count.set(v, 7ll);
+    mode.set(v, "odd");
+    EXPECT_EQ(count.integer(v), 7);
+    EXPECT_EQ(mode.choice(v), "odd");
+    EXPECT_EQ(mode.index(v), 2u);
+    EXPECT_FALSE(mode.isDefault(v));
+    try {
+        count.set(v, 10ll);
+        FAIL();
+    } catch (const Error& e) {
+        EXPECT_STREQ(e.what(), "--count 10: must be in 1..9");
+    }
+    try {
+        mode.set(v, "quick");
+        FAIL();
+    } catch (const Error& e) {
+        EXPECT_STREQ(e.what(), "--mode quick: must be slow, fast or odd");
+    }
+    EXPECT_EQ(count.integer(v), 7) << "a refused value leaves the old one";
+}
+
+// Sweep files take every declared option under its sweep key, and cells carry it into their
+// keys and labels by its declaration; a number's "default" is the declared default.
+TEST(Registry, SweepFilesTakeEveryDeclaredOption) {
+    for (const PipelineOption* opt : pipelineRegistry().options()) {
+        const bool number = opt->type == PipelineOption::Type::Integer;
+        std::string value = number ? std::to_string(opt->max) : opt->choices.back();
+        std::string fallback = number ? "default" : opt->text(opt->defaultValue);
+        bench::SweepConfig c = bench::parseSweep("[a]\nscenes = spheres\npipelines = wave\n" +
+                                                     opt->sweepKey + " = " + value + "\n[b]\n" +
+                                                     "scenes = spheres\npipelines = wave\n" +
+                                                     opt->sweepKey + " = " + fallback + "\n",
+                                                 "t");
+        EXPECT_EQ(opt->text(opt->value(c.groups[0].pipelineOptions)), value) << opt->name;
+        EXPECT_TRUE(opt->isDefault(c.groups[1].pipelineOptions)) << opt->name;
+        Scene scene = loadScene("scenes/spheres.json", readImage);
+        std::vector<bench::Cell> cells =
+            bench::expandCells(c, [&](const std::string&) -> const Scene& { return scene; });
+        ASSERT_EQ(cells.size(), 2u) << opt->name << ": the value makes a cell of its own";
+        std::string label = opt->label;
+        label.replace(label.find("{}"), 2, value);
+        EXPECT_NE(cells[0].key().find("|" + opt->cellTag + value), std::string::npos)
+            << cells[0].key();
+        EXPECT_NE(cells[0].label().find(label), std::string::npos) << cells[0].label();
+        EXPECT_EQ(cells[1].key().find("|" + opt->cellTag), std::string::npos) << cells[1].key();
+    }
+}
+
+// Rows already in results/ were written when the queue's options were fields of RenderOptions:
+// the cells the same sweep file expands to now must have the same keys (resumed sweeps and
+// scripts match rows by them).
+TEST(Registry, RecordedRowsKeepTheirCellKeys) {
+    const char* file = "results/pocl-pthread-skylake-avx512-amd-epyc/queue-launch-cpu.json";
+    std::ifstream in(file);
+    ASSERT_TRUE(in) << file;
+    const nlohmann::json results = nlohmann::json::parse(in);
+    std::set<std::string> recorded;
+    for (const nlohmann::json& row : results.at("rows")) recorded.insert(row.at("cell"));
+    bench::SweepConfig c =
+        bench::parseSweep(results.at("meta").at("config").get<std::string>(), "queue-launch-cpu");
+    std::map<std::string, Scene> scenes;
+    std::set<std::string> now;
+    for (const bench::Cell& cell : bench::expandCells(c, [&](const std::string& name) -> const Scene& {
+             return scenes.try_emplace(name, loadScene("scenes/" + name + ".json", readImage))
+                 .first->second;
+         }))
+        now.insert(cell.key());
+    EXPECT_EQ(now, recorded);
 }
 
 TEST(Registry, DevicePipelineNeedsADevice) {

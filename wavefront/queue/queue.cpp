@@ -224,7 +224,7 @@ public:
     QueuePass(ClContext& cl, QueueFrame& f, const QueueBuffers& b, const RenderOptions& o,
               QueueStats& stats, size_t learned)
         : cl_(cl), f_(f), b_(b), o_(o), stats_(stats),
-          onDevice_(o.queueLaunch == RenderOptions::QueueLaunch::Device),
+          onDevice_(queueLaunch(o) == QueueLaunchMode::Device),
           // --max-launch-ms: start with a probe and learn what a ray costs (see adaptLimit).
           limit_(o.maxLaunchMs <= 0 ? b.pool
                  : learned         ? std::min(b.pool, learned)
@@ -511,7 +511,7 @@ Image QueuePipeline::render(const Scene& scene, const RenderOptions& o) {
     if (o.adaptiveAa && o.aa > 1)
         throw Error("--adaptive is not supported by the queue pipeline (use --pipeline mega)",
                     FailureKind::InvalidOption);
-    const bool onDevice = o.queueLaunch == RenderOptions::QueueLaunch::Device;
+    const bool onDevice = queueLaunch(o) == QueueLaunchMode::Device;
     if (onDevice && o.maxLaunchMs > 0)
         throw Error("--queue-launch device does not go with --max-launch-ms: its admission is "
                     "learned from each bounce's time, which needs --queue-launch readback",
@@ -555,7 +555,7 @@ Image QueuePipeline::render(const Scene& scene, const RenderOptions& o) {
                       std::to_string(o.height) + " B" + std::to_string(o.bounces) + " s" +
                       std::to_string(o.shadowSamples) + " " + scene.source.string();
     for (const std::string& d : defines) key += " " + d;
-    key += std::string(" ") + queueLaunchName(o.queueLaunch);
+    key += std::string(" ") + queueLaunchName(queueLaunch(o));
     if (key != learnedKey_) {
         learnedLimit_ = 0;
         stageCosts_.clear();
@@ -617,7 +617,7 @@ Image QueuePipeline::render(const Scene& scene, const RenderOptions& o) {
         // A bounce's children outgrew the pool, and device sizing does not cut paths: this
         // frame's image is incomplete. Render it again with read-backs, which cut and restart.
         RenderOptions again = o;
-        again.queueLaunch = RenderOptions::QueueLaunch::Readback;
+        setQueueLaunch(again, QueueLaunchMode::Readback);
         Image image = render(scene, again);
         queue_.fellBack = true;
         stats_.extras["queue_launch"] = "device, fell back to readback";
@@ -632,7 +632,7 @@ Image QueuePipeline::render(const Scene& scene, const RenderOptions& o) {
     stats_.extras["restarted_paths"] = queue_.restartedPaths;
     if (o.countRays) stats_.extras["retraced_rays"] = queue_.retracedRays;  // by RT_RAY_* type
     stats_.extras["queue_lengths"] = queue_.queueLengths;  // [depth][miss, diffuse, mirror, glass]
-    stats_.extras["queue_launch"] = queueLaunchName(o.queueLaunch);
+    stats_.extras["queue_launch"] = queueLaunchName(queueLaunch(o));
     stats_.extras["queue_packets"] = packets ? kPacket : 0;  // rays per extend/shadow work-item
     stats_.extras["readbacks"] = queue_.readbacks;
     stats_.extras["span_ms"] = queue_.spanMs;
@@ -654,10 +654,10 @@ std::string QueuePipeline::packetRefusal(const DeviceInfo& device, const Scene& 
 
 bool QueuePipeline::usesPackets(const DeviceInfo& device, const Scene& scene,
                                 const RenderOptions& o) {
-    using Packets = RenderOptions::QueuePackets;
-    if (o.queuePackets == Packets::Off) return false;
+    const QueuePacketMode mode = queuePackets(o);
+    if (mode == QueuePacketMode::Off) return false;
     std::string why = packetRefusal(device, scene, o);
-    if (o.queuePackets == Packets::On) {
+    if (mode == QueuePacketMode::On) {
         if (!why.empty())
             throw Error("--queue-packets on: " + why, FailureKind::InvalidOption);
         return true;
@@ -674,6 +674,12 @@ void registerQueueWavefront(PipelineRegistry& registry) {
     p.description = "a pool of live rays in SoA buffers; generate, extend, shadow and per-material "
                     "shade kernels over compacted queues (--pool N)";
     p.supports = {.layouts = false, .adaptiveAa = false, .tiling = false, .rowWindow = true};
+    p.options = queueOptions();
+    // Device-sized launches learn no admission limit (that takes a read-back per bounce): the
+    // command line's default launch cap gives way to them; a cap asked for is refused in render().
+    p.settleDefaults = [](RenderOptions& o, bool launchCapGiven) {
+        if (queueLaunch(o) == QueueLaunchMode::Device && !launchCapGiven) o.maxLaunchMs = 0;
+    };
     p.make = [](ClContext* cl) { return std::make_unique<QueuePipeline>(*cl); };
     registry.add(std::move(p));
 }

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "core/pipeline.h"
+#include "wavefront/queue/queue_options.h"
 #include "wavefront/queue/queue_split.h"
 
 namespace rt {

@@ -34,17 +34,17 @@ size_t QueuePipeline::poolSize(const DeviceInfo& device, int branching, int boun
                                const RenderOptions& o) {
     size_t widest = 1;  // C^B: a path's widest bounce (every ray spawns C children)
     for (int b = 0; b < bounces; ++b) widest *= size_t(branching);
-    if (o.pool) {
-        if (o.pool > kMaxPool)
-            throw Error("--pool " + std::to_string(o.pool) + ": must be in 1.." +
+    if (const size_t asked = queuePool(o)) {
+        if (asked > kMaxPool)
+            throw Error("--pool " + std::to_string(asked) + ": must be in 1.." +
                         std::to_string(kMaxPool), FailureKind::InvalidOption);
-        if (o.pool < widest)
-            throw Error("--pool " + std::to_string(o.pool) + ": one path of this scene (C = " +
+        if (asked < widest)
+            throw Error("--pool " + std::to_string(asked) + ": one path of this scene (C = " +
                         std::to_string(branching) + ") can hold " + std::to_string(widest) +
                         " rays at once at --bounces " + std::to_string(bounces) +
                         "; use --pool " + std::to_string(widest) + " or more",
                         FailureKind::InvalidOption);
-        return o.pool;
+        return asked;
     }
     // About 2 M rays on a GPU (a 1080p frame's camera rays in one launch), 64 K on a CPU; then
     // halved until the pool fits a quarter of global memory, --memory-budget and the largest

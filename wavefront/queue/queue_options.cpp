@@ -1,0 +1,103 @@
+// rtlab — the queue wavefront's option declarations and their typed read-back (queue_options.h).
+#include "wavefront/queue/queue_options.h"
+
+namespace rt {
+
+namespace {
+
+constexpr long long kMaxPool = 1ll << 26;  // keeps every index of C * pool in an int
+
+const PipelineOption& launchOption() {
+    static const PipelineOption o{
+        .name = "queue-launch",
+        .type = PipelineOption::Type::Choice,
+        .help = "Queue pipeline: how launches are sized: readback (the host reads each "
+                "bounce's counts) or device (all bounces enqueued at once, counts read on the "
+                "device) [readback]",
+        .defaultValue = "readback",
+        .choices = {"readback", "device"},  // QueueLaunchMode's order
+        .sweepKey = "queue-launch",
+        .cellTag = "Q",
+        .label = "{}-sized",
+    };
+    return o;
+}
+
+const PipelineOption& poolOption() {
+    static const PipelineOption o{
+        .name = "pool",
+        .type = PipelineOption::Type::Integer,
+        .help = "Queue pipeline: ray slots in the pool, 1..67108864 (memory does not grow with "
+                "--bounces) [from the device: 2M on GPUs, 64K on CPUs]",
+        .defaultValue = 0ll,  // chosen from the device
+        .min = 1,
+        .max = kMaxPool,
+        .sweepKey = "pool",
+        .cellTag = "P",
+        .label = "pool {}",
+    };
+    return o;
+}
+
+const PipelineOption& packetsOption() {
+    static const PipelineOption o{
+        .name = "queue-packets",
+        .type = PipelineOption::Type::Choice,
+        .help = "Queue pipeline: trace the extend and shadow queues 16 rays per work-item "
+                "through the wide BVH: auto (on a CPU device with --accel wide), on or off "
+                "[auto]",
+        .defaultValue = "auto",
+        .choices = {"auto", "on", "off"},  // QueuePacketMode's order
+        .sweepKey = "queue-packets",
+        .cellTag = "K",
+        .label = "packets {}",
+    };
+    return o;
+}
+
+}  // namespace
+
+std::vector<PipelineOption> queueOptions() { return {launchOption(), poolOption(), packetsOption()}; }
+
+QueueLaunchMode queueLaunch(const RenderOptions& o) {
+    return QueueLaunchMode(launchOption().index(o.pipelineOptions));
+}
+
+void setQueueLaunch(RenderOptions& o, QueueLaunchMode mode) {
+    launchOption().set(o.pipelineOptions, queueLaunchName(mode));
+}
+
+size_t queuePool(const RenderOptions& o) { return size_t(poolOption().integer(o.pipelineOptions)); }
+
+void setQueuePool(RenderOptions& o, size_t rays) {
+    if (rays == 0)
+        o.pipelineOptions.reset(poolOption().name);
+    else
+        poolOption().set(o.pipelineOptions, (long long)(rays));
+}
+
+QueuePacketMode queuePackets(const RenderOptions& o) {
+    return QueuePacketMode(packetsOption().index(o.pipelineOptions));
+}
+
+void setQueuePackets(RenderOptions& o, QueuePacketMode mode) {
+    packetsOption().set(o.pipelineOptions, queuePacketsName(mode));
+}
+
+QueueLaunchMode parseQueueLaunch(const std::string& name) {
+    return QueueLaunchMode(launchOption().indexOf(name));
+}
+
+const char* queueLaunchName(QueueLaunchMode mode) {
+    return launchOption().choices.at(size_t(mode)).c_str();
+}
+
+QueuePacketMode parseQueuePackets(const std::string& name) {
+    return QueuePacketMode(packetsOption().indexOf(name));
+}
+
+const char* queuePacketsName(QueuePacketMode mode) {
+    return packetsOption().choices.at(size_t(mode)).c_str();
+}
+
+}  // namespace rt

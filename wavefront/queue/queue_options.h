@@ -1,0 +1,42 @@
+// rtlab — the queue wavefront's own options (--queue-launch, --pool, --queue-packets), declared
+// in its registry entry (core/pipeline_options.h) and read back here, typed, from
+// RenderOptions::pipelineOptions. Front ends know them only through the declarations.
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "core/pipeline_options.h"
+#include "core/scene.h"
+
+namespace rt {
+
+// How each bounce's launches are sized. Readback: the host reads the counts once per bounce
+// (blocking). Device: every bounce is enqueued at once over a bound the host knows, and each
+// kernel reads its real count from the device (wavefront/queue/README.md).
+enum class QueueLaunchMode { Readback, Device };
+// Whether the extend and shadow queues are traced 16 rays per work-item (packets of the wide
+// BVH, for CPU devices). Auto: when the device is a CPU, --accel wide and the scene has no
+// spheres outside the BVH's reach (wavefront/queue/README.md); On refuses otherwise.
+enum class QueuePacketMode { Auto, On, Off };
+
+// The declarations, in the order cell keys list them.
+std::vector<PipelineOption> queueOptions();
+
+QueueLaunchMode queueLaunch(const RenderOptions& options);
+void setQueueLaunch(RenderOptions& options, QueueLaunchMode mode);
+// Ray slots in the pool; 0: chosen from the device (QueuePipeline::poolSize).
+size_t queuePool(const RenderOptions& options);
+void setQueuePool(RenderOptions& options, size_t rays);  // 0: back to the device's choice
+QueuePacketMode queuePackets(const RenderOptions& options);
+void setQueuePackets(RenderOptions& options, QueuePacketMode mode);
+
+// Names as the flags take them: readback, device; auto, on, off. The parsers throw rt::Error
+// naming the flag ("--queue-launch up: must be readback or device").
+QueueLaunchMode parseQueueLaunch(const std::string& name);
+const char* queueLaunchName(QueueLaunchMode mode);
+QueuePacketMode parseQueuePackets(const std::string& name);
+const char* queuePacketsName(QueuePacketMode mode);
+
+}  // namespace rt
