@@ -46,19 +46,9 @@ public:
     }
 
     int integer(const std::string& w, int lo, int hi) const {
-        size_t used = 0;
-        int v = 0;
-        try {
-            v = std::stoi(w, &used);
-        } catch (const std::exception&) {
-            used = 0;
-        }
-        if (used != w.size() || w.empty()) fail("'" + w + "' is not an integer");
-        if (v < lo || v > hi)
-            fail(w + " is out of range " + std::to_string(lo) + ".." + std::to_string(hi));
-        return v;
+        return int(wholeNumber(w, lo, hi));
     }
-    // A pipeline option's whole number, whose range may pass an int's.
+    // A whole number in lo..hi, whose range may pass an int's (a pipeline option's).
     long long wholeNumber(const std::string& w, long long lo, long long hi) const {
         size_t used = 0;
         long long v = 0;
