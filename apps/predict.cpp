@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -57,13 +58,13 @@ bool predictParsed() { return predictCmd && predictCmd->parsed(); }
 
 int runPredict() {
     const PredictArgs& a = args;
-    if (!a.json)
-        std::printf("%-40s %10s %10s %8s %9s %9s  %s\n", "scene", "size", "busy/32", "rays/px",
-                    "largest", "obj/warp", "predicted");
+    int width = 0, height = 0;
+    if (!a.size.empty()) parseSize(a.size, width, height);  // a bad --size before any scene
+    bool header = !a.json;
     for (const std::string& file : a.scenes) {
         Scene scene = loadScene(file, readImage);
         RenderOptions o = scene.defaults;
-        if (!a.size.empty()) parseSize(a.size, o.width, o.height);
+        if (width > 0) o.width = width, o.height = height;
         if (a.bounces) o.bounces = *a.bounces;
         if (a.aa) o.aa = *a.aa;
         const LaneEstimate e = estimateBusyLanes(scene, o, a.warps);
@@ -75,11 +76,16 @@ int runPredict() {
                                 {"warps", e.warps},       {"lanes", e.lanes},
                                 {"busy_lanes", e.busyLanes}, {"rays_per_pixel", e.raysPerPixel},
                                 {"largest_tree", e.largestTree},
-                                {"objects_per_warp", e.objectsPerWarp}, {"objects", scene.spheres.size() + scene.planes.size() + scene.triangles.size()},
+                                {"objects_per_warp", e.objectsPerWarp},
+                                {"objects", scene.spheres.size() + scene.planes.size() +
+                                                scene.triangles.size()},
                                 {"predicted", p.design},  {"threshold", a.threshold},
                                 {"reason", p.reason}};
             std::printf("%s\n", j.dump().c_str());
         } else {
+            if (std::exchange(header, false))  // after the first scene loads, not before an error
+                std::printf("%-40s %10s %10s %8s %9s %9s  %s\n", "scene", "size", "busy/32",
+                            "rays/px", "largest", "obj/warp", "predicted");
             std::printf("%-40s %10s %10.1f %8.2f %9d %9.1f  %s\n", scene.name.c_str(),
                         (std::to_string(o.width) + "x" + std::to_string(o.height)).c_str(),
                         e.busyLanes, e.raysPerPixel, e.largestTree, e.objectsPerWarp,

@@ -11,6 +11,7 @@
 #include <sstream>
 #include <string>
 #include <sys/wait.h>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -164,7 +165,14 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"sweep nosuchsweep", "nosuchsweep: no such sweep file (give a path, or one of "},
         BadCase{"sweep quick --cell-timeout -2", "--cell-timeout -2: must be in 0..10000000"},
         BadCase{"render README.md -o /tmp/x.png", "README.md: not a scene file (a scene is a JSON"},
-        BadCase{"render docs/viewer-split.png -o /tmp/x.png", "viewer-split.png: not a scene file"}),
+        BadCase{"render docs/viewer-split.png -o /tmp/x.png", "viewer-split.png: not a scene file"},
+        BadCase{"predict", "scenes is required (see rtlab predict --help)"},
+        BadCase{"predict scenes/nope.json", "scenes/nope.json: cannot open"},
+        BadCase{"predict README.md", "README.md: not a scene file"},
+        BadCase{"predict scenes/spheres.json --warps 0", "--warps 0: must be in 1..1048576"},
+        BadCase{"predict scenes/spheres.json --size 0x10", "--size 0x10: width and height must"},
+        BadCase{"predict scenes/spheres.json --threshold 40", "--threshold 40: must be in 0..32"},
+        BadCase{"predict scenes/spheres.json --bounces 99", "--bounces 99: must be in 0..64"}),
     caseName);
 
 TEST(Cli, RendersWithEveryPipeline) {
@@ -246,6 +254,48 @@ TEST(Cli, CompareShowsRaysRateAndLaunches) {
         EXPECT_GT(std::stod(cols[7]), 0.0) << name << ": Mrays/s";
         EXPECT_GE(std::stoi(cols[8]), 1) << name << ": launches";
     }
+}
+
+// rtlab predict: one JSON object a scene; a scene with nothing to hit gives every lane a one-ray
+// tree, so all 32 are busy and one tree a work-item is predicted; the threshold decides the rest.
+TEST(Cli, PredictSaysADesignPerScene) {
+    auto predict = [](const std::string& threshold) {
+        Result r = run("predict scenes/empty.json scenes/spheres.json --size 64x36 --warps 32 "
+                       "--json --threshold " + threshold);
+        EXPECT_EQ(r.status, 0) << r.err;
+        EXPECT_EQ(lines(r.out), 2) << r.out;
+        std::vector<nlohmann::json> rows;
+        std::istringstream in(r.out);
+        for (std::string line; std::getline(in, line);) rows.push_back(nlohmann::json::parse(line));
+        return rows;
+    };
+    const std::vector<nlohmann::json> strict = predict("32");
+    ASSERT_EQ(strict.size(), 2u);
+    const nlohmann::json& empty = strict[0];
+    EXPECT_EQ(empty.at("busy_lanes").get<double>(), 32.0);
+    EXPECT_EQ(empty.at("largest_tree"), 1);
+    EXPECT_EQ(empty.at("rays_per_pixel").get<double>(), 1.0);
+    EXPECT_EQ(empty.at("warps"), 32);
+    EXPECT_EQ(empty.at("width"), 64);
+    EXPECT_EQ(empty.at("predicted"), "tree-per-work-item");  // 32 is at the threshold, not below
+    const nlohmann::json& spheres = strict[1];
+    EXPECT_GT(spheres.at("largest_tree").get<int>(), 1);  // mirrors and glass branch
+    EXPECT_LT(spheres.at("busy_lanes").get<double>(), 32.0);
+    EXPECT_GT(spheres.at("rays_per_pixel").get<double>(), 1.0);
+    EXPECT_EQ(spheres.at("predicted"), "queue");
+    const std::vector<nlohmann::json> lenient = predict("0");
+    ASSERT_EQ(lenient.size(), 2u);
+    EXPECT_EQ(lenient[1].at("predicted"), "tree-per-work-item");
+    EXPECT_EQ(lenient[1].at("busy_lanes"), spheres.at("busy_lanes"));  // a fixed seed
+}
+
+// A bad scene after good ones: the good ones' rows stay on stdout, the error is one line.
+TEST(Cli, PredictStopsAtABadSceneWithOneLine) {
+    Result r = run("predict scenes/empty.json scenes/nope.json --size 64x36 --warps 8 --json");
+    EXPECT_EQ(r.status, 1);
+    EXPECT_EQ(lines(r.out), 1) << r.out;
+    EXPECT_EQ(lines(r.err), 1) << r.err;
+    EXPECT_NE(r.err.find("scenes/nope.json: cannot open"), std::string::npos) << r.err;
 }
 
 // --stats prints ray counts and rays/s; --stats-json writes them for scripts.
