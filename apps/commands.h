@@ -13,9 +13,9 @@ bool compareParsed();
 int runCompare();
 void addSweep(CLI::App& app);  // apps/sweep.cpp
 int run(CLI::App& app);
-int runSweepCommand();  // apps/sweep.cpp
-void addLists(CLI::App& app);  // apps/list.cpp: rtlab scenes, rtlab sweeps
-int runLists();                // -1 when neither was parsed
+int runSweepCommand();           // apps/sweep.cpp
+void addLists(CLI::App& app);    // apps/list.cpp: rtlab scenes, rtlab sweeps
+int runLists();                  // -1 when neither was parsed
 void addPredict(CLI::App& app);  // apps/predict.cpp: rtlab predict
 bool predictParsed();
 int runPredict();

@@ -2,6 +2,8 @@
 // every registered pipeline on one device, and prints each pipeline's device time (median of
 // repeats after a warm-up frame) beside its error against the reference, then how far each pair
 // of pipelines differs (by design, not at all).
+#include "image/compare.h"
+
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
@@ -14,11 +16,10 @@
 #include "core/cl_runtime.h"
 #include "core/error.h"
 #include "core/pipeline.h"
-#include "pipelines/registry.h"
 #include "core/scene_loader.h"
-#include "image/compare.h"
-#include "image/image_io.h"
 #include "core/version.h"
+#include "image/image_io.h"
+#include "pipelines/registry.h"
 
 namespace rt::cli {
 
@@ -42,10 +43,10 @@ double median(std::vector<double> v) {
 
 void addCompare(CLI::App& app) {
     CompareArgs& a = compareArgs;
-    compareCmd = app.add_subcommand(
-        "compare", "Render one scene with the CPU reference and every pipeline (" +
-                       pipelineRegistry().joinedNames(true) +
-                       "); print time and error side by side");
+    compareCmd = app.add_subcommand("compare",
+                                    "Render one scene with the CPU reference and every pipeline (" +
+                                        pipelineRegistry().joinedNames(true) +
+                                        "); print time and error side by side");
     compareCmd->add_option("scene", a.scene, "Scene file (.json) or OBJ model")->required();
     compareCmd->add_option("-o,--output-prefix", a.outputPrefix,
                            "Also write PREFIX-<pipeline>.png for each pipeline and the reference");
@@ -67,7 +68,8 @@ int runCompare() {
                         " does not exist");
     }
     Scene scene = loadScene(a.scene, readImage);
-    for (const std::string& note : scene.notes) std::fprintf(stderr, "rtlab: note: %s\n", note.c_str());
+    for (const std::string& note : scene.notes)
+        std::fprintf(stderr, "rtlab: note: %s\n", note.c_str());
     RenderOptions o = a.flags.apply(scene.defaults);
     ClContext cl(selectDevice(a.flags.device), a.flags.kernelSources());
     std::printf("rtlab compare: %s, %dx%d, bounces %d, shadow samples %d, aa %d, C=%d\n",
@@ -94,7 +96,8 @@ int runCompare() {
     for (const std::string& name : names) {
         // Adaptive anti-aliasing is compared only where a pipeline has it (the registry says).
         if (o.adaptiveAa && !registry.get(name).supports.adaptiveAa) {
-            std::printf("%-6s %12s   (no adaptive anti-aliasing: not compared)\n", name.c_str(), "-");
+            std::printf("%-6s %12s   (no adaptive anti-aliasing: not compared)\n", name.c_str(),
+                        "-");
             continue;
         }
         auto p = makePipeline(name, &cl);
@@ -119,8 +122,7 @@ int runCompare() {
                     name.c_str(), median(dev), median(host), 100.0 * d.fractionWithin,
                     d.meanAbs * 255.0, d.maxAbs * 255.0, rays,
                     median(dev) > 0 ? double(rays) / (median(dev) * 1e3) : 0.0, launches);
-        if (!a.outputPrefix.empty())
-            writeImage(img, a.outputPrefix + "-" + name + ".png");
+        if (!a.outputPrefix.empty()) writeImage(img, a.outputPrefix + "-" + name + ".png");
         images.push_back(std::move(img));
         compared.push_back(name);
     }
@@ -129,11 +131,13 @@ int runCompare() {
         for (size_t j = i + 1; j < compared.size(); ++j) {
             ImageDiff d = compareImages(images[i], images[j], 0.0, false);
             std::printf("%s vs %s: max |difference| %.3g (%s)\n", compared[i].c_str(),
-                        compared[j].c_str(), d.maxAbs, d.maxAbs == 0 ? "bit-identical" : "not bit-identical");
+                        compared[j].c_str(), d.maxAbs,
+                        d.maxAbs == 0 ? "bit-identical" : "not bit-identical");
         }
     // A NaN or infinite pixel is a broken frame whatever the error figures say.
     if (nonfinite)
-        throw Error(std::to_string(nonfinite) + " non-finite (NaN or infinite) pixel(s) in the frames above");
+        throw Error(std::to_string(nonfinite) +
+                    " non-finite (NaN or infinite) pixel(s) in the frames above");
     return 0;
 }
 

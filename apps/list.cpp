@@ -3,10 +3,9 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "apps/commands.h"
 #include "bench/sweep_config.h"
@@ -59,10 +58,10 @@ int runScenes() {
         std::vector<fs::path> inside = sorted(folder, ".json");
         std::vector<fs::path> models = sorted(folder, ".obj");
         if (inside.empty() && models.empty()) continue;
-        std::printf("  %s/: %zu scene(s)%s, e.g. %s\n", folder.filename().string().c_str(),
-                    inside.size(),
-                    models.empty() ? "" : (", " + std::to_string(models.size()) + " OBJ model(s)").c_str(),
-                    (inside.empty() ? models : inside).front().filename().string().c_str());
+        std::printf(
+            "  %s/: %zu scene(s)%s, e.g. %s\n", folder.filename().string().c_str(), inside.size(),
+            models.empty() ? "" : (", " + std::to_string(models.size()) + " OBJ model(s)").c_str(),
+            (inside.empty() ? models : inside).front().filename().string().c_str());
     }
     fs::path stress = dir.parent_path() / "stress";
     if (std::vector<fs::path> big = sorted(stress, ".json"); !big.empty()) {
@@ -75,7 +74,8 @@ int runScenes() {
 }
 
 int runSweeps() {
-    std::printf("Sweeps (rtlab sweep NAME; the format and what each is for: bench/sweeps/README.md):\n");
+    std::printf(
+        "Sweeps (rtlab sweep NAME; the format and what each is for: bench/sweeps/README.md):\n");
     for (const auto& [name, what] : bench::listSweeps())
         std::printf("  %-17s %s\n", name.c_str(), what.c_str());
     return 0;

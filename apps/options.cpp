@@ -6,8 +6,8 @@
 
 #include "core/accel.h"
 #include "core/error.h"
-#include "pipelines/registry.h"
 #include "core/pipeline.h"
+#include "pipelines/registry.h"
 
 namespace rt::cli {
 
@@ -16,12 +16,15 @@ void SceneFlags::add(CLI::App& cmd) {
                    "OpenCL device: index or name substring from `rtlab devices` "
                    "[$RTLAB_DEVICE, else first GPU, else CPU]");
     cmd.add_option("--size", size, "Image size WxH [scene default]");
-    cmd.add_option("--bounces", bounces, "Bounce limit B, 0.." + std::to_string(RT_MAX_BOUNCE_LIMIT) + " [scene default]");
+    cmd.add_option(
+        "--bounces", bounces,
+        "Bounce limit B, 0.." + std::to_string(RT_MAX_BOUNCE_LIMIT) + " [scene default]");
     cmd.add_option("--shadow-samples", shadowSamples,
                    "Shadow rays per light of non-zero radius, 1..255 [scene default]");
     cmd.add_option("--aa", aa, "Anti-aliasing: N x N samples per pixel, 1..16 [scene default]");
     cmd.add_flag("--adaptive", adaptive,
-                 "Supersample only edge pixels (report 2.1.2); megakernel and cpu only: the wavefront refuses it");
+                 "Supersample only edge pixels (report 2.1.2); megakernel and cpu only: the "
+                 "wavefront refuses it");
     cmd.add_option("--shadow-strength", shadowStrength,
                    "How much a fully occluded light darkens, 0..1 [scene default]");
     cmd.add_option("--layout", layout,
@@ -55,13 +58,15 @@ void SceneFlags::add(CLI::App& cmd) {
                    "the hit point's rounding error, scale-free), scaled (1e-4 max(1, |p|)) or "
                    "fixed (1e-4) [bound]");
     cmd.add_flag("--fixed-offset", fixedOffset, "Same as --offset fixed");
-    maxLaunchOption = cmd.add_option("--max-launch-ms", maxLaunchMs,
-                   "Split frames into row tiles (and a costly row into column pieces; the queue "
-                   "wavefront admits fewer rays and runs a long stage in pieces) so that no kernel "
-                   "launch runs longer than this (display-driver watchdogs); 0 = one launch per "
-                   "frame")
-        ->check(CLI::Range(0.0, 1e6))
-        ->capture_default_str();
+    maxLaunchOption =
+        cmd.add_option(
+               "--max-launch-ms", maxLaunchMs,
+               "Split frames into row tiles (and a costly row into column pieces; the queue "
+               "wavefront admits fewer rays and runs a long stage in pieces) so that no kernel "
+               "launch runs longer than this (display-driver watchdogs); 0 = one launch per "
+               "frame")
+            ->check(CLI::Range(0.0, 1e6))
+            ->capture_default_str();
     cmd.add_option("--kernel-dir", kernelDir,
                    "Read kernel sources from this source tree instead of the embedded copies "
                    "[$RTLAB_KERNEL_DIR]");
@@ -96,7 +101,10 @@ size_t parseBytes(const std::string& text, const std::string& flag) {
         throw Error(flag + " " + text + ": expected a byte count such as 4096, 64K, 512M or 2G");
     double v = std::stod(m[1]);
     char unit = m[3].length() ? char(std::toupper(m[3].str()[0])) : ' ';
-    double scale = unit == 'K' ? 1024.0 : unit == 'M' ? 1048576.0 : unit == 'G' ? 1073741824.0 : 1.0;
+    double scale = unit == 'K'   ? 1024.0
+                   : unit == 'M' ? 1048576.0
+                   : unit == 'G' ? 1073741824.0
+                                 : 1.0;
     double bytes = v * scale;
     if (!(bytes >= 1) || bytes > 1e15) throw Error(flag + " " + text + ": out of range");
     return size_t(std::llround(bytes));
@@ -115,7 +123,8 @@ RenderOptions SceneFlags::apply(RenderOptions o) const {
     for (const PipelineOption* opt : registry.options()) {
         if (auto it = pipelineIntegers.find(opt->name); it != pipelineIntegers.end() && it->second)
             opt->set(o.pipelineOptions, *it->second);
-        if (auto it = pipelineChoices.find(opt->name); it != pipelineChoices.end() && !it->second.empty())
+        if (auto it = pipelineChoices.find(opt->name);
+            it != pipelineChoices.end() && !it->second.empty())
             opt->set(o.pipelineOptions, it->second);
     }
     if (!accel.empty()) o.accel = parseAccel(accel);

@@ -3,9 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <regex>
 #include <sstream>
-#include <cstdlib>
 #include <string>
 #include <vector>
 
@@ -95,8 +95,9 @@ std::string plainValueError(const CLI::App& cmd, const std::string& message) {
         char* end = nullptr;
         std::strtod(value.c_str(), &end);
         bool number = !value.empty() && end && *end == 0;
-        return std::string(m[1]) + " " + value + ": " + (number ? "must be in " : "not a number; expected ") +
-               shortNumber(m[3]) + ".." + shortNumber(m[4]);
+        return std::string(m[1]) + " " + value + ": " +
+               (number ? "must be in " : "not a number; expected ") + shortNumber(m[3]) + ".." +
+               shortNumber(m[4]);
     }
     static const std::regex member("(-[-\\w]+): (.*) not in \\{(.*)\\}");
     if (std::regex_match(message, m, member)) {
@@ -117,7 +118,8 @@ int reportParseError(const CLI::App& app, const CLI::ParseError& error, const ch
     std::string help = prog;
     if (cmd != &app) help += " " + cmd->get_name();
     std::string hint = nearestFlag(*cmd, argc, argv);
-    std::fprintf(stderr, "%s: %s%s (see %s --help)\n", prog, plainValueError(*cmd, error.what()).c_str(),
+    std::fprintf(stderr, "%s: %s%s (see %s --help)\n", prog,
+                 plainValueError(*cmd, error.what()).c_str(),
                  hint.empty() ? "" : (" (did you mean " + hint + "?)").c_str(), help.c_str());
     return kUsageError;
 }

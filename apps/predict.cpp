@@ -1,17 +1,17 @@
 // rtlab predict: which design a scene favours on a GPU, from the busy lanes of a sample of warps
 // traced on the CPU (core/predict.h), before any pipeline runs.
+#include "core/predict.h"
+
 #include <cstdio>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <utility>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
 #include "apps/commands.h"
 #include "apps/options.h"
 #include "core/error.h"
-#include "core/predict.h"
 #include "core/scene_loader.h"
 #include "image/image_io.h"
 
@@ -47,8 +47,9 @@ void addPredict(CLI::App& app) {
     predictCmd->add_option("--warps", a.warps, "Warps traced, chosen at random with a fixed seed")
         ->check(CLI::Range(1, 1 << 20))
         ->capture_default_str();
-    predictCmd->add_option("--threshold", a.threshold,
-                           "Busy lanes of 32 below which the queue wavefront is predicted")
+    predictCmd
+        ->add_option("--threshold", a.threshold,
+                     "Busy lanes of 32 below which the queue wavefront is predicted")
         ->check(CLI::Range(0.0, 32.0))
         ->capture_default_str();
     predictCmd->add_flag("--json", a.json, "One JSON object a scene on stdout instead of a table");
@@ -70,17 +71,23 @@ int runPredict() {
         const LaneEstimate e = estimateBusyLanes(scene, o, a.warps);
         const Prediction p = predictDesign(e, a.threshold);
         if (a.json) {
-            nlohmann::json j = {{"scene", file},          {"name", scene.name},
-                                {"width", o.width},       {"height", o.height},
-                                {"bounces", o.bounces},   {"aa", o.aa},
-                                {"warps", e.warps},       {"lanes", e.lanes},
-                                {"busy_lanes", e.busyLanes}, {"rays_per_pixel", e.raysPerPixel},
-                                {"largest_tree", e.largestTree},
-                                {"objects_per_warp", e.objectsPerWarp},
-                                {"objects", scene.spheres.size() + scene.planes.size() +
-                                                scene.triangles.size()},
-                                {"predicted", p.design},  {"threshold", a.threshold},
-                                {"reason", p.reason}};
+            nlohmann::json j = {
+                {"scene", file},
+                {"name", scene.name},
+                {"width", o.width},
+                {"height", o.height},
+                {"bounces", o.bounces},
+                {"aa", o.aa},
+                {"warps", e.warps},
+                {"lanes", e.lanes},
+                {"busy_lanes", e.busyLanes},
+                {"rays_per_pixel", e.raysPerPixel},
+                {"largest_tree", e.largestTree},
+                {"objects_per_warp", e.objectsPerWarp},
+                {"objects", scene.spheres.size() + scene.planes.size() + scene.triangles.size()},
+                {"predicted", p.design},
+                {"threshold", a.threshold},
+                {"reason", p.reason}};
             std::printf("%s\n", j.dump().c_str());
         } else {
             if (std::exchange(header, false))  // after the first scene loads, not before an error

@@ -15,11 +15,11 @@
 #include "core/accel.h"
 #include "core/cl_runtime.h"
 #include "core/error.h"
-#include "core/version.h"
 #include "core/pipeline.h"
-#include "pipelines/registry.h"
 #include "core/scene_loader.h"
+#include "core/version.h"
 #include "image/image_io.h"
+#include "pipelines/registry.h"
 
 namespace rt::cli {
 
@@ -52,16 +52,18 @@ void printAccel(std::FILE* out, const AccelStats& a, RenderOptions::Accel chosen
         std::fprintf(out, "  accel        none (preliminary checks only)\n");
         return;
     }
-    const char* unit = a.name == "bvh" || a.name == "wide" || a.name == "cwbvh" ? "nodes" : a.name == "grid" ? "cells" : "volumes";
-    std::fprintf(out, "  accel        %s, %lld %s (%s), %s; built in %.1f ms\n", a.name.c_str(), a.nodes,
-                unit, mib(double(a.bytes)).c_str(), a.detail.c_str(), a.buildMs);
+    const char* unit = a.name == "bvh" || a.name == "wide" || a.name == "cwbvh" ? "nodes"
+                       : a.name == "grid"                                       ? "cells"
+                                                                                : "volumes";
+    std::fprintf(out, "  accel        %s, %lld %s (%s), %s; built in %.1f ms\n", a.name.c_str(),
+                 a.nodes, unit, mib(double(a.bytes)).c_str(), a.detail.c_str(), a.buildMs);
 }
 
 // A progress bar on stderr for a frame that takes more than about a second, when stderr is a
 // terminal; it draws from the pipeline's progress reports (Pipeline::setProgress) and erases
 // itself when the frame ends, so that what stays on the terminal is only the render's output.
 class ProgressBar {
-public:
+  public:
     explicit ProgressBar(std::string label)
         : label_(std::move(label)), enabled_(isatty(STDERR_FILENO) == 1) {}
     ~ProgressBar() { clear(); }
@@ -79,7 +81,8 @@ public:
         double f = std::clamp(double(done) / double(total), 0.0, 1.0);
         constexpr int kWidth = 30;
         int filled = int(f * kWidth);
-        std::string bar = std::string(size_t(filled), '#') + std::string(size_t(kWidth - filled), '-');
+        std::string bar =
+            std::string(size_t(filled), '#') + std::string(size_t(kWidth - filled), '-');
         char eta[32] = "ETA ?";
         if (done > 0) std::snprintf(eta, sizeof eta, "ETA %.1f s", elapsed * (1 - f) / f);
         std::fprintf(stderr, "\r\033[K%s [%s] %3.0f%%  elapsed %.1f s  %s", label_.c_str(),
@@ -96,7 +99,7 @@ public:
         return [this](long long done, long long total) { update(done, total); };
     }
 
-private:
+  private:
     using Clock = std::chrono::steady_clock;
     std::string label_;
     bool enabled_, drawn_ = false;
@@ -119,9 +122,8 @@ int runDevices() {
                     d.type.c_str());
         std::printf("      platform %s, %s, %s, driver %s\n", d.platformName.c_str(),
                     d.version.c_str(), d.openclC.c_str(), d.driver.c_str());
-        std::printf("      %u compute units, %s global memory, %s max allocation\n",
-                    d.computeUnits, mib(double(d.globalMem)).c_str(),
-                    mib(double(d.maxAlloc)).c_str());
+        std::printf("      %u compute units, %s global memory, %s max allocation\n", d.computeUnits,
+                    mib(double(d.globalMem)).c_str(), mib(double(d.maxAlloc)).c_str());
     }
     std::printf("(* = default; choose with --device INDEX|NAME or RTLAB_DEVICE)\n");
     return 0;
@@ -160,7 +162,8 @@ int runRender() {
     // Fail on an unwritable output before spending time on the frame.
     checkOutputPath(output);
     Scene scene = loadScene(a.scene, readImage);
-    for (const std::string& note : scene.notes) std::fprintf(stderr, "rtlab: note: %s\n", note.c_str());
+    for (const std::string& note : scene.notes)
+        std::fprintf(stderr, "rtlab: note: %s\n", note.c_str());
     RenderOptions options = a.flags.apply(scene.defaults);
     std::optional<ClContext> cl;
     if (!info.reference) cl.emplace(selectDevice(a.flags.device), a.flags.kernelSources());
@@ -228,10 +231,11 @@ int runRender() {
             {"driver", cl ? cl->device().driver : std::string()},
             {"device_ms", rounded(s.deviceMs)},
             {"host_ms", rounded(frameHostMs)},
-            {"programs", {{"built", programs.built},
-                          {"from_disk", programs.fromDisk},
-                          {"in_memory", programs.fromMemory},
-                          {"ms", rounded(programs.ms)}}},
+            {"programs",
+             {{"built", programs.built},
+              {"from_disk", programs.fromDisk},
+              {"in_memory", programs.fromMemory},
+              {"ms", rounded(programs.ms)}}},
             {"launches", s.launches},
             {"longest_launch_ms", rounded(s.longestLaunchMs)},
             {"private_bytes", s.privateBytes},
@@ -254,15 +258,16 @@ int runRender() {
     if (a.stats) {
         // With the JSON on standard output, the table goes to standard error.
         std::FILE* out = jsonToStdout ? stderr : stdout;
-        std::fprintf(out, "scene %s, %dx%d, bounces %d, shadow samples %d, aa %d%s, accel %s, C=%d, "
-                    "N=%lld nodes/pixel, pipeline %s",
-                    scene.name.c_str(), options.width, options.height, options.bounces,
-                    options.shadowSamples, options.aa, options.adaptiveAa ? " adaptive" : "",
-                    accelName(options.accel), scene.branching(),
-                    treeNodeCount(scene.branching(), options.bounces), info.name.c_str());
+        std::fprintf(out,
+                     "scene %s, %dx%d, bounces %d, shadow samples %d, aa %d%s, accel %s, C=%d, "
+                     "N=%lld nodes/pixel, pipeline %s",
+                     scene.name.c_str(), options.width, options.height, options.bounces,
+                     options.shadowSamples, options.aa, options.adaptiveAa ? " adaptive" : "",
+                     accelName(options.accel), scene.branching(),
+                     treeNodeCount(scene.branching(), options.bounces), info.name.c_str());
         if (info.supports.layouts)
             std::fprintf(out, " (layout %s)",
-                        options.layout == RenderOptions::Layout::Tree ? "tree" : "weighted");
+                         options.layout == RenderOptions::Layout::Tree ? "tree" : "weighted");
         std::fprintf(out, "\n");
         if (cl) {
             std::fprintf(out, "device %s\n", cl->device().label().c_str());
@@ -271,14 +276,18 @@ int runRender() {
         for (const auto& [name, ms] : s.kernelMs)
             std::fprintf(out, "  %-12s %10.3f ms\n", name.c_str(), ms);
         if (!info.reference) std::fprintf(out, "  %-12s %10.3f ms\n", "device total", s.deviceMs);
-        std::fprintf(out, "  %-12s %10.3f ms%s\n", "host", frameHostMs,
-                    programs.ms > 0 ? " (the frame alone: program builds and loads not counted)" : "");
+        std::fprintf(
+            out, "  %-12s %10.3f ms%s\n", "host", frameHostMs,
+            programs.ms > 0 ? " (the frame alone: program builds and loads not counted)" : "");
         for (const auto& [name, bytes] : s.buffers)
-            std::fprintf(out, "  %-12s %zu bytes (%s)\n", name.c_str(), bytes, mib(double(bytes)).c_str());
+            std::fprintf(out, "  %-12s %zu bytes (%s)\n", name.c_str(), bytes,
+                         mib(double(bytes)).c_str());
         if (info.supports.tiling)
-            std::fprintf(out, "  tiles        %d (launches of rows; memory_tiles: those the tree's memory "
-                        "needed)\n",
-                        s.tiles);
+            std::fprintf(
+                out,
+                "  tiles        %d (launches of rows; memory_tiles: those the tree's memory "
+                "needed)\n",
+                s.tiles);
         if (!info.reference) {
             std::fprintf(out, "  private      %zu bytes per work-item\n", s.privateBytes);
             printAccel(out, s.accel, options.accel);
@@ -288,17 +297,19 @@ int runRender() {
         std::fprintf(out, "  launches     %d, longest %.3f ms", s.launches, s.longestLaunchMs);
         if (capped)
             std::fprintf(out, " (--max-launch-ms %g: %s)", options.maxLaunchMs,
-                        s.longestLaunchMs <= options.maxLaunchMs
-                            ? "every launch kept to it"
-                            : "some launch passed it; pieces are sized from launches timed "
-                              "before them");
+                         s.longestLaunchMs <= options.maxLaunchMs
+                             ? "every launch kept to it"
+                             : "some launch passed it; pieces are sized from launches timed "
+                               "before them");
         std::fprintf(out, "\n");
         if (s.raysCounted) {
             for (int t = 0; t < RT_RAY_TYPES; ++t)
-                std::fprintf(out, "  rays %-7s %llu\n", rayTypeName(t), (unsigned long long)s.rays[t]);
+                std::fprintf(out, "  rays %-7s %llu\n", rayTypeName(t),
+                             (unsigned long long)s.rays[t]);
             if (s.deviceMs > 0)
-                std::fprintf(out, "  rays/s       %.3g (all types, over the timed frame's device time)\n",
-                            raysPerS);
+                std::fprintf(
+                    out, "  rays/s       %.3g (all types, over the timed frame's device time)\n",
+                    raysPerS);
         }
     }
     if (!jsonToStdout) std::printf("wrote %s\n", output.c_str());
@@ -309,7 +320,8 @@ int runRender() {
 
 void addRender(CLI::App& app) {
     RenderArgs& a = renderArgs;
-    renderCmd = app.add_subcommand("render", "Render a scene (.json) or a bare model (.obj) to an image");
+    renderCmd =
+        app.add_subcommand("render", "Render a scene (.json) or a bare model (.obj) to an image");
     renderCmd->add_option("scene", a.scene, "Scene file (.json, see scenes/README.md) or OBJ model")
         ->required();
     renderCmd->add_option("-o,--output", a.output,

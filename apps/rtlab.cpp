@@ -1,9 +1,9 @@
 // rtlab — command-line front end: `rtlab render`, `rtlab devices`, `rtlab sweep`.
 // Every failure, a usage error included, ends in one line on stderr ("rtlab: <reason>") and exit
 // status 1.
-#include <CLI/CLI.hpp>
 #include <unistd.h>
 
+#include <CLI/CLI.hpp>
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
@@ -20,10 +20,11 @@
 namespace {
 
 int mainCommand(int argc, char** argv) {
-    CLI::App app{"rtlab: Whitted ray tracing on OpenCL, pipeline against pipeline.\n"
-                 "Renders scenes with a double-precision CPU reference and every registered\n"
-                 "pipeline, and measures them:\n" +
-                 rt::pipelineRegistry().help()};
+    CLI::App app{
+        "rtlab: Whitted ray tracing on OpenCL, pipeline against pipeline.\n"
+        "Renders scenes with a double-precision CPU reference and every registered\n"
+        "pipeline, and measures them:\n" +
+        rt::pipelineRegistry().help()};
     app.set_version_flag("--version", std::string("rtlab ") + RTLAB_COMMIT,
                          "Print the commit this binary was built from and exit");
     app.require_subcommand(1);

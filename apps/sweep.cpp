@@ -9,11 +9,10 @@
 #include <cstdlib>
 #include <fstream>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <set>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "apps/commands.h"
 #include "apps/sweep_accuracy.h"
@@ -42,13 +41,16 @@ CLI::App* sweepCmd = nullptr;
 std::string csvField(const nlohmann::json& v) {
     std::string s;
     if (v.is_null()) return "";
-    if (v.is_string()) s = v.get<std::string>();
-    else if (v.is_boolean()) s = v.get<bool>() ? "1" : "0";
+    if (v.is_string())
+        s = v.get<std::string>();
+    else if (v.is_boolean())
+        s = v.get<bool>() ? "1" : "0";
     else if (v.is_number_float()) {
         char buf[32];
         std::snprintf(buf, sizeof buf, "%.7g", v.get<double>());  // times to 0.1 us and better
         s = buf;
-    } else s = v.dump();
+    } else
+        s = v.dump();
     if (s.find_first_of(",\"\n") == std::string::npos) return s;
     std::string q = "\"";
     for (char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c == '\n' ? ' ' : c);
@@ -73,10 +75,12 @@ nlohmann::json field(const nlohmann::json& row, const char* object, const std::s
 
 void writeCsv(const nlohmann::json& rows, const fs::path& path) {
     const std::vector<std::string> kernels = keysOf(rows, "kernel_ms"),
-                                   buffers = keysOf(rows, "buffers"), extras = keysOf(rows, "extras");
+                                   buffers = keysOf(rows, "buffers"),
+                                   extras = keysOf(rows, "extras");
     const std::vector<std::string> head = {
-        "sweep", "groups", "scene", "pipeline", "width", "height", "bounces", "shadow_samples",
-        "aa", "accel", "layout", "memory_budget", "adaptive", "status", "device_ms",
+        "sweep",         "groups",        "scene",          "pipeline", "width",
+        "height",        "bounces",       "shadow_samples", "aa",       "accel",
+        "layout",        "memory_budget", "adaptive",       "status",   "device_ms",
         "device_ms_min", "device_ms_max", "wall_ms"};
     const std::vector<std::string> tail = {
         "device_bytes", "tree_bytes", "private_bytes", "tree_nodes", "branching", "tiles",
@@ -109,14 +113,16 @@ void writeCsv(const nlohmann::json& rows, const fs::path& path) {
         for (const auto& h : head) {
             if (h == "groups") {
                 std::string g;
-                for (const auto& x : r["groups"]) g += (g.empty() ? "" : " ") + x.get<std::string>();
+                for (const auto& x : r["groups"])
+                    g += (g.empty() ? "" : " ") + x.get<std::string>();
                 line += csvField(g) + ",";
             } else {
                 line += csvField(get(h)) + ",";
             }
         }
         for (const auto& k : kernels) line += csvField(field(r, "kernel_ms", k)) + ",";
-        for (int x = 0; x < RT_RAY_TYPES; ++x) line += csvField(field(r, "rays", rayTypeName(x))) + ",";
+        for (int x = 0; x < RT_RAY_TYPES; ++x)
+            line += csvField(field(r, "rays", rayTypeName(x))) + ",";
         for (const char* c : counts) line += csvField(r["scene_info"][c]) + ",";
         for (const auto& t : tail) line += csvField(get(t)) + ",";
         for (const auto& b : buffers) line += csvField(field(r, "buffers", b)) + ",";
@@ -143,15 +149,18 @@ void drawCharts(const fs::path& json) {
         }
         std::string cmd = "/usr/bin/python3 '" + p.string() + "' '" + json.string() + "'";
         if (std::system(cmd.c_str()) != 0)
-            std::fprintf(stderr, "rtlab sweep: %s failed (is python3-matplotlib installed? run "
-                                 "scripts/setup)\n", cmd.c_str());
+            std::fprintf(stderr,
+                         "rtlab sweep: %s failed (is python3-matplotlib installed? run "
+                         "scripts/setup)\n",
+                         cmd.c_str());
     }
 }
 
 // rtlab-bench cannot decode PNG: a copy of the scene folder whose cubemap faces are .pfm, holding
 // exactly the linear values readImage gives here.
 int exportScenes(const fs::path& dest) {
-    fs::path src = fs::exists("scenes") ? fs::path("scenes") : fs::path(RTLAB_SOURCE_DIR) / "scenes";
+    fs::path src =
+        fs::exists("scenes") ? fs::path("scenes") : fs::path(RTLAB_SOURCE_DIR) / "scenes";
     fs::create_directories(dest);
     fs::copy(src, dest, fs::copy_options::recursive | fs::copy_options::overwrite_existing);
     int converted = 0;
@@ -217,12 +226,14 @@ void sortByCell(nlohmann::json& rows, std::vector<PendingFrame>& frames) {
 void addSweep(CLI::App& app) {
     SweepArgs& a = sweepArgs;
     sweepCmd = app.add_subcommand(
-        "sweep", "Run a named benchmark sweep and write results/<device>/ (CSV, JSON, charts, README)");
+        "sweep",
+        "Run a named benchmark sweep and write results/<device>/ (CSV, JSON, charts, README)");
     std::string names;
     for (const auto& [name, what] : bench::listSweeps()) names += "\n  " + name + ": " + what;
     sweepCmd->add_option("config", a.config,
                          "Sweep file, or a name in bench/sweeps/ (format and purposes in "
-                         "bench/sweeps/README.md; `rtlab sweeps` lists them):" + names);
+                         "bench/sweeps/README.md; `rtlab sweeps` lists them):" +
+                             names);
     sweepCmd->add_option("--device", a.device,
                          "OpenCL device: index or name substring [$RTLAB_DEVICE, else first GPU]");
     sweepCmd->add_option("--devices", a.devices,
@@ -236,31 +247,35 @@ void addSweep(CLI::App& app) {
                          "Output folder [results/<device-slug>]; a folder that holds this sweep's "
                          "results already is refused unless --force is given");
     sweepCmd->add_flag("--force", a.force, "Overwrite this sweep's results in the output folder");
-    sweepCmd->add_option("--import", a.importDirs,
-                         "Do not measure: score and chart what `rtlab-bench --sweep CONFIG --out DIR` "
-                         "wrote to DIR on another machine; several folders: runs continued with "
-                         "--resume, or the shards of --shard i/N, merged in cell order")
+    sweepCmd
+        ->add_option("--import", a.importDirs,
+                     "Do not measure: score and chart what `rtlab-bench --sweep CONFIG --out DIR` "
+                     "wrote to DIR on another machine; several folders: runs continued with "
+                     "--resume, or the shards of --shard i/N, merged in cell order")
         ->take_all();
     sweepCmd->add_option("--time-limit", a.timeLimit,
                          "Stop before a cell that would end after this many seconds");
-    sweepCmd->add_option("--cell-timeout", a.cellTimeout,
-                         "A cell (program builds included) that has not finished after this many "
-                         "seconds fails with \"timeout\"; after a stuck compiler the sweep goes on "
-                         "in a fresh context, after a stuck device it stops with the rows so far "
-                         "written; the exit status is then 1. 0: no limit")
+    sweepCmd
+        ->add_option("--cell-timeout", a.cellTimeout,
+                     "A cell (program builds included) that has not finished after this many "
+                     "seconds fails with \"timeout\"; after a stuck compiler the sweep goes on "
+                     "in a fresh context, after a stuck device it stops with the rows so far "
+                     "written; the exit status is then 1. 0: no limit")
         ->check(CLI::Range(0.0, 1e7))
         ->capture_default_str();
     sweepCmd->add_option("--scene-dir", a.sceneDir, "Folder holding <scene>.json [scenes/]");
     sweepCmd->add_option("--kernel-dir", a.kernelDir, "Read kernel sources from this source tree");
     sweepCmd->add_flag("--no-charts", a.noCharts, "Write CSV and JSON only");
-    sweepCmd->add_option("--export-scenes", a.exportScenes,
-                         "Copy scenes/ to this folder with .pfm cubemap faces (for rtlab-bench) and exit");
+    sweepCmd->add_option(
+        "--export-scenes", a.exportScenes,
+        "Copy scenes/ to this folder with .pfm cubemap faces (for rtlab-bench) and exit");
 }
 
 int runSweepCommand() {
     SweepArgs& a = sweepArgs;
     if (!a.exportScenes.empty()) return exportScenes(a.exportScenes);
-    if (a.config.empty()) throw Error("sweep: name a sweep file (e.g. rtlab sweep bench/sweeps/quick)");
+    if (a.config.empty())
+        throw Error("sweep: name a sweep file (e.g. rtlab sweep bench/sweeps/quick)");
     bench::SweepConfig config = bench::loadSweep(bench::findSweep(a.config));
 
     nlohmann::json meta, rows = nlohmann::json::array();
@@ -283,8 +298,10 @@ int runSweepCommand() {
         for (const std::string& d : a.importDirs) {
             fs::path dir = d;
             std::ifstream m(dir / "sweep.json");
-            if (!m) throw Error((dir / "sweep.json").string() + ": cannot read (was it made by "
-                                "rtlab-bench --sweep?)");
+            if (!m)
+                throw Error((dir / "sweep.json").string() +
+                            ": cannot read (was it made by "
+                            "rtlab-bench --sweep?)");
             nlohmann::json part = nlohmann::json::parse(m);
             if (part.value("sweep", "") != config.name)
                 throw Error(dir.string() + " holds sweep '" + part.value("sweep", "") + "', not '" +
@@ -300,13 +317,14 @@ int runSweepCommand() {
                 meta.erase("shard");
                 out = outputFolder(meta.value("device_slug", "unknown-device"));
             } else if (firstOfShard) {
-                for (const char* k : {"measured", "failed", "not_run", "seconds", "cells",
-                                      "skipped_as_done"})
+                for (const char* k :
+                     {"measured", "failed", "not_run", "seconds", "cells", "skipped_as_done"})
                     meta[k] = meta.value(k, 0.0) + part.value(k, 0.0);
                 meta["finished"] = std::max(meta.value("finished", ""), part.value("finished", ""));
                 if (part.value("commit", "") != meta.value("commit", ""))
-                    throw Error(dir.string() + " was measured at commit " + part.value("commit", "") +
-                                ", the first folder at " + meta.value("commit", ""));
+                    throw Error(dir.string() + " was measured at commit " +
+                                part.value("commit", "") + ", the first folder at " +
+                                meta.value("commit", ""));
             } else {
                 // A continued run: its cells add to the first run's; the sums and the end move.
                 for (const char* k : {"measured", "failed", "not_run", "seconds"})
@@ -314,10 +332,14 @@ int runSweepCommand() {
                 meta["finished"] = part.value("finished", "");
                 meta["complete"] = part.value("complete", false);
                 if (part.value("commit", "") != meta.value("commit", ""))
-                    throw Error(dir.string() + " was measured at commit " + part.value("commit", "") +
-                                ", the first folder at " + meta.value("commit", ""));
+                    throw Error(dir.string() + " was measured at commit " +
+                                part.value("commit", "") + ", the first folder at " +
+                                meta.value("commit", ""));
             }
-            meta["imported_from"] = (meta.contains("imported_from") ? meta["imported_from"].get<std::string>() + " + " : "") + dir.string();
+            meta["imported_from"] =
+                (meta.contains("imported_from") ? meta["imported_from"].get<std::string>() + " + "
+                                                : "") +
+                dir.string();
             for (auto& row : readJsonLines(dir / "rows.jsonl")) {
                 // A cell measured again (it failed the first time) replaces its old row.
                 size_t at = rows.size();
@@ -329,13 +351,17 @@ int runSweepCommand() {
                 }
                 if (row.contains("image")) {
                     fs::path image = dir / row["image"].get<std::string>();
-                    if (fs::exists(image)) frames.push_back({at, bench::readPfm(image)});
-                    else std::fprintf(stderr, "rtlab sweep: %s missing; row not scored\n",
-                                      image.string().c_str());
+                    if (fs::exists(image))
+                        frames.push_back({at, bench::readPfm(image)});
+                    else
+                        std::fprintf(stderr, "rtlab sweep: %s missing; row not scored\n",
+                                     image.string().c_str());
                     row.erase("image");
                 }
-                if (at == rows.size()) rows.push_back(row);
-                else rows[at] = row;
+                if (at == rows.size())
+                    rows.push_back(row);
+                else
+                    rows[at] = row;
                 cellRow[cell] = at;
             }
         }
@@ -354,15 +380,16 @@ int runSweepCommand() {
                                       : a.kernelDir);
         o.timeLimitS = a.timeLimit;
         o.cellTimeoutS = a.cellTimeout;
-        out = outputFolder(a.out.empty() ? bench::deviceSlug(o.devices.empty()
-                                                                 ? selectDevice(o.device)
-                                                                 : bench::selectDevices(o.devices).front())
-                                         : "");
-        bench::SweepSummary s = bench::runSweep(config, o, nullptr,
-                                                [&](const nlohmann::json& row, const Image* image) {
-            if (image) frames.push_back({rows.size(), *image});
-            rows.push_back(row);
-        });
+        out = outputFolder(a.out.empty()
+                               ? bench::deviceSlug(o.devices.empty()
+                                                       ? selectDevice(o.device)
+                                                       : bench::selectDevices(o.devices).front())
+                               : "");
+        bench::SweepSummary s =
+            bench::runSweep(config, o, nullptr, [&](const nlohmann::json& row, const Image* image) {
+                if (image) frames.push_back({rows.size(), *image});
+                rows.push_back(row);
+            });
         meta = s.meta;
         timedOut = s.timedOut;
     }
@@ -377,8 +404,10 @@ int runSweepCommand() {
             meta["shards"] = shards;
             meta["complete"] = complete && int(shardComplete.size()) == shardCount;
             if (int(shardComplete.size()) != shardCount || shardComplete.count(""))
-                std::fprintf(stderr, "rtlab sweep: warning: %zu of %d shards imported; the set is "
-                                     "incomplete\n", shardComplete.size(), shardCount);
+                std::fprintf(stderr,
+                             "rtlab sweep: warning: %zu of %d shards imported; the set is "
+                             "incomplete\n",
+                             shardComplete.size(), shardCount);
         }
         sortByCell(rows, frames);
     }

@@ -14,9 +14,9 @@
 #include "core/error.h"
 #include "core/reference.h"
 #include "core/scene_loader.h"
+#include "core/version.h"
 #include "image/compare.h"
 #include "image/image_io.h"
-#include "core/version.h"
 
 namespace rt::cli {
 namespace fs = std::filesystem;

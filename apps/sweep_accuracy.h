@@ -4,10 +4,9 @@
 #pragma once
 
 #include <filesystem>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "bench/sweep_config.h"
 #include "core/image.h"
@@ -15,7 +14,7 @@
 namespace rt::cli {
 
 struct PendingFrame {
-    size_t row;   // index into the rows being scored
+    size_t row;  // index into the rows being scored
     Image image;
 };
 

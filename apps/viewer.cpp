@@ -1,12 +1,12 @@
 // rtlab-view SCENE — a real-time window on the registered pipelines: one at a time (M cycles), or
-// any two side by side (--split LEFT,RIGHT). Sets up GLFW (OpenGL 3.3 core), the OpenCL device and the render thread,
-// then hands over to App (viewer_app.h). Every failure ends in one line on stderr
+// any two side by side (--split LEFT,RIGHT). Sets up GLFW (OpenGL 3.3 core), the OpenCL device and
+// the render thread, then hands over to App (viewer_app.h). Every failure ends in one line on
+// stderr
 // ("rtlab-view: <reason>") and exit status 1, usage errors included.
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>
 
 #include <CLI/CLI.hpp>
-
 #include <algorithm>
 #include <array>
 #include <cstdio>
@@ -32,8 +32,8 @@ using namespace rt;
 struct Args {
     std::string scene, pipeline, screenshot;  // pipeline: the registry's first by default
     cli::SceneFlags flags;
-    int scale = 0;      // 0: 2 when the window then fits the screen, else 1
-    int pieceRows = 0;  // --piece-rows
+    int scale = 0;                    // 0: 2 when the window then fits the screen, else 1
+    int pieceRows = 0;                // --piece-rows
     std::array<std::string, 2> pair;  // --split LEFT,RIGHT
     bool split = false, noOverlay = false, animate = false, noRayCount = false;
     long long frames = 0;
@@ -49,8 +49,9 @@ struct GlfwSession {
     GlfwSession() {
         glfwSetErrorCallback([](int, const char* text) { lastGlfwError = text ? text : ""; });
         if (!glfwInit())
-            throw Error("no display: " + (lastGlfwError.empty() ? "glfwInit failed" : lastGlfwError) +
-                        " (run in a desktop session, or headless under xvfb-run -a)");
+            throw Error(
+                "no display: " + (lastGlfwError.empty() ? "glfwInit failed" : lastGlfwError) +
+                " (run in a desktop session, or headless under xvfb-run -a)");
     }
     ~GlfwSession() { glfwTerminate(); }
 };
@@ -96,8 +97,8 @@ std::string windowSizes(GLFWwindow* window, const RenderOptions& o, int scale) {
     glfwGetWindowSize(window, &ww, &wh);
     glfwGetFramebufferSize(window, &fw, &fh);
     char buf[256];
-    int n = std::snprintf(buf, sizeof buf, "rendering %dx%d, window %dx%d (--scale %d)",
-                          o.width, o.height, ww, wh, scale);
+    int n = std::snprintf(buf, sizeof buf, "rendering %dx%d, window %dx%d (--scale %d)", o.width,
+                          o.height, ww, wh, scale);
     if ((fw != ww || fh != wh) && n > 0) {
         float sx = 1, sy = 1;
         glfwGetWindowContentScale(window, &sx, &sy);
@@ -111,7 +112,8 @@ std::string windowSizes(GLFWwindow* window, const RenderOptions& o, int scale) {
 
 int runViewer(Args& a) {
     Scene scene = loadScene(a.scene, readImage);
-    for (const std::string& note : scene.notes) std::fprintf(stderr, "rtlab-view: note: %s\n", note.c_str());
+    for (const std::string& note : scene.notes)
+        std::fprintf(stderr, "rtlab-view: note: %s\n", note.c_str());
     RenderOptions options = a.flags.apply(scene.defaults);
     if (!a.screenshot.empty()) {
         try {
@@ -126,7 +128,8 @@ int runViewer(Args& a) {
     if (a.frames < 0) throw Error("--frames " + std::to_string(a.frames) + ": must be >= 0");
     if (a.scale != 0 && (a.scale < 1 || a.scale > 8))
         throw Error("--scale " + std::to_string(a.scale) + ": must be in 1..8");
-    if (a.pieceRows < 0) throw Error("--piece-rows " + std::to_string(a.pieceRows) + ": must be >= 0");
+    if (a.pieceRows < 0)
+        throw Error("--piece-rows " + std::to_string(a.pieceRows) + ": must be >= 0");
 
     GlfwSession glfw;
     if (a.scale == 0) a.scale = fits(options.width * 2, options.height * 2) ? 2 : 1;
@@ -178,7 +181,8 @@ int runViewer(Args& a) {
 }  // namespace
 
 // "--split LEFT,RIGHT": two registered device pipelines (they may be the same one).
-std::array<std::string, 2> parsePair(const std::string& text, const std::vector<std::string>& names) {
+std::array<std::string, 2> parsePair(const std::string& text,
+                                     const std::vector<std::string>& names) {
     size_t comma = text.find(',');
     std::array<std::string, 2> pair = {text.substr(0, comma),
                                        comma == std::string::npos ? "" : text.substr(comma + 1)};
@@ -214,26 +218,31 @@ int main(int argc, char** argv) {
     a.pair = {names.at(0), names.at(names.size() > 1 ? 1 : 0)};
     cli::addPipelineOption(app, a.pipeline, false);
     std::string pair;
-    CLI::Option* split = app.add_option(
-        "--split", pair,
-        "Start in split view; LEFT,RIGHT picks any two pipelines (" + registry.joinedNames(true) +
-            ") [" + a.pair[0] + "," + a.pair[1] + "]");
+    CLI::Option* split =
+        app.add_option("--split", pair,
+                       "Start in split view; LEFT,RIGHT picks any two pipelines (" +
+                           registry.joinedNames(true) + ") [" + a.pair[0] + "," + a.pair[1] + "]");
     split->expected(0, 1);
     app.add_option("--scale", a.scale,
                    "Window pixels (screen coordinates) per rendered pixel, 1..8 [2 when the "
-                   "window then fits the screen, else 1]. The frame is always rendered at --size; a high-DPI screen "
+                   "window then fits the screen, else 1]. The frame is always rendered at --size; "
+                   "a high-DPI screen "
                    "gives the window a larger framebuffer (the first line says so), and the "
                    "frame is scaled up to fill it");
     app.add_option("--piece-rows", a.pieceRows,
                    "Render each frame in pieces of this many rows (automation, tests); 0, the "
                    "default, sizes pieces to take about 100 ms each, so a slow frame shows row "
                    "by row and a key or camera move restarts it");
-    app.add_flag("--no-overlay", a.noOverlay, "Hide the overlay and the split divider (O shows them)");
+    app.add_flag("--no-overlay", a.noOverlay,
+                 "Hide the overlay and the split divider (O shows them)");
     app.add_flag("--animate", a.animate,
                  "Move the first sphere around a circle (until scene files carry 'animate')");
-    app.add_option("--orbit-radius", a.orbitRadius, "--animate: circle radius")->capture_default_str();
-    app.add_option("--orbit-period", a.orbitPeriod, "--animate: seconds per turn")->capture_default_str();
-    app.add_option("--speed", a.speed, "Camera speed in scene units per second")->capture_default_str();
+    app.add_option("--orbit-radius", a.orbitRadius, "--animate: circle radius")
+        ->capture_default_str();
+    app.add_option("--orbit-period", a.orbitPeriod, "--animate: seconds per turn")
+        ->capture_default_str();
+    app.add_option("--speed", a.speed, "Camera speed in scene units per second")
+        ->capture_default_str();
     app.add_flag("--no-ray-count", a.noRayCount,
                  "Do not count rays on the device (no Mrays/s, slightly faster kernels)");
     app.add_option("--frames", a.frames,
@@ -258,7 +267,8 @@ int main(int argc, char** argv) {
     } catch (const Error& e) {
         std::fprintf(stderr, "rtlab-view: %s\n", e.what());
     } catch (const cl::Error& e) {
-        std::fprintf(stderr, "rtlab-view: OpenCL error in %s: %s\n", e.what(), clErrorName(e.err()));
+        std::fprintf(stderr, "rtlab-view: OpenCL error in %s: %s\n", e.what(),
+                     clErrorName(e.err()));
     } catch (const std::exception& e) {
         std::fprintf(stderr, "rtlab-view: unexpected error: %s\n", e.what());
     }

@@ -83,8 +83,10 @@ std::vector<ScriptedKey> parseKeyScript(const std::string& script) {
         item.clear();
     };
     for (char c : script) {
-        if (c == ' ' || c == ',') flush();
-        else item += c;
+        if (c == ' ' || c == ',')
+            flush();
+        else
+            item += c;
     }
     flush();
     // By when they are pressed: piece p of frame f comes before frame f is complete.
@@ -111,7 +113,8 @@ App::App(GLFWwindow* window, GlDisplay& display, Renderer& renderer, ViewRequest
     glfwSetMouseButtonCallback(window_, [](GLFWwindow* w, int button, int action, int) {
         self(w)->onMouseButton(button, action);
     });
-    glfwSetCursorPosCallback(window_, [](GLFWwindow* w, double x, double y) { self(w)->onCursor(x, y); });
+    glfwSetCursorPosCallback(window_,
+                             [](GLFWwindow* w, double x, double y) { self(w)->onCursor(x, y); });
     // The split view's pair is fixed for the session (--split LEFT,RIGHT): label it once, by the
     // registry's titles, both labels as wide as the longer.
     std::string labels[2] = {pipelineInfo(req_.pair[0]).title, pipelineInfo(req_.pair[1]).title};
@@ -125,9 +128,7 @@ App::App(GLFWwindow* window, GlDisplay& display, Renderer& renderer, ViewRequest
     }
 }
 
-void App::send() {
-    renderer_.request(req_);
-}
+void App::send() { renderer_.request(req_); }
 
 void App::message(const std::string& text) {
     messages_.push_back({text, Clock::now() + std::chrono::seconds(8)});
@@ -180,7 +181,9 @@ void App::onKey(int key) {
     }
     const std::string shown = pipelineInfo(req_.pipeline).title;
     switch (key) {
-        case GLFW_KEY_ESCAPE: glfwSetWindowShouldClose(window_, GLFW_TRUE); return;
+        case GLFW_KEY_ESCAPE:
+            glfwSetWindowShouldClose(window_, GLFW_TRUE);
+            return;
         case GLFW_KEY_M: {
             // Cycles through every registered device pipeline, in registry order.
             std::vector<std::string> names = pipelineRegistry().names(true);
@@ -208,7 +211,9 @@ void App::onKey(int key) {
             if (req_.bounces <= 0) return message("bounce limit is already 0");
             --req_.bounces;
             break;
-        case GLFW_KEY_B: cycleAccel(); return;
+        case GLFW_KEY_B:
+            cycleAccel();
+            return;
         case GLFW_KEY_R:
             ++req_.reloads;
             message("reloading the scene");
@@ -231,9 +236,14 @@ void App::onKey(int key) {
             }
             return;
         }
-        case GLFW_KEY_H: showHelp_ = !showHelp_; return;
-        case GLFW_KEY_O: showStats_ = !showStats_; return;
-        default: return;
+        case GLFW_KEY_H:
+            showHelp_ = !showHelp_;
+            return;
+        case GLFW_KEY_O:
+            showStats_ = !showStats_;
+            return;
+        default:
+            return;
     }
     send();
 }
@@ -261,8 +271,8 @@ void App::onCursor(double x, double y) {
         if (w > 0) divider_ = std::clamp(float(x / w), 0.f, 1.f);
     } else if (drag_ == Drag::View) {
         req_.camera.yaw += float(dx) * kTurnPerPixel;
-        req_.camera.pitch = std::clamp(req_.camera.pitch - float(dy) * kTurnPerPixel, -kMaxPitch,
-                                       kMaxPitch);
+        req_.camera.pitch =
+            std::clamp(req_.camera.pitch - float(dy) * kTurnPerPixel, -kMaxPitch, kMaxPitch);
         send();
     }
 }
@@ -326,7 +336,8 @@ long long App::framesShown() const {
 
 double App::fps() const {
     if (arrivals_.size() < 2) return 0;
-    double s = std::chrono::duration<double>(arrivals_.back().first - arrivals_.front().first).count();
+    double s =
+        std::chrono::duration<double>(arrivals_.back().first - arrivals_.front().first).count();
     return s > 0 ? double(arrivals_.back().second - arrivals_.front().second) / s : 0;
 }
 
@@ -416,9 +427,9 @@ int App::run() {
             for (const PipelineFrame& p : frame_.pipelines)
                 std::printf(", %s %.1f ms device", p.name.c_str(), p.stats.deviceMs);
             // How the last frame came: in how many pieces, and how many were abandoned part way.
-            std::printf(", accel %s, the last in %d piece%s, %llu restarted", accelName(frame_.options.accel),
-                        frame_.pieces, frame_.pieces == 1 ? "" : "s",
-                        (unsigned long long)frame_.restarts);
+            std::printf(", accel %s, the last in %d piece%s, %llu restarted",
+                        accelName(frame_.options.accel), frame_.pieces,
+                        frame_.pieces == 1 ? "" : "s", (unsigned long long)frame_.restarts);
             std::printf("\n");
             glfwSwapBuffers(window_);
             return 0;

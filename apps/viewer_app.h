@@ -30,10 +30,10 @@ struct AppConfig {
     std::string screenshot;  // automation: save the window here after the last frame
     // Automation: keys pressed once a frame (or piece) is shown, in order (see parseKeyScript).
     std::vector<ScriptedKey> keys;
-    size_t triangles = 0;     // in the scene at start (the brute-force guard before a frame)
-    long long pixels = 0;     // rendered pixels per frame, the same
-    float speed = 2.f;       // camera speed, scene units per second
-    std::string framePath;   // how frames reach the texture, for the overlay
+    size_t triangles = 0;   // in the scene at start (the brute-force guard before a frame)
+    long long pixels = 0;   // rendered pixels per frame, the same
+    float speed = 2.f;      // camera speed, scene units per second
+    std::string framePath;  // how frames reach the texture, for the overlay
     bool animate = false;
 };
 
@@ -55,7 +55,7 @@ double bruteForceTests(size_t triangles, long long pixels, int aa, int bounces);
 constexpr double kBruteForceTests = 1e9;
 
 class App {
-public:
+  public:
     App(GLFWwindow* window, GlDisplay& display, Renderer& renderer, ViewRequest first,
         AppConfig config);
     // Returns the exit status; throws rt::Error for a failure that ends the viewer.
@@ -66,7 +66,7 @@ public:
     void onMouseButton(int button, int action);
     void onCursor(double x, double y);
 
-private:
+  private:
     void send();
     void moveCamera(double dt);
     void receive();

@@ -14,7 +14,7 @@ struct Rgba {
 };
 
 class TextCanvas {
-public:
+  public:
     static constexpr int kCellWidth = 6, kCellHeight = 9;  // glyph 5x7 plus spacing
     static constexpr int kMargin = 3;                      // pixels around the text block
 
@@ -26,7 +26,7 @@ public:
     int height() const { return height_; }
     const std::vector<uint8_t>& rgba() const { return rgba_; }
 
-private:
+  private:
     int width_, height_;
     std::vector<uint8_t> rgba_;
 };

@@ -16,45 +16,45 @@
 namespace rt::view {
 namespace {
 
-#define RT_GL_FUNCTIONS(X)                                                                       \
-    X(PFNGLGETSTRINGPROC, GetString)                                                             \
-    X(PFNGLVIEWPORTPROC, Viewport)                                                               \
-    X(PFNGLCLEARCOLORPROC, ClearColor)                                                           \
-    X(PFNGLCLEARPROC, Clear)                                                                     \
-    X(PFNGLENABLEPROC, Enable)                                                                   \
-    X(PFNGLDISABLEPROC, Disable)                                                                 \
-    X(PFNGLFINISHPROC, Finish)                                                                   \
-    X(PFNGLBLENDFUNCPROC, BlendFunc)                                                             \
-    X(PFNGLPIXELSTOREIPROC, PixelStorei)                                                         \
-    X(PFNGLREADBUFFERPROC, ReadBuffer)                                                           \
-    X(PFNGLREADPIXELSPROC, ReadPixels)                                                           \
-    X(PFNGLGENTEXTURESPROC, GenTextures)                                                         \
-    X(PFNGLDELETETEXTURESPROC, DeleteTextures)                                                   \
-    X(PFNGLBINDTEXTUREPROC, BindTexture)                                                         \
-    X(PFNGLACTIVETEXTUREPROC, ActiveTexture)                                                     \
-    X(PFNGLTEXIMAGE2DPROC, TexImage2D)                                                           \
-    X(PFNGLTEXSUBIMAGE2DPROC, TexSubImage2D)                                                     \
-    X(PFNGLTEXPARAMETERIPROC, TexParameteri)                                                     \
-    X(PFNGLDRAWARRAYSPROC, DrawArrays)                                                           \
-    X(PFNGLGENVERTEXARRAYSPROC, GenVertexArrays)                                                 \
-    X(PFNGLDELETEVERTEXARRAYSPROC, DeleteVertexArrays)                                           \
-    X(PFNGLBINDVERTEXARRAYPROC, BindVertexArray)                                                 \
-    X(PFNGLCREATESHADERPROC, CreateShader)                                                       \
-    X(PFNGLSHADERSOURCEPROC, ShaderSource)                                                       \
-    X(PFNGLCOMPILESHADERPROC, CompileShader)                                                     \
-    X(PFNGLGETSHADERIVPROC, GetShaderiv)                                                         \
-    X(PFNGLGETSHADERINFOLOGPROC, GetShaderInfoLog)                                               \
-    X(PFNGLDELETESHADERPROC, DeleteShader)                                                       \
-    X(PFNGLCREATEPROGRAMPROC, CreateProgram)                                                     \
-    X(PFNGLATTACHSHADERPROC, AttachShader)                                                       \
-    X(PFNGLLINKPROGRAMPROC, LinkProgram)                                                         \
-    X(PFNGLGETPROGRAMIVPROC, GetProgramiv)                                                       \
-    X(PFNGLGETPROGRAMINFOLOGPROC, GetProgramInfoLog)                                             \
-    X(PFNGLDELETEPROGRAMPROC, DeleteProgram)                                                     \
-    X(PFNGLUSEPROGRAMPROC, UseProgram)                                                           \
-    X(PFNGLGETUNIFORMLOCATIONPROC, GetUniformLocation)                                           \
-    X(PFNGLUNIFORM1IPROC, Uniform1i)                                                             \
-    X(PFNGLUNIFORM1FPROC, Uniform1f)                                                             \
+#define RT_GL_FUNCTIONS(X)                             \
+    X(PFNGLGETSTRINGPROC, GetString)                   \
+    X(PFNGLVIEWPORTPROC, Viewport)                     \
+    X(PFNGLCLEARCOLORPROC, ClearColor)                 \
+    X(PFNGLCLEARPROC, Clear)                           \
+    X(PFNGLENABLEPROC, Enable)                         \
+    X(PFNGLDISABLEPROC, Disable)                       \
+    X(PFNGLFINISHPROC, Finish)                         \
+    X(PFNGLBLENDFUNCPROC, BlendFunc)                   \
+    X(PFNGLPIXELSTOREIPROC, PixelStorei)               \
+    X(PFNGLREADBUFFERPROC, ReadBuffer)                 \
+    X(PFNGLREADPIXELSPROC, ReadPixels)                 \
+    X(PFNGLGENTEXTURESPROC, GenTextures)               \
+    X(PFNGLDELETETEXTURESPROC, DeleteTextures)         \
+    X(PFNGLBINDTEXTUREPROC, BindTexture)               \
+    X(PFNGLACTIVETEXTUREPROC, ActiveTexture)           \
+    X(PFNGLTEXIMAGE2DPROC, TexImage2D)                 \
+    X(PFNGLTEXSUBIMAGE2DPROC, TexSubImage2D)           \
+    X(PFNGLTEXPARAMETERIPROC, TexParameteri)           \
+    X(PFNGLDRAWARRAYSPROC, DrawArrays)                 \
+    X(PFNGLGENVERTEXARRAYSPROC, GenVertexArrays)       \
+    X(PFNGLDELETEVERTEXARRAYSPROC, DeleteVertexArrays) \
+    X(PFNGLBINDVERTEXARRAYPROC, BindVertexArray)       \
+    X(PFNGLCREATESHADERPROC, CreateShader)             \
+    X(PFNGLSHADERSOURCEPROC, ShaderSource)             \
+    X(PFNGLCOMPILESHADERPROC, CompileShader)           \
+    X(PFNGLGETSHADERIVPROC, GetShaderiv)               \
+    X(PFNGLGETSHADERINFOLOGPROC, GetShaderInfoLog)     \
+    X(PFNGLDELETESHADERPROC, DeleteShader)             \
+    X(PFNGLCREATEPROGRAMPROC, CreateProgram)           \
+    X(PFNGLATTACHSHADERPROC, AttachShader)             \
+    X(PFNGLLINKPROGRAMPROC, LinkProgram)               \
+    X(PFNGLGETPROGRAMIVPROC, GetProgramiv)             \
+    X(PFNGLGETPROGRAMINFOLOGPROC, GetProgramInfoLog)   \
+    X(PFNGLDELETEPROGRAMPROC, DeleteProgram)           \
+    X(PFNGLUSEPROGRAMPROC, UseProgram)                 \
+    X(PFNGLGETUNIFORMLOCATIONPROC, GetUniformLocation) \
+    X(PFNGLUNIFORM1IPROC, Uniform1i)                   \
+    X(PFNGLUNIFORM1FPROC, Uniform1f)                   \
     X(PFNGLUNIFORM4FPROC, Uniform4f)
 
 namespace gl {
@@ -65,8 +65,8 @@ RT_GL_FUNCTIONS(RT_GL_DECLARE)
 
 void loadFunctions() {
     std::string missing;
-#define RT_GL_LOAD(type, name)                                                   \
-    gl::name = reinterpret_cast<type>(glfwGetProcAddress("gl" #name));           \
+#define RT_GL_LOAD(type, name)                                         \
+    gl::name = reinterpret_cast<type>(glfwGetProcAddress("gl" #name)); \
     if (!gl::name) missing += std::string(missing.empty() ? "" : ", ") + "gl" #name;
     RT_GL_FUNCTIONS(RT_GL_LOAD)
 #undef RT_GL_LOAD
@@ -260,7 +260,8 @@ std::vector<uint8_t> GlDisplay::readPixels(int fbWidth, int fbHeight) {
     std::vector<uint8_t> rows(bottomUp.size());
     size_t stride = size_t(fbWidth) * 3;
     for (int y = 0; y < fbHeight; ++y)
-        std::copy_n(&bottomUp[size_t(fbHeight - 1 - y) * stride], stride, &rows[size_t(y) * stride]);
+        std::copy_n(&bottomUp[size_t(fbHeight - 1 - y) * stride], stride,
+                    &rows[size_t(y) * stride]);
     return rows;
 }
 

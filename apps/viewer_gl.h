@@ -11,7 +11,7 @@ namespace rt::view {
 // Loads the GL entry points through GLFW and compiles the shaders; needs a current context.
 // Throws rt::Error naming what is missing.
 class GlDisplay {
-public:
+  public:
     GlDisplay();
     ~GlDisplay();
     GlDisplay(const GlDisplay&) = delete;
@@ -46,7 +46,7 @@ public:
     // The back buffer as rows top first, 3 bytes per pixel (what the window shows).
     std::vector<uint8_t> readPixels(int fbWidth, int fbHeight);
 
-private:
+  private:
     struct Texture {
         unsigned id = 0;
         int width = 0, height = 0;

@@ -133,8 +133,8 @@ OverlayLayout overlayLayout(int fbWidth, int fbHeight, bool help) {
     double statsWidth = std::max(fbWidth, 1) * OverlayLayout::kStatsWidth;
     l.scale = std::clamp(int(statsWidth / (OverlayLayout::kReadableCols * kCell + kEdges)), 1,
                          OverlayLayout::kMaxScale);
-    double width = std::max(fbWidth, 1) *
-                   (help ? OverlayLayout::kHelpWidth : OverlayLayout::kStatsWidth);
+    double width =
+        std::max(fbWidth, 1) * (help ? OverlayLayout::kHelpWidth : OverlayLayout::kStatsWidth);
     double height = std::max(fbHeight, 1) * (help ? 1.0 : OverlayLayout::kStatsHeight);
     auto columns = [&](double pixels) { return int((pixels / l.scale - kEdges) / kCell); };
     l.maxCols = std::max(1, std::min(std::max(columns(width), OverlayLayout::kMinCols),
@@ -169,9 +169,8 @@ std::vector<OverlayRow> overlayRows(const OverlayInfo& info, const OverlayLayout
             }
             std::vector<Part> mem = {{"device memory"}, {format("%.1f MiB", mib(f->deviceBytes))}};
             if (largest.second)
-                mem.push_back({format("(%s %.1f MiB)", largest.first.c_str(),
-                                      mib(largest.second)),
-                               true});
+                mem.push_back(
+                    {format("(%s %.1f MiB)", largest.first.c_str(), mib(largest.second)), true});
             lines.push_back({mem, kText});
         } else {
             lines.push_back({{{"building kernels, first frame..."}}, kText});

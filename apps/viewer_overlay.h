@@ -15,8 +15,8 @@ namespace rt::view {
 struct OverlayInfo {
     const FrameOut* frame = nullptr;  // the frame on screen; null before the first one
     bool split = false;
-    std::string pipeline;               // shown when not split
-    std::array<std::string, 2> pair;    // split: left, right
+    std::string pipeline;             // shown when not split
+    std::array<std::string, 2> pair;  // split: left, right
     int bounces = 0;
     RenderOptions::Accel accel = RenderOptions::Accel::Bv;
     bool animate = false;

@@ -30,9 +30,8 @@ bool sameRequest(const ViewRequest& a, const ViewRequest& b) {
     const dev::Camera &x = a.camera, &y = b.camera;
     return x.position.x == y.position.x && x.position.y == y.position.y &&
            x.position.z == y.position.z && x.yaw == y.yaw && x.pitch == y.pitch &&
-           x.fovY == y.fovY && a.split == b.split && a.pipeline == b.pipeline &&
-           a.pair == b.pair && a.bounces == b.bounces && a.accel == b.accel &&
-           a.reloads == b.reloads;
+           x.fovY == y.fovY && a.split == b.split && a.pipeline == b.pipeline && a.pair == b.pair &&
+           a.bounces == b.bounces && a.accel == b.accel && a.reloads == b.reloads;
 }
 
 Animation orbitFirstSphere(const Scene& scene, float radius, double period) {
@@ -45,7 +44,8 @@ Animation orbitFirstSphere(const Scene& scene, float radius, double period) {
     const int steps = 48;
     for (int i = 0; i < steps; ++i) {
         double t = 2 * M_PI * i / steps;
-        a.path.push_back({c.x + radius * float(std::cos(t)), c.y, c.z + radius * float(std::sin(t))});
+        a.path.push_back(
+            {c.x + radius * float(std::cos(t)), c.y, c.z + radius * float(std::sin(t))});
     }
     return a;
 }
@@ -54,7 +54,8 @@ Renderer::Renderer(ClContext& cl, Scene scene, Config config, std::function<void
     : cl_(cl), config_(std::move(config)), wake_(std::move(wake)) {
     base_ = config_.flags.apply(scene.defaults);
     base_.countRays = config_.countRays;
-    if (config_.animate) animation_ = orbitFirstSphere(scene, config_.orbitRadius, config_.orbitPeriod);
+    if (config_.animate)
+        animation_ = orbitFirstSphere(scene, config_.orbitRadius, config_.orbitPeriod);
     fileCamera_ = scene.camera;
     for (const std::string& name : pipelineRegistry().names(true))
         held_.push_back({name, makePipeline(name, &cl_), {}});
@@ -100,9 +101,10 @@ void Renderer::install(Scene scene) {
 }
 
 void Renderer::animate() {
-    double t = config_.fixedStep > 0
-                   ? double(rendered_) * config_.fixedStep
-                   : std::chrono::duration<double>(std::chrono::steady_clock::now() - started_).count();
+    double t =
+        config_.fixedStep > 0
+            ? double(rendered_) * config_.fixedStep
+            : std::chrono::duration<double>(std::chrono::steady_clock::now() - started_).count();
     int s = freeSlot();  // a new address, so the pipelines upload the moved object
     if (slotLoad_[size_t(s)] != slotLoad_[size_t(current_)]) {
         slots_[size_t(s)] = slots_[size_t(current_)];
@@ -167,7 +169,8 @@ void Renderer::loop() {
             std::unique_lock<std::mutex> lock(mutex_);
             cv_.wait(lock, [&] {
                 if (stop_) return true;
-                if (failed_ || (config_.frameLimit > 0 && (long long)rendered_ >= config_.frameLimit))
+                if (failed_ ||
+                    (config_.frameLimit > 0 && (long long)rendered_ >= config_.frameLimit))
                     return false;
                 // After a partial piece: on once the window took it, or asked for something new.
                 return !frame_.active || taken_ >= published_ ||
@@ -253,8 +256,10 @@ void Renderer::beginFrame(const ViewRequest& r) {
     scene.camera = r.camera;  // travels in the kernel settings, not in the device scene
 
     p.order.clear();
-    if (r.split) p.order = {&held(r.pair[0]), &held(r.pair[1])};
-    else p.order = {&held(r.pipeline)};
+    if (r.split)
+        p.order = {&held(r.pair[0]), &held(r.pair[1])};
+    else
+        p.order = {&held(r.pipeline)};
     p.windows = true;
     std::string key = std::to_string(slotLoad_[size_t(current_)]);
     for (Held* h : p.order) {
@@ -281,8 +286,10 @@ void Renderer::beginFrame(const ViewRequest& r) {
     for (size_t i = 0; i < p.order.size(); ++i) {
         PipelineFrame pf{p.order[i]->name, {}, {}};
         // Below the rows done, the last complete frame (when it has this size), else black.
-        if (lastRgb_[i].size() == size_t(o.width) * o.height * 3) pf.rgb = lastRgb_[i];
-        else pf.rgb.assign(size_t(o.width) * o.height * 3, 0);
+        if (lastRgb_[i].size() == size_t(o.width) * o.height * 3)
+            pf.rgb = lastRgb_[i];
+        else
+            pf.rgb.assign(size_t(o.width) * o.height * 3, 0);
         f.pipelines.push_back(std::move(pf));
     }
     p.started = std::chrono::steady_clock::now();

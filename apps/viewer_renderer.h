@@ -52,9 +52,9 @@ Animation orbitFirstSphere(const Scene& scene, float radius, double period);
 // What the window wants rendered next; the latest request wins.
 struct ViewRequest {
     dev::Camera camera{};
-    bool split = false;                // two pipelines, both full frame
-    std::string pipeline;              // when not split: any registered device pipeline
-    std::array<std::string, 2> pair;   // split: left, right (registered device pipelines)
+    bool split = false;               // two pipelines, both full frame
+    std::string pipeline;             // when not split: any registered device pipeline
+    std::array<std::string, 2> pair;  // split: left, right (registered device pipelines)
     int bounces = 0;
     RenderOptions::Accel accel = RenderOptions::Accel::Bv;
     uint64_t reloads = 0;  // bumped by R
@@ -70,9 +70,9 @@ struct PipelineFrame {
 };
 
 struct FrameOut {
-    uint64_t index = 0;  // 1 for the first frame; a partial frame has the index it will complete
-    int rowsDone = 0;    // rows rendered so far, from the top; the rest show the previous frame
-    int pieces = 0;      // pieces rendered so far
+    uint64_t index = 0;     // 1 for the first frame; a partial frame has the index it will complete
+    int rowsDone = 0;       // rows rendered so far, from the top; the rest show the previous frame
+    int pieces = 0;         // pieces rendered so far
     uint64_t restarts = 0;  // frames abandoned part way so far (the view changed), all frames
     size_t triangles = 0;   // in the scene rendered (the window's brute-force guard)
     bool complete() const { return rowsDone >= height; }
@@ -96,15 +96,15 @@ struct Notice {
 };
 
 class Renderer {
-public:
+  public:
     struct Config {
         std::filesystem::path scenePath;
         cli::SceneFlags flags;  // command-line overrides of the scene's defaults
         bool animate = false;
         float orbitRadius = 0.8f;
         double orbitPeriod = 6;
-        bool countRays = true;      // for Mrays/s
-        long long frameLimit = 0;   // stop after this many frames (0 = never)
+        bool countRays = true;     // for Mrays/s
+        long long frameLimit = 0;  // stop after this many frames (0 = never)
         // Animation clock: seconds per frame when > 0 (reproducible automation), else wall time.
         double fixedStep = 0;
         int pieceRows = 0;  // rows per piece when > 0 (--piece-rows), else sized by kPieceMs
@@ -123,7 +123,7 @@ public:
     std::vector<Notice> takeNotices();
     uint64_t framesRendered() const;
 
-private:
+  private:
     void loop();
     void renderPiece(const ViewRequest& r);
     void beginFrame(const ViewRequest& r);

@@ -12,8 +12,12 @@ namespace rt::view {
 namespace {
 
 // core/SHADING.md section 10, as image/image_io.cpp writes it.
-double srgbEncode(double c) { return c <= 0.0031308 ? 12.92 * c : 1.055 * std::pow(c, 1 / 2.4) - 0.055; }
-double srgbDecode(double s) { return s <= 0.04045 ? s / 12.92 : std::pow((s + 0.055) / 1.055, 2.4); }
+double srgbEncode(double c) {
+    return c <= 0.0031308 ? 12.92 * c : 1.055 * std::pow(c, 1 / 2.4) - 0.055;
+}
+double srgbDecode(double s) {
+    return s <= 0.04045 ? s / 12.92 : std::pow((s + 0.055) / 1.055, 2.4);
+}
 
 int byteOf(float v) {
     double c = std::isnan(v) ? 0.0 : std::clamp(double(v), 0.0, 1.0);
@@ -32,8 +36,10 @@ Tables buildTables() {
         uint32_t lo = 0, hi = std::bit_cast<uint32_t>(1.0f);
         while (lo < hi) {
             uint32_t mid = lo + (hi - lo) / 2;
-            if (byteOf(std::bit_cast<float>(mid)) >= k) hi = mid;
-            else lo = mid + 1;
+            if (byteOf(std::bit_cast<float>(mid)) >= k)
+                hi = mid;
+            else
+                lo = mid + 1;
         }
         t.threshold[k] = std::bit_cast<float>(lo);
     }

@@ -26,8 +26,8 @@
 #include "core/cl_runtime.h"
 #include "core/error.h"
 #include "core/pipeline.h"
-#include "pipelines/registry.h"
 #include "core/scene_loader.h"
+#include "pipelines/registry.h"
 
 namespace fs = std::filesystem;
 using namespace rt;
@@ -108,7 +108,8 @@ void BigMeshBvhOverNone(benchmark::State& state, const std::string& kind) {
 // One benchmark per registered device pipeline, named after it (BigMeshBvhOverNone/mega, ...).
 int main(int argc, char** argv) {
     for (const std::string& name : rt::pipelineRegistry().names(true))
-        benchmark::RegisterBenchmark(("BigMeshBvhOverNone/" + name).c_str(), BigMeshBvhOverNone, name)
+        benchmark::RegisterBenchmark(("BigMeshBvhOverNone/" + name).c_str(), BigMeshBvhOverNone,
+                                     name)
             ->Iterations(1)
             ->UseManualTime()
             ->Unit(benchmark::kMillisecond);

@@ -175,27 +175,48 @@ Flags parseFlags(int argc, char** argv) {
             return v;
         };
         f.given.insert(key);
-        if (key == "--scenes") f.scenes = split(value);
-        else if (key == "--pipelines") f.pipelines = split(value);
-        else if (key == "--sizes") f.sizes = split(value);
-        else if (key == "--bounces") f.bounces = value;
-        else if (key == "--accels") f.accels = split(value);
-        else if (key == "--cells") f.cells = value;
-        else if (key == "--sweep") f.sweep = value;
-        else if (key == "--out") f.out = value;
-        else if (key == "--resume") f.resume = value;
-        else if (key == "--device") f.device = value;
-        else if (key == "--devices") f.devices = split(value);
-        else if (key == "--shard") f.shard = value;
-        else if (key == "--scene-dir") f.sceneDir = value;
-        else if (key == "--kernel-dir") f.kernelDir = value;
-        else if (key == "--repeats") f.repeats = integer(1, 1000);
-        else if (key == "--frames") f.frames = integer(1, 100000);
-        else if (key == "--warmup") f.warmup = integer(0, 100);
-        else if (key == "--count-rays") f.countRays = value == "yes" || value == "true";
-        else if (key == "--time-limit") f.timeLimit = std::atof(value.c_str());
-        else if (key == "--cell-timeout") f.cellTimeout = seconds();
-        else throw Error("unknown flag " + key + " (see --help)");
+        if (key == "--scenes")
+            f.scenes = split(value);
+        else if (key == "--pipelines")
+            f.pipelines = split(value);
+        else if (key == "--sizes")
+            f.sizes = split(value);
+        else if (key == "--bounces")
+            f.bounces = value;
+        else if (key == "--accels")
+            f.accels = split(value);
+        else if (key == "--cells")
+            f.cells = value;
+        else if (key == "--sweep")
+            f.sweep = value;
+        else if (key == "--out")
+            f.out = value;
+        else if (key == "--resume")
+            f.resume = value;
+        else if (key == "--device")
+            f.device = value;
+        else if (key == "--devices")
+            f.devices = split(value);
+        else if (key == "--shard")
+            f.shard = value;
+        else if (key == "--scene-dir")
+            f.sceneDir = value;
+        else if (key == "--kernel-dir")
+            f.kernelDir = value;
+        else if (key == "--repeats")
+            f.repeats = integer(1, 1000);
+        else if (key == "--frames")
+            f.frames = integer(1, 100000);
+        else if (key == "--warmup")
+            f.warmup = integer(0, 100);
+        else if (key == "--count-rays")
+            f.countRays = value == "yes" || value == "true";
+        else if (key == "--time-limit")
+            f.timeLimit = std::atof(value.c_str());
+        else if (key == "--cell-timeout")
+            f.cellTimeout = seconds();
+        else
+            throw Error("unknown flag " + key + " (see --help)");
     }
     return f;
 }
@@ -204,8 +225,10 @@ Flags parseFlags(int argc, char** argv) {
 Image readFace(const fs::path& path) {
     std::string ext = path.extension().string();
     if (ext == ".pfm") return readPfm(path);
-    throw Error(path.string() + ": rtlab-bench reads cubemap faces only as .pfm (it links no "
-                "OpenImageIO); make a converted scene folder with `rtlab sweep --export-scenes DIR`");
+    throw Error(
+        path.string() +
+        ": rtlab-bench reads cubemap faces only as .pfm (it links no "
+        "OpenImageIO); make a converted scene folder with `rtlab sweep --export-scenes DIR`");
 }
 
 int listDevicesCommand() {
@@ -256,26 +279,30 @@ int sweepCommand(const Flags& f) {
     auto writeMeta = [&](const nlohmann::json& meta) {
         std::ofstream(out / "sweep.json") << meta.dump(2) << "\n";
     };
-    SweepSummary s = runSweep(config, o, writeMeta, [&](const nlohmann::json& row, const Image* image) {
-        nlohmann::json r = row;
-        if (image) {
-            uint64_t h = 1469598103934665603ull ^ uint64_t(image->width) << 32 ^ image->height;
-            for (unsigned char c : std::string_view(reinterpret_cast<const char*>(image->rgb.data()),
-                                                    image->rgb.size() * sizeof(float)))
-                h = (h ^ c) * 1099511628211ull;
-            auto [it, fresh] = stored.emplace(h, "images/" + imageName(row));
-            r["image"] = it->second;
-            if (fresh) writePfm(*image, out / it->second);
-        }
-        rows << r.dump() << "\n" << std::flush;
-        unexpectedErrors += row.value("status", "") == "error" && !row.value("stop_after_failure", false);
-    });
+    SweepSummary s =
+        runSweep(config, o, writeMeta, [&](const nlohmann::json& row, const Image* image) {
+            nlohmann::json r = row;
+            if (image) {
+                uint64_t h = 1469598103934665603ull ^ uint64_t(image->width) << 32 ^ image->height;
+                for (unsigned char c :
+                     std::string_view(reinterpret_cast<const char*>(image->rgb.data()),
+                                      image->rgb.size() * sizeof(float)))
+                    h = (h ^ c) * 1099511628211ull;
+                auto [it, fresh] = stored.emplace(h, "images/" + imageName(row));
+                r["image"] = it->second;
+                if (fresh) writePfm(*image, out / it->second);
+            }
+            rows << r.dump() << "\n" << std::flush;
+            unexpectedErrors +=
+                row.value("status", "") == "error" && !row.value("stop_after_failure", false);
+        });
     writeMeta(s.meta);
-    std::string stopped = s.complete ? ""
+    std::string stopped = s.complete                      ? ""
                           : s.meta.contains("stopped_by") ? " (stopped by a timeout on the device)"
                                                           : " (stopped by the time limit)";
-    std::fprintf(stderr, "sweep %s: %d of %d cells measured, %d failed, %d not run after a failure, "
-                         "%d done before, in %s%s -> %s\n",
+    std::fprintf(stderr,
+                 "sweep %s: %d of %d cells measured, %d failed, %d not run after a failure, "
+                 "%d done before, in %s%s -> %s\n",
                  config.name.c_str(), s.measured, s.cells, s.failed, s.notRun, s.skipped,
                  formatDuration(s.seconds).c_str(), stopped.c_str(), out.string().c_str());
     if (s.timedOut) {
@@ -284,7 +311,8 @@ int sweepCommand(const Flags& f) {
         return 1;
     }
     if (unexpectedErrors) {
-        std::fprintf(stderr, "rtlab-bench: %d cell(s) failed (their rows say why)\n", unexpectedErrors);
+        std::fprintf(stderr, "rtlab-bench: %d cell(s) failed (their rows say why)\n",
+                     unexpectedErrors);
         return 1;
     }
     return 0;
@@ -342,8 +370,8 @@ void reportProgress(size_t slot, const std::string& name, double msPerFrame, boo
     progress.failed += !ok;
     progress.eta.measured(progress.cells[slot], seconds, buildSeconds, ok);
     if (progress.left[slot] > 0) --progress.left[slot];
-    double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() -
-                                                   progress.start).count();
+    double elapsed =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - progress.start).count();
     std::vector<const Cell*> pending;
     for (size_t i = 0; i < progress.cells.size(); ++i)
         for (int r = 0; r < progress.left[i]; ++r) pending.push_back(&progress.cells[i]);
@@ -361,9 +389,9 @@ void reportProgress(size_t slot, const std::string& name, double msPerFrame, boo
 double cellTimeoutS = kDefaultCellTimeoutS;
 std::string timedOut;
 
-void renderBenchmark(benchmark::State& state, size_t slot, const std::string& name,
-                     ClContext* cl, const Scene* scene, std::string kind, RenderOptions o,
-                     int warmup, bool countRays) {
+void renderBenchmark(benchmark::State& state, size_t slot, const std::string& name, ClContext* cl,
+                     const Scene* scene, std::string kind, RenderOptions o, int warmup,
+                     bool countRays) {
     if (interrupted) {
         state.SkipWithError("interrupted");
         return;
@@ -388,21 +416,25 @@ void renderBenchmark(benchmark::State& state, size_t slot, const std::string& na
     } report{state, slot, name, *cl};
     // Every device call of the repetition runs under the cell time limit; work that overruns it
     // keeps the pipeline (shared) and is never waited for again.
-    const auto deadline = std::chrono::steady_clock::now() +
-                          std::chrono::duration<double>(cellTimeoutS);
+    const auto deadline =
+        std::chrono::steady_clock::now() + std::chrono::duration<double>(cellTimeoutS);
     auto guarded = [&](auto work) {
-        double left = cellTimeoutS <= 0 ? 0
-                      : std::max(1e-3, std::chrono::duration<double>(
-                                           deadline - std::chrono::steady_clock::now()).count());
+        double left = cellTimeoutS <= 0
+                          ? 0
+                          : std::max(1e-3, std::chrono::duration<double>(
+                                               deadline - std::chrono::steady_clock::now())
+                                               .count());
         if (withinSeconds(left, work)) return true;
         timedOut = name;
         std::string building = cl->building();
         char why[128];
-        std::snprintf(why, sizeof why, "timeout: did not finish within %g s (--cell-timeout): ",
-                      cellTimeoutS);
+        std::snprintf(why, sizeof why,
+                      "timeout: did not finish within %g s (--cell-timeout): ", cellTimeoutS);
         state.SkipWithError((why + (building.empty() ? "the device or its driver did not return"
                                                      : "the OpenCL compiler did not finish "
-                                                       "building " + building)).c_str());
+                                                       "building " +
+                                                           building))
+                                .c_str());
         return false;
     };
     size_t before = cl->allocatedBytes();
@@ -496,7 +528,8 @@ std::vector<int> bounceList(const std::string& spec) {
 }
 
 int benchmarkCommand(const Flags& f) {
-    if (!f.shard.empty()) throw Error("--shard: only with --sweep (the Google Benchmark mode runs no work units)");
+    if (!f.shard.empty())
+        throw Error("--shard: only with --sweep (the Google Benchmark mode runs no work units)");
     // The same --devices specs as the sweep mode (all, indices, names); one benchmark set each.
     std::string spec;
     for (const std::string& d : f.devices) spec += (spec.empty() ? "" : ",") + d;
@@ -520,9 +553,10 @@ int benchmarkCommand(const Flags& f) {
         targets.push_back(std::move(t));
     }
     benchmark::AddCustomContext("rtlab_commit", RTLAB_COMMIT);
-    benchmark::AddCustomContext("rtlab_timing", "manual time = device ms per frame (profiling "
-                                "events, sum over kernels) after " + std::to_string(f.warmup) +
-                                " warm-up frames");
+    benchmark::AddCustomContext("rtlab_timing",
+                                "manual time = device ms per frame (profiling "
+                                "events, sum over kernels) after " +
+                                    std::to_string(f.warmup) + " warm-up frames");
 
     // A scene that cannot be loaded (a PNG cubemap, say) ends the run with its reason: a
     // benchmark that silently leaves a scene out reads as a complete one.
@@ -530,7 +564,8 @@ int benchmarkCommand(const Flags& f) {
     auto scene = [&](const std::string& name) -> const Scene* {
         if (auto it = scenes.find(name); it != scenes.end()) return &it->second;
         try {
-            return &scenes.emplace(name, loadScene(scenePath(name, f.sceneDir), readFace)).first->second;
+            return &scenes.emplace(name, loadScene(scenePath(name, f.sceneDir), readFace))
+                        .first->second;
         } catch (const Error& e) {
             throw Error("scene " + name + ": " + e.what());
         }
@@ -543,7 +578,8 @@ int benchmarkCommand(const Flags& f) {
         for (SweepGroup& g : config.groups)
             std::erase_if(g.scenes, [&](const std::string& s) { return !scenes.count(s); });
         std::erase_if(config.groups, [](const SweepGroup& g) { return g.scenes.empty(); });
-        cells = expandCells(config, [&](const std::string& n) -> const Scene& { return *scene(n); });
+        cells =
+            expandCells(config, [&](const std::string& n) -> const Scene& { return *scene(n); });
     } else {
         std::vector<int> bounces = bounceList(f.bounces);
         for (const std::string& name : f.scenes) {
@@ -562,7 +598,8 @@ int benchmarkCommand(const Flags& f) {
                             if (std::sscanf(size.c_str(), "%dx%d", &c.options.width,
                                             &c.options.height) != 2 ||
                                 c.options.width < 1 || c.options.height < 1)
-                                throw Error("--sizes " + size + ": expected WIDTHxHEIGHT, both at least 1");
+                                throw Error("--sizes " + size +
+                                            ": expected WIDTHxHEIGHT, both at least 1");
                             c.options.bounces = b;
                             c.options.accel = parseAccel(accel);
                             c.accelApplies = !s->triangles.empty() || !s->spheres.empty();
@@ -603,7 +640,8 @@ int benchmarkCommand(const Flags& f) {
     size_t ran = benchmark::RunSpecifiedBenchmarks();
     benchmark::Shutdown();
     if (interrupted) {
-        std::fprintf(stderr, "rtlab-bench: interrupted after %d repetitions; results so far written\n",
+        std::fprintf(stderr,
+                     "rtlab-bench: interrupted after %d repetitions; results so far written\n",
                      progress.done);
         return 130;
     }
@@ -611,8 +649,10 @@ int benchmarkCommand(const Flags& f) {
     if (!timedOut.empty()) {
         // The stuck call may still use its context: it must outlive this function.
         for (Target& t : targets) (void)t.cl.release();
-        std::fprintf(stderr, "rtlab-bench: %s timed out (--cell-timeout %g); the benchmarks after "
-                             "it were not run\n", timedOut.c_str(), cellTimeoutS);
+        std::fprintf(stderr,
+                     "rtlab-bench: %s timed out (--cell-timeout %g); the benchmarks after "
+                     "it were not run\n",
+                     timedOut.c_str(), cellTimeoutS);
         return 1;
     }
     if (progress.failed) {
@@ -629,7 +669,8 @@ int main(int argc, char** argv) {
     for (int i = 1; i < argc; ++i)
         if (!std::strcmp(argv[i], "--help") || !std::strcmp(argv[i], "-h")) {
             printUsage();
-            std::puts("\nGoogle Benchmark's own flags: --benchmark_list_tests, --benchmark_filter, ...");
+            std::puts(
+                "\nGoogle Benchmark's own flags: --benchmark_list_tests, --benchmark_filter, ...");
             return 0;
         }
     try {

@@ -2,7 +2,6 @@
 // that rtlab-trace-bench still times rtlab's structures; EmbreePeer::available() is false and
 // the peer is never constructed.
 #include "bench/embree_peer.h"
-
 #include "core/error.h"
 
 namespace rt {

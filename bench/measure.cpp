@@ -59,9 +59,8 @@ struct Timed {
 }  // namespace
 
 std::vector<Measurement> measureCells(ClContext& cl, const Scene& scene,
-                                      const std::vector<Variant>& variants, int warmup,
-                                      int repeats, bool countRays, bool keepImage,
-                                      double frameCapS) {
+                                      const std::vector<Variant>& variants, int warmup, int repeats,
+                                      bool countRays, bool keepImage, double frameCapS) {
     const size_t n = variants.size();
     std::vector<double> warmupWall(n, 0);
     std::vector<Measurement> out(n);

@@ -6,46 +6,45 @@
 
 #include <array>
 #include <cstdint>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <utility>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "core/cl_runtime.h"
 #include "core/error.h"
 #include "core/image.h"
 #include "core/pipeline.h"
-#include "pipelines/registry.h"
 #include "core/scene.h"
+#include "pipelines/registry.h"
 
 namespace rt::bench {
 
 struct Measurement {
     bool ok = false;
-    std::string error;          // why the cell could not be measured (ok = false)
+    std::string error;                        // why the cell could not be measured (ok = false)
     FailureKind failure = FailureKind::None;  // its kind, as thrown
-    int frames = 0;             // timed frames
-    double deviceMs = 0;        // median over the timed frames of the kernels' summed time
+    int frames = 0;                           // timed frames
+    double deviceMs = 0;  // median over the timed frames of the kernels' summed time
     double deviceMsMin = 0, deviceMsMax = 0;
-    double wallMs = 0;          // median host wall time of render(), read-back included
+    double wallMs = 0;            // median host wall time of render(), read-back included
     std::vector<double> frameMs;  // device ms of each timed frame, in round order
     std::vector<std::pair<std::string, double>> kernelMs;  // median per kernel name
-    size_t deviceBytes = 0;     // global memory the pipeline allocated for this frame
+    size_t deviceBytes = 0;  // global memory the pipeline allocated for this frame
     std::vector<std::pair<std::string, size_t>> buffers;  // FrameStats::buffers
     size_t privateBytes = 0;
     int tiles = 1, launches = 0;
     std::map<std::string, double> kernelResources;  // FrameStats::kernelResources (issue 15)
-    double longestLaunchMs = 0; // the longest single kernel launch of any timed frame
-    RayCounts rays{};           // by RT_RAY_* type
+    double longestLaunchMs = 0;  // the longest single kernel launch of any timed frame
+    RayCounts rays{};            // by RT_RAY_* type
     bool raysCounted = false;
-    double mrays = 0;           // million rays per second of device time (when counted)
+    double mrays = 0;  // million rays per second of device time (when counted)
     nlohmann::json extras = nlohmann::json::object();  // FrameStats::extras, counting frame's last
-    double accelBuildMs = 0;    // host wall time of the acceleration structure's build
+    double accelBuildMs = 0;  // host wall time of the acceleration structure's build
     // Host wall time this cell spent building or loading OpenCL programs (ClContext's counts):
     // the first cell of a program pays it, later ones find the program in the context.
     double programMs = 0;
-    Image image;                // the last timed frame, when asked for
+    Image image;  // the last timed frame, when asked for
 };
 
 // Never throws for a cell that fails (CL error, a limit): the Measurement says why.
@@ -63,9 +62,8 @@ struct Variant {
 // frameCapS > 0 bounds a variant's timed frames: once they add up to more than that many seconds
 // of wall time (or its last warm-up frame alone took longer), it stops after at least one.
 std::vector<Measurement> measureCells(ClContext& cl, const Scene& scene,
-                                      const std::vector<Variant>& variants, int warmup,
-                                      int repeats, bool countRays, bool keepImage,
-                                      double frameCapS = 0);
+                                      const std::vector<Variant>& variants, int warmup, int repeats,
+                                      bool countRays, bool keepImage, double frameCapS = 0);
 
 // Fills mrays from the ray counts and the median device time.
 void deriveRayCounters(Measurement& m);

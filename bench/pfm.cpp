@@ -36,10 +36,10 @@ Image readPfm(const std::filesystem::path& path) {
     if (scale >= 0) throw Error(path.string() + ": big-endian PFM is not supported");
     Image image(width, height);
     const std::streamsize row = std::streamsize(width) * 3 * sizeof(float);
-    for (int y = height - 1; y >= 0; --y)
-        f.read(reinterpret_cast<char*>(image.pixel(0, y)), row);
-    if (!f) throw Error(path.string() + ": file ends before its " + std::to_string(width) + "x" +
-                        std::to_string(height) + " pixels");
+    for (int y = height - 1; y >= 0; --y) f.read(reinterpret_cast<char*>(image.pixel(0, y)), row);
+    if (!f)
+        throw Error(path.string() + ": file ends before its " + std::to_string(width) + "x" +
+                    std::to_string(height) + " pixels");
     return image;
 }
 

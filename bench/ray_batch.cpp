@@ -89,8 +89,7 @@ std::vector<int> BatchTracer::occluded(const std::vector<BatchRay>& rays) {
 cl::Buffer uploadRays(ClContext& cl, const std::vector<BatchRay>& rays) {
     if (rays.empty()) return cl::Buffer(cl.context(), CL_MEM_READ_ONLY, 32);
     return cl::Buffer(cl.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR,
-                      rays.size() * sizeof(BatchRay),
-                      const_cast<BatchRay*>(rays.data()));
+                      rays.size() * sizeof(BatchRay), const_cast<BatchRay*>(rays.data()));
 }
 
 }  // namespace rt

@@ -9,10 +9,9 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "core/cl_runtime.h"
 #include "core/error.h"
@@ -68,17 +67,23 @@ Args parse(int argc, char** argv) {
             return argv[++i];
         };
         if (k == "--help" || k == "-h") {
-            std::puts("rtlab-roofline [--device SPEC] [--mib N] [--repeats N] [--out FILE.json]\n"
-                      "Measures copy and saxpy bandwidth and fp32 FMA throughput with OpenCL "
-                      "profiling events\n(median of --repeats after 3 warm-up launches). --mib: "
-                      "size of each buffer [a quarter of the\nmax allocation, at most 1024 MiB].");
+            std::puts(
+                "rtlab-roofline [--device SPEC] [--mib N] [--repeats N] [--out FILE.json]\n"
+                "Measures copy and saxpy bandwidth and fp32 FMA throughput with OpenCL "
+                "profiling events\n(median of --repeats after 3 warm-up launches). --mib: "
+                "size of each buffer [a quarter of the\nmax allocation, at most 1024 MiB].");
             std::exit(0);
         }
-        if (k.rfind("--device", 0) == 0) a.device = value();
-        else if (k.rfind("--out", 0) == 0) a.out = value();
-        else if (k.rfind("--mib", 0) == 0) a.mib = std::stoul(value());
-        else if (k.rfind("--repeats", 0) == 0) a.repeats = std::max(1, std::stoi(value()));
-        else throw Error("unknown flag " + k + " (see --help)");
+        if (k.rfind("--device", 0) == 0)
+            a.device = value();
+        else if (k.rfind("--out", 0) == 0)
+            a.out = value();
+        else if (k.rfind("--mib", 0) == 0)
+            a.mib = std::stoul(value());
+        else if (k.rfind("--repeats", 0) == 0)
+            a.repeats = std::max(1, std::stoi(value()));
+        else
+            throw Error("unknown flag " + k + " (see --help)");
     }
     return a;
 }
@@ -102,8 +107,8 @@ int main(int argc, char** argv) {
         Args a = parse(argc, argv);
         ClContext cl(selectDevice(a.device));
         const DeviceInfo& d = cl.device();
-        size_t bytes = a.mib ? a.mib << 20
-                             : std::min<size_t>(size_t(1) << 30, d.maxAlloc / 4) & ~size_t(15);
+        size_t bytes =
+            a.mib ? a.mib << 20 : std::min<size_t>(size_t(1) << 30, d.maxAlloc / 4) & ~size_t(15);
         bytes = std::min<size_t>(bytes, d.maxAlloc);
         const size_t n4 = bytes / 16;
         cl::Program program(cl.context(), kSource);
@@ -120,7 +125,8 @@ int main(int argc, char** argv) {
         cl.queue().enqueueFillBuffer(y, 2.0f, 0, bytes);
         cl.queue().finish();
 
-        cl::Kernel copy(program, "Roof_Copy"), saxpy(program, "Roof_Saxpy"), fma(program, "Roof_Fma");
+        cl::Kernel copy(program, "Roof_Copy"), saxpy(program, "Roof_Saxpy"),
+            fma(program, "Roof_Fma");
         copy.setArg(0, x);
         copy.setArg(1, y);
         saxpy.setArg(0, 0.5f);
@@ -133,35 +139,50 @@ int main(int argc, char** argv) {
         fma.setArg(0, 0.999f);
         fma.setArg(1, 0.001f);
         fma.setArg(2, x);
-        const double fmaMs = medianMs(cl.queue(), fma, std::min(fmaItems, bytes / 4), a.warmup, a.repeats);
+        const double fmaMs =
+            medianMs(cl.queue(), fma, std::min(fmaItems, bytes / 4), a.warmup, a.repeats);
         const double fmaFlops = double(std::min(fmaItems, bytes / 4)) * kFmaIterations * 8 * 4 * 2;
 
         const double copyGBs = 2.0 * double(bytes) / (copyMs * 1e6);
         const double saxpyGBs = 3.0 * double(bytes) / (saxpyMs * 1e6);
         const double tflops = fmaFlops / (fmaMs * 1e9);
         std::printf("rtlab-roofline: %s, commit %s\n", d.label().c_str(), RTLAB_COMMIT);
-        std::printf("  copy   %8.1f GB/s  (2 x %zu MiB in %.3f ms)\n", copyGBs, bytes >> 20, copyMs);
-        std::printf("  saxpy  %8.1f GB/s  (3 x %zu MiB in %.3f ms)\n", saxpyGBs, bytes >> 20, saxpyMs);
+        std::printf("  copy   %8.1f GB/s  (2 x %zu MiB in %.3f ms)\n", copyGBs, bytes >> 20,
+                    copyMs);
+        std::printf("  saxpy  %8.1f GB/s  (3 x %zu MiB in %.3f ms)\n", saxpyGBs, bytes >> 20,
+                    saxpyMs);
         std::printf("  fma    %8.2f TFLOP/s fp32 (%.3f ms)\n", tflops, fmaMs);
         if (!a.out.empty()) {
             nlohmann::json j = {
-                {"about", "bandwidth and fp32 ceilings measured by rtlab-roofline (bench/roofline.cpp): "
-                          "OpenCL profiling events, median of the timed launches after warm-up"},
-                {"device", d.name}, {"platform", d.platformName}, {"driver", d.driver},
-                {"device_version", d.version}, {"compute_units", d.computeUnits},
-                {"global_mem_bytes", d.globalMem}, {"max_alloc_bytes", d.maxAlloc},
-                {"commit", RTLAB_COMMIT}, {"buffer_bytes", bytes}, {"repeats", a.repeats},
+                {"about",
+                 "bandwidth and fp32 ceilings measured by rtlab-roofline (bench/roofline.cpp): "
+                 "OpenCL profiling events, median of the timed launches after warm-up"},
+                {"device", d.name},
+                {"platform", d.platformName},
+                {"driver", d.driver},
+                {"device_version", d.version},
+                {"compute_units", d.computeUnits},
+                {"global_mem_bytes", d.globalMem},
+                {"max_alloc_bytes", d.maxAlloc},
+                {"commit", RTLAB_COMMIT},
+                {"buffer_bytes", bytes},
+                {"repeats", a.repeats},
                 {"warmup", a.warmup},
-                {"copy_gb_per_s", copyGBs}, {"copy_ms", copyMs},
-                {"saxpy_gb_per_s", saxpyGBs}, {"saxpy_ms", saxpyMs},
-                {"fma_tflops", tflops}, {"fma_ms", fmaMs}, {"fma_iterations", kFmaIterations}};
+                {"copy_gb_per_s", copyGBs},
+                {"copy_ms", copyMs},
+                {"saxpy_gb_per_s", saxpyGBs},
+                {"saxpy_ms", saxpyMs},
+                {"fma_tflops", tflops},
+                {"fma_ms", fmaMs},
+                {"fma_iterations", kFmaIterations}};
             std::ofstream f(a.out);
             f << j.dump(2) << "\n";
             if (!f) throw Error(a.out + ": cannot write");
         }
         return 0;
     } catch (const cl::Error& e) {
-        std::fprintf(stderr, "rtlab-roofline: OpenCL error in %s: %s\n", e.what(), clErrorName(e.err()));
+        std::fprintf(stderr, "rtlab-roofline: OpenCL error in %s: %s\n", e.what(),
+                     clErrorName(e.err()));
     } catch (const std::exception& e) {
         std::fprintf(stderr, "rtlab-roofline: %s\n", e.what());
     }

@@ -39,15 +39,13 @@ std::vector<std::string> words(const std::string& s) {
 
 // Parses one key's value; `where` prefixes errors ("bench/sweeps/full:12").
 class ValueParser {
-public:
+  public:
     explicit ValueParser(std::string where) : where_(std::move(where)) {}
     [[noreturn]] void fail(const std::string& why) const {
         throw Error(where_ + ": " + why, FailureKind::InvalidOption);
     }
 
-    int integer(const std::string& w, int lo, int hi) const {
-        return int(wholeNumber(w, lo, hi));
-    }
+    int integer(const std::string& w, int lo, int hi) const { return int(wholeNumber(w, lo, hi)); }
     // A whole number in lo..hi, whose range may pass an int's (a pipeline option's).
     long long wholeNumber(const std::string& w, long long lo, long long hi) const {
         size_t used = 0;
@@ -83,7 +81,10 @@ public:
         static const std::regex re("([0-9]+(\\.[0-9]+)?)([KMG]?)");
         std::smatch m;
         if (!std::regex_match(value, m, re)) fail("'" + value + "': expected bytes such as 512M");
-        double scale = m[3] == "K" ? 1024.0 : m[3] == "M" ? 1048576.0 : m[3] == "G" ? 1073741824.0 : 1;
+        double scale = m[3] == "K"   ? 1024.0
+                       : m[3] == "M" ? 1048576.0
+                       : m[3] == "G" ? 1073741824.0
+                                     : 1;
         return size_t(std::llround(std::stod(m[1]) * scale));
     }
     double number(const std::string& w, double lo, double hi) const {
@@ -96,7 +97,8 @@ public:
         }
         if (used != w.size() || w.empty() || !std::isfinite(v)) fail("'" + w + "' is not a number");
         if (v < lo || v > hi)
-            fail(w + " is out of range " + std::to_string(int(lo)) + ".." + std::to_string(int(hi)));
+            fail(w + " is out of range " + std::to_string(int(lo)) + ".." +
+                 std::to_string(int(hi)));
         return v;
     }
     bool boolean(const std::string& value) const {
@@ -113,17 +115,18 @@ public:
         }
     }
 
-private:
+  private:
     std::string where_;
 };
 
-const std::set<std::string> kGroupKeys = {"scenes", "pipelines", "sizes",  "bounces",
-                                          "shadow-samples", "aa", "accel", "layout",
-                                          "memory-budget", "adaptive", "images",
-                                          "repeats", "warmup", "count-rays",
-                                          "max-launch-ms", "stop-after-failure", "max-frame-s"};
-const std::set<std::string> kTopKeys = {"reference-bounces",
-                                        "reference-shadow-samples", "reference-aa"};
+const std::set<std::string> kGroupKeys = {
+    "scenes",         "pipelines",  "sizes",         "bounces",
+    "shadow-samples", "aa",         "accel",         "layout",
+    "memory-budget",  "adaptive",   "images",        "repeats",
+    "warmup",         "count-rays", "max-launch-ms", "stop-after-failure",
+    "max-frame-s"};
+const std::set<std::string> kTopKeys = {"reference-bounces", "reference-shadow-samples",
+                                        "reference-aa"};
 
 void applyGroupKey(SweepGroup& g, const std::string& key, const std::string& value,
                    const ValueParser& p) {
@@ -132,8 +135,10 @@ void applyGroupKey(SweepGroup& g, const std::string& key, const std::string& val
     } else if (key == "pipelines") {
         g.pipelines.clear();
         for (const std::string& w : words(value)) {
-            const PipelineInfo& info = p.wrap([&]() -> const PipelineInfo& { return pipelineInfo(w); });
-            if (info.reference) p.fail("the " + info.name + " reference is not a measured pipeline");
+            const PipelineInfo& info =
+                p.wrap([&]() -> const PipelineInfo& { return pipelineInfo(w); });
+            if (info.reference)
+                p.fail("the " + info.name + " reference is not a measured pipeline");
             g.pipelines.push_back(info.name);
         }
     } else if (key == "sizes") {
@@ -226,7 +231,8 @@ SweepConfig parseSweep(const std::string& text, const fs::path& path) {
         if (!top && !group) p.fail("unknown key '" + key + "' (see bench/sweeps/README.md)");
         if (top) {
             if (!groupNames.empty()) p.fail("'" + key + "' belongs before the first [group]");
-            if (key == "reference-bounces") c.referenceBounces = p.integer(value, 0, RT_MAX_BOUNCE_LIMIT);
+            if (key == "reference-bounces")
+                c.referenceBounces = p.integer(value, 0, RT_MAX_BOUNCE_LIMIT);
             if (key == "reference-shadow-samples")
                 c.referenceShadowSamples = p.integer(value, 1, RT_MAX_SHADOW_SAMPLES);
             if (key == "reference-aa") c.referenceAa = p.integer(value, 1, 16);
@@ -242,7 +248,8 @@ SweepConfig parseSweep(const std::string& text, const fs::path& path) {
             groupKeys.back().emplace_back(key, value + "\n" + std::to_string(n));
         }
     }
-    if (groupNames.empty()) throw Error(path.string() + ": no [group] (see bench/sweeps/README.md)");
+    if (groupNames.empty())
+        throw Error(path.string() + ": no [group] (see bench/sweeps/README.md)");
     for (size_t i = 0; i < groupNames.size(); ++i) {
         SweepGroup g = defaults;
         g.name = groupNames[i];
@@ -314,7 +321,8 @@ std::string Cell::batchKey() const {
     std::ostringstream k;
     k << scene << '|' << o.bounces << '|' << o.shadowSamples << '|' << o.aa << '|' << int(o.layout)
       << '|' << o.memoryBudget << '|' << o.adaptiveAa << '|' << repeats << '|' << warmup << '|'
-      << countRays << '|' << images << '|' << o.maxLaunchMs << pipelineOptionsKey(o.pipelineOptions);
+      << countRays << '|' << images << '|' << o.maxLaunchMs
+      << pipelineOptionsKey(o.pipelineOptions);
     // A cell that may be skipped depends on the smaller sizes' outcome: one size per batch.
     if (stopAfterFailure) k << '|' << o.width << 'x' << o.height;
     return k.str();
@@ -325,8 +333,8 @@ std::string Cell::key() const { return std::string(pipeline) + '|' + settingKey(
 std::string Cell::label() const {
     const RenderOptions& o = options;
     std::ostringstream l;
-    l << scene << ' ' << pipeline << ' ' << o.width << 'x' << o.height << " b"
-      << o.bounces << " s" << o.shadowSamples << " aa" << o.aa;
+    l << scene << ' ' << pipeline << ' ' << o.width << 'x' << o.height << " b" << o.bounces << " s"
+      << o.shadowSamples << " aa" << o.aa;
     if (accelApplies) l << ' ' << accelName(o.accel);
     if (o.layout == RenderOptions::Layout::Weighted) l << " weighted";
     if (o.adaptiveAa) l << " adaptive";
@@ -355,8 +363,8 @@ std::vector<Cell> expandCells(const SweepConfig& config,
             auto orDefault = [](const std::vector<int>& v, int def) {
                 return v.empty() ? std::vector<int>{def} : v;
             };
-            auto sizes = g.sizes.empty() ? std::vector<std::pair<int, int>>{{d.width, d.height}}
-                                         : g.sizes;
+            auto sizes =
+                g.sizes.empty() ? std::vector<std::pair<int, int>>{{d.width, d.height}} : g.sizes;
             auto accels = g.accels.empty() ? std::vector<RenderOptions::Accel>{d.accel} : g.accels;
             // The grid and the BVH hold spheres and triangles, bv bounds meshes; a scene of
             // planes alone runs the same program whatever the accel.
@@ -394,8 +402,8 @@ std::vector<Cell> expandCells(const SweepConfig& config,
                                     c.images = g.images;
                                     c.repeats = g.repeats > 0 ? g.repeats : config.repeats;
                                     c.warmup = g.warmup >= 0 ? g.warmup : config.warmup;
-                                    c.countRays = g.countRays >= 0 ? g.countRays == 1
-                                                                   : config.countRays;
+                                    c.countRays =
+                                        g.countRays >= 0 ? g.countRays == 1 : config.countRays;
                                     auto [it, fresh] = index.emplace(c.key(), cells.size());
                                     if (fresh) {
                                         cells.push_back(c);
@@ -406,7 +414,8 @@ std::vector<Cell> expandCells(const SweepConfig& config,
                                         old.groups.end())
                                         old.groups.push_back(g.name);
                                     old.groupIds.push_back(int(gi));
-                                    old.stopAfterFailure = old.stopAfterFailure || g.stopAfterFailure;
+                                    old.stopAfterFailure =
+                                        old.stopAfterFailure || g.stopAfterFailure;
                                     if (g.maxFrameS > 0)
                                         old.maxFrameS = old.maxFrameS > 0
                                                             ? std::min(old.maxFrameS, g.maxFrameS)
@@ -421,7 +430,8 @@ std::vector<Cell> expandCells(const SweepConfig& config,
     return cells;
 }
 
-std::string skipReason(const SweepConfig& config, const Cell& cell, const std::vector<Stop>& stops) {
+std::string skipReason(const SweepConfig& config, const Cell& cell,
+                       const std::vector<Stop>& stops) {
     // Every setting but size and bounce limit must match: the same key with those blanked.
     auto others = [](const Cell& c) {
         Cell o = c;
@@ -436,13 +446,14 @@ std::string skipReason(const SweepConfig& config, const Cell& cell, const std::v
         if (b.width < a.width || b.height < a.height || b.bounces < a.bounces) continue;
         bool shared = false;
         for (int g : s.cell.groupIds)
-            if (g >= 0 && size_t(g) < config.groups.size() && config.groups[size_t(g)].stopAfterFailure &&
+            if (g >= 0 && size_t(g) < config.groups.size() &&
+                config.groups[size_t(g)].stopAfterFailure &&
                 std::find(cell.groupIds.begin(), cell.groupIds.end(), g) != cell.groupIds.end())
                 shared = true;
         if (!shared) continue;
         std::ostringstream why;
-        why << cell.pipeline << " stopped at " << a.width << 'x' << a.height << " B="
-            << a.bounces << " (" << s.why << "); this setting is no smaller";
+        why << cell.pipeline << " stopped at " << a.width << 'x' << a.height << " B=" << a.bounces
+            << " (" << s.why << "); this setting is no smaller";
         return why.str();
     }
     return "";

@@ -9,8 +9,8 @@
 #include <vector>
 
 #include "core/pipeline.h"
-#include "pipelines/registry.h"
 #include "core/scene.h"
+#include "pipelines/registry.h"
 
 namespace rt::bench {
 
@@ -25,7 +25,7 @@ struct SweepGroup {
     RenderOptions::Layout layout = RenderOptions::Layout::Tree;
     size_t memoryBudget = 0;
     bool adaptive = false;
-    bool images = false;  // keep the frame for the accuracy comparison
+    bool images = false;            // keep the frame for the accuracy comparison
     int repeats = -1, warmup = -1;  // -1: the sweep's
     int countRays = -1;             // -1: the sweep's, else 0 or 1
     double maxLaunchMs = 0;         // split frames so no launch runs past this (0: one launch)
@@ -35,16 +35,16 @@ struct SweepGroup {
     // Once a pipeline fails at a setting (or a frame takes longer than maxFrameS), the group's
     // settings of that pipeline that are no smaller (size, bounce limit) are skipped.
     bool stopAfterFailure = false;
-    double maxFrameS = 0;           // 0: no cap
+    double maxFrameS = 0;  // 0: no cap
 };
 
 struct SweepConfig {
-    std::string name;                 // file stem: "quick", "full"
+    std::string name;  // file stem: "quick", "full"
     std::filesystem::path path;
-    std::string text;                 // the file as read, recorded with the results
-    int repeats = 5;                  // timed frames per cell; the median is reported
-    int warmup = 2;                   // untimed frames first (program build, allocation, caches)
-    bool countRays = true;            // one extra untimed frame with device ray counters
+    std::string text;       // the file as read, recorded with the results
+    int repeats = 5;        // timed frames per cell; the median is reported
+    int warmup = 2;         // untimed frames first (program build, allocation, caches)
+    bool countRays = true;  // one extra untimed frame with device ray counters
     // The converged reference the accuracy group is compared against (CPU, double precision).
     int referenceBounces = 12, referenceShadowSamples = 64, referenceAa = 8;
     std::vector<SweepGroup> groups;
@@ -64,22 +64,22 @@ std::vector<std::pair<std::string, std::string>> listSweeps();
 // One measured cell: a scene, a pipeline and fully resolved render options.
 struct Cell {
     std::string scene;
-    std::string pipeline;             // a registered name
+    std::string pipeline;  // a registered name
     RenderOptions options;
     std::vector<std::string> groups;  // every group that asked for this cell
     bool images = false;
     int repeats = 5, warmup = 2;
-    int branching = 1;                // the scene's C, for cost estimates
+    int branching = 1;  // the scene's C, for cost estimates
     bool countRays = true;
-    bool accelApplies = true;         // false when the scene has no spheres or triangles
-    std::vector<int> groupIds;        // indices into SweepConfig::groups, parallel to `groups`
-    bool stopAfterFailure = false;    // some group of this cell stops after a failure
-    double maxFrameS = 0;             // the smallest cap of its groups (0: none)
-    std::string key() const;          // identity, for de-duplication
-    std::string settingKey() const;   // the same without the pipeline
+    bool accelApplies = true;        // false when the scene has no spheres or triangles
+    std::vector<int> groupIds;       // indices into SweepConfig::groups, parallel to `groups`
+    bool stopAfterFailure = false;   // some group of this cell stops after a failure
+    double maxFrameS = 0;            // the smallest cap of its groups (0: none)
+    std::string key() const;         // identity, for de-duplication
+    std::string settingKey() const;  // the same without the pipeline
     // Cells of one batch differ only in pipeline, accel and size: their frames are interleaved.
     std::string batchKey() const;
-    std::string label() const;        // "cornell wave 1280x720 b4 s8 aa1 bv"
+    std::string label() const;  // "cornell wave 1280x720 b4 s8 aa1 bv"
 };
 
 // Expands the groups over the loaded scenes' defaults, merging duplicates (file order kept).

@@ -23,7 +23,7 @@ namespace rt::bench {
 double roughCost(const Cell& c);
 
 class SweepEta {
-public:
+  public:
     // What a cell's build is keyed by: cells of one program key build once (the context keeps
     // the programs); settings outside it (size, samples, frames) never change a program.
     static std::string programKey(const Cell& c);
@@ -46,7 +46,7 @@ public:
 
     int cellsMeasured() const { return int(samples_.size()); }
 
-private:
+  private:
     static constexpr int kFactors = 6;
     using Levels = std::array<std::string, kFactors>;
     static Levels levels(const Cell& c);

@@ -41,10 +41,14 @@ std::string utcNow() {
 // shown is of cells finished, and the time left is the not yet started cells' estimate shared
 // out over the workers. Callers hold the sweep's lock.
 class Progress {
-public:
+  public:
     Progress(const std::vector<Cell>& cells, const std::vector<size_t>& toRun, int workers)
-        : cells_(cells), pending_(cells.size(), 0), total_(toRun.size()), workers_(workers),
-          tty_(isatty(fileno(stderr))), start_(std::chrono::steady_clock::now()) {
+        : cells_(cells),
+          pending_(cells.size(), 0),
+          total_(toRun.size()),
+          workers_(workers),
+          tty_(isatty(fileno(stderr))),
+          start_(std::chrono::steady_clock::now()) {
         // Cells that stop-after-failure may skip are counted in: the ETA is then a bound.
         for (size_t i : toRun) {
             pending_[i] = 1;
@@ -86,9 +90,9 @@ public:
         const Cell& c = cells_[i];
         pending_[i] = 0;
         ++done_;
-        std::fprintf(stderr, "%s[%zu/%zu] %s: skipped | elapsed %s\n    %s\n", tty_ ? "\r\033[K" : "",
-                     done_, total_, c.label().c_str(), formatDuration(elapsed()).c_str(),
-                     why.c_str());
+        std::fprintf(stderr, "%s[%zu/%zu] %s: skipped | elapsed %s\n    %s\n",
+                     tty_ ? "\r\033[K" : "", done_, total_, c.label().c_str(),
+                     formatDuration(elapsed()).c_str(), why.c_str());
         std::fflush(stderr);
     }
     // seconds: the cell's share of its batch, buildSeconds of them in program builds.
@@ -113,7 +117,7 @@ public:
         if (tty_) std::fprintf(stderr, "\n");
     }
 
-private:
+  private:
     const std::vector<Cell>& cells_;
     std::vector<char> pending_;  // to run and not yet started
     size_t total_, done_ = 0;
@@ -151,7 +155,9 @@ nlohmann::json rowJson(const SweepConfig& config, const Cell& c, const Measureme
         {"offset", offsetName(o.offset)},
         {"warmup", c.warmup},
         {"repeats", c.repeats},
-        {"status", m.ok ? "ok" : skipped.empty() ? "error" : "skipped"},
+        {"status", m.ok              ? "ok"
+                   : skipped.empty() ? "error"
+                                     : "skipped"},
         {"error", m.error},
     };
     if (c.stopAfterFailure) row["stop_after_failure"] = true;
@@ -159,8 +165,8 @@ nlohmann::json rowJson(const SweepConfig& config, const Cell& c, const Measureme
     if (!skipped.empty()) row["skip_reason"] = skipped;
     // The kind is the one the error was thrown with (rt::Error's FailureKind), never read from
     // the message; a cell that failed without one is "other".
-    FailureKind failure = !skipped.empty() ? FailureKind::Skipped
-                          : m.ok           ? FailureKind::None
+    FailureKind failure = !skipped.empty()                 ? FailureKind::Skipped
+                          : m.ok                           ? FailureKind::None
                           : m.failure == FailureKind::None ? FailureKind::Other
                                                            : m.failure;
     row["failure"] = failureKindName(failure);
@@ -271,7 +277,8 @@ fs::path scenePath(const std::string& name, const fs::path& sceneDir) {
     fs::path p(name);
     if (p.has_extension()) return p;
     if (!sceneDir.empty()) return sceneDir / (name + ".json");
-    if (fs::exists(fs::path("scenes") / (name + ".json"))) return fs::path("scenes") / (name + ".json");
+    if (fs::exists(fs::path("scenes") / (name + ".json")))
+        return fs::path("scenes") / (name + ".json");
     return fs::path(RTLAB_SOURCE_DIR) / "scenes" / (name + ".json");
 }
 
@@ -298,14 +305,16 @@ nlohmann::json sweepSettingsJson(const SweepConfig& c) {
     return {{"repeats", c.repeats},
             {"warmup", c.warmup},
             {"count_rays", c.countRays},
-            {"reference", {{"pipeline", "cpu"},
-                           {"bounces", c.referenceBounces},
-                           {"shadow_samples", c.referenceShadowSamples},
-                           {"aa", c.referenceAa}}},
+            {"reference",
+             {{"pipeline", "cpu"},
+              {"bounces", c.referenceBounces},
+              {"shadow_samples", c.referenceShadowSamples},
+              {"aa", c.referenceAa}}},
             {"groups", groups},
-            {"timing", "device time = sum of the frame's kernels by OpenCL profiling events; "
-                       "median of `repeats` frames after `warmup` untimed ones; rays counted "
-                       "in one further untimed frame"}};
+            {"timing",
+             "device time = sum of the frame's kernels by OpenCL profiling events; "
+             "median of `repeats` frames after `warmup` untimed ones; rays counted "
+             "in one further untimed frame"}};
 }
 
 namespace {
@@ -324,9 +333,9 @@ struct SweepState {
     size_t nextUnit = 0;
     bool started = false, stop = false;  // a batch began; the time limit (or an error) stops all
     std::exception_ptr error;
-    std::map<size_t, Result> results;    // by cell index, until every earlier cell is out
-    std::vector<size_t> order;           // the cells to run, in cell order
-    size_t emitted = 0;                  // order[0, emitted) went to the sink
+    std::map<size_t, Result> results;  // by cell index, until every earlier cell is out
+    std::vector<size_t> order;         // the cells to run, in cell order
+    size_t emitted = 0;                // order[0, emitted) went to the sink
 };
 
 }  // namespace
@@ -361,8 +370,10 @@ SweepSummary runSweep(const SweepConfig& config, const SweepRunOptions& options,
     SweepSummary summary;
     for (size_t k = 0; k < cells.size(); ++k) {
         if (!inShard[k]) continue;
-        if (options.skip.count(cells[k].key())) ++summary.skipped;
-        else state.order.push_back(k);
+        if (options.skip.count(cells[k].key()))
+            ++summary.skipped;
+        else
+            state.order.push_back(k);
     }
 
     std::vector<DeviceInfo> devices = options.devices.empty()
@@ -397,9 +408,11 @@ SweepSummary runSweep(const SweepConfig& config, const SweepRunOptions& options,
             list.back()["device_index"] = devices[w].index;
             on += (w ? ", d" : " d") + std::to_string(w) + " = " + devices[w].label();
             if (devices[w].name != devices.front().name)
-                std::fprintf(stderr, "sweep %s: warning: the devices differ (%s, %s); each row "
-                                     "names its own\n", config.name.c_str(),
-                             devices.front().name.c_str(), devices[w].name.c_str());
+                std::fprintf(stderr,
+                             "sweep %s: warning: the devices differ (%s, %s); each row "
+                             "names its own\n",
+                             config.name.c_str(), devices.front().name.c_str(),
+                             devices[w].name.c_str());
         }
         summary.meta["devices"] = list;
     }
@@ -459,8 +472,9 @@ SweepSummary runSweep(const SweepConfig& config, const SweepRunOptions& options,
                     for (size_t k : run) predicted += progress.estimate(k);
                     if (options.timeLimitS > 0 && state.started &&
                         progress.elapsed() + predicted > options.timeLimitS) {
-                        std::fprintf(stderr, "\nsweep %s: stopping before %s, the time limit of "
-                                             "%s would pass\n",
+                        std::fprintf(stderr,
+                                     "\nsweep %s: stopping before %s, the time limit of "
+                                     "%s would pass\n",
                                      config.name.c_str(), cells[run.front()].label().c_str(),
                                      formatDuration(options.timeLimitS).c_str());
                         summary.complete = false;
@@ -500,23 +514,28 @@ SweepSummary runSweep(const SweepConfig& config, const SweepRunOptions& options,
                         return measureCells(*ctx, *scene, variants, warmup, repeats, countRays,
                                             keep, cap);
                     });
-                    seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+                    seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0)
+                                  .count();
                     if (got) {
                         for (size_t r = 0; r < run.size(); ++r) ms[run[r]] = std::move((*got)[r]);
                     } else {
                         // The thread keeps ctx and scene; this worker never touches ctx again.
                         const std::string compiling = ctx->building();
                         char head[160];
-                        std::snprintf(head, sizeof head, "did not finish within %g s (cell time "
-                                      "limit %g s%s): ", limit, options.cellTimeoutS,
+                        std::snprintf(head, sizeof head,
+                                      "did not finish within %g s (cell time "
+                                      "limit %g s%s): ",
+                                      limit, options.cellTimeoutS,
                                       run.size() > 1 ? (" x " + std::to_string(run.size()) +
-                                                        " cells measured together").c_str()
+                                                        " cells measured together")
+                                                           .c_str()
                                                      : "");
-                        std::string why = head + (compiling.empty()
-                                                      ? std::string("the device or its driver "
+                        std::string why =
+                            head + (compiling.empty() ? std::string("the device or its driver "
                                                                     "did not return")
                                                       : "the OpenCL compiler did not finish "
-                                                        "building " + compiling);
+                                                        "building " +
+                                                            compiling);
                         for (size_t k : run) {
                             Measurement& m = ms[k];
                             m.error = why;
@@ -530,9 +549,10 @@ SweepSummary runSweep(const SweepConfig& config, const SweepRunOptions& options,
                         } else if (compiling.empty()) {
                             // What the device runs, or the driver's state, is unknown: what is
                             // measured after it could not be trusted. Stop here.
-                            std::fprintf(stderr, "\nsweep %s: %s timed out on the device; "
-                                                 "stopping (rows so far are written; --resume "
-                                                 "goes on past it)\n",
+                            std::fprintf(stderr,
+                                         "\nsweep %s: %s timed out on the device; "
+                                         "stopping (rows so far are written; --resume "
+                                         "goes on past it)\n",
                                          config.name.c_str(), cells[run.front()].label().c_str());
                             summary.complete = false;
                             summary.meta["stopped_by"] = "timeout: " + cells[run.front()].label();
@@ -566,7 +586,8 @@ SweepSummary runSweep(const SweepConfig& config, const SweepRunOptions& options,
                     if (!skipWhy[k].empty()) {
                         progress.skipped(k, skipWhy[k]);
                         ++summary.notRun;
-                        row = rowJson(config, cells[k], m, where, sceneInfo.at(c.scene), skipWhy[k]);
+                        row =
+                            rowJson(config, cells[k], m, where, sceneInfo.at(c.scene), skipWhy[k]);
                         row["cell_index"] = k;
                         state.results[k] = {row, std::nullopt};
                         continue;
@@ -588,16 +609,19 @@ SweepSummary runSweep(const SweepConfig& config, const SweepRunOptions& options,
                         row["image_compared_with"] = it->second.first;
                         row["image_max_diff"] = it->second.second;
                         if (it->second.second != 0)
-                            std::fprintf(stderr, "    WARNING: %s and %s frames differ by up to %g\n",
+                            std::fprintf(stderr,
+                                         "    WARNING: %s and %s frames differ by up to %g\n",
                                          cells[k].pipeline.c_str(), it->second.first.c_str(),
                                          it->second.second);
                     }
                     if (cells[k].stopAfterFailure) {
                         if (!m.ok) {
-                            stops.push_back({cells[k], std::string("error: ") + failureKindName(m.failure)});
+                            stops.push_back(
+                                {cells[k], std::string("error: ") + failureKindName(m.failure)});
                         } else if (cells[k].maxFrameS > 0 && m.wallMs > cells[k].maxFrameS * 1e3) {
                             char why[96];
-                            std::snprintf(why, sizeof why, "a frame took %.1f s, over max-frame-s %g",
+                            std::snprintf(why, sizeof why,
+                                          "a frame took %.1f s, over max-frame-s %g",
                                           m.wallMs / 1e3, cells[k].maxFrameS);
                             stops.push_back({cells[k], why});
                         }

@@ -7,10 +7,9 @@
 
 #include <filesystem>
 #include <functional>
+#include <nlohmann/json.hpp>
 #include <set>
 #include <string>
-
-#include <nlohmann/json.hpp>
 
 #include "bench/sweep_config.h"
 #include "bench/sweep_schedule.h"
@@ -20,22 +19,22 @@
 namespace rt::bench {
 
 struct SweepRunOptions {
-    std::string device;                 // --device spec (empty: $RTLAB_DEVICE, else first GPU)
+    std::string device;  // --device spec (empty: $RTLAB_DEVICE, else first GPU)
     // --devices spec (bench/sweep_schedule.h): when set, one worker and context per device
     // take work units from a shared queue; rows still reach the sink in cell order.
     std::string devices;
-    Shard shard;                        // --shard i/N: only this share of the work units
-    std::filesystem::path sceneDir;     // <scene>.json lives here; empty: scenes/ of the checkout
-    ImageReader readImage;              // for cubemap faces
+    Shard shard;                     // --shard i/N: only this share of the work units
+    std::filesystem::path sceneDir;  // <scene>.json lives here; empty: scenes/ of the checkout
+    ImageReader readImage;           // for cubemap faces
     KernelSources sources;
-    double timeLimitS = 0;              // stop before a cell that would end past this; 0 = none
+    double timeLimitS = 0;  // stop before a cell that would end past this; 0 = none
     // A cell that has not finished after this many seconds (k cells measured interleaved: k
     // times as long) is recorded as failed with "timeout". When the OpenCL compiler was what
     // did not return, the sweep goes on in a fresh context; when the device or driver did, it
     // stops there with every row so far written (--resume then goes on past that cell).
     // 0 = no limit.
     double cellTimeoutS = 0;
-    std::set<std::string> skip;         // Cell::key()s measured by an earlier run (--resume)
+    std::set<std::string> skip;  // Cell::key()s measured by an earlier run (--resume)
 };
 
 // row: one cell's results (settings, times, counters, device, commit); image: its frame when
@@ -43,7 +42,7 @@ struct SweepRunOptions {
 using RowSink = std::function<void(const nlohmann::json& row, const Image* image)>;
 
 struct SweepSummary {
-    nlohmann::json meta;   // sweep, config text, device, commit, settings, start and end time
+    nlohmann::json meta;  // sweep, config text, device, commit, settings, start and end time
     int cells = 0, measured = 0, failed = 0, skipped = 0;
     int notRun = 0;        // skipped by stop-after-failure (a row with status "skipped" each)
     int timedOut = 0;      // cells over the cell time limit (counted in `failed` too)

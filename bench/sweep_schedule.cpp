@@ -61,8 +61,10 @@ std::vector<DeviceInfo> selectDevices(const std::string& spec) {
         size_t b = spec.find(',', a);
         if (b == std::string::npos) b = spec.size();
         std::string one = spec.substr(a, b - a);
-        if (one.empty()) throw Error("--devices " + spec + ": an empty entry (expected all, or "
-                                     "indices and names separated by commas)");
+        if (one.empty())
+            throw Error("--devices " + spec +
+                        ": an empty entry (expected all, or "
+                        "indices and names separated by commas)");
         try {
             out.push_back(selectDevice(one));
         } catch (const Error& e) {

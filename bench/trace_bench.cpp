@@ -11,23 +11,22 @@
 // work-item (core/cl/accel_wide_packet.cl, for CPU devices); its results are also compared ray
 // by ray with the single-ray wide kernels, which they must equal.
 #include <CLI/CLI.hpp>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdlib>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <thread>
 
+#include "apps/parse_error.h"
 #include "bench/embree_peer.h"
 #include "bench/measure.h"
 #include "bench/ray_batch.h"
 #include "bench/trace_visits.h"
-#include "apps/parse_error.h"
 #include "core/accel.h"
 #include "core/cl_runtime.h"
 #include "core/error.h"
@@ -57,8 +56,8 @@ std::vector<BatchRay> primaryRays(const Scene& s, int W, int H) {
                     float oy = ny * ca + D * sa, oz = D * ca - ny * sa;
                     float dx = nx * cb + oz * sb, dz = oz * cb - nx * sb;
                     float len = std::sqrt(dx * dx + oy * oy + dz * dz);
-                    rays.push_back({c.position.x, c.position.y, c.position.z, INFINITY,
-                                    dx / len, oy / len, dz / len, 0.f});
+                    rays.push_back({c.position.x, c.position.y, c.position.z, INFINITY, dx / len,
+                                    oy / len, dz / len, 0.f});
                 }
     return rays;
 }
@@ -173,22 +172,25 @@ bool report(const Args& a, const Scene& scene, const RenderOptions& o, ClContext
         return m > 0 ? double(n) / m * 1e-6 : 0.0;
     };
     auto allowed = [](size_t n) { return std::max<long long>(2, (long long)(1e-4 * double(n))); };
-    std::printf("rtlab-trace-bench: %s, %dx%d, %zu primary rays (%.1f%% hit), %zu shadow rays to %zu "
-                "light(s), %d rounds interleaved\n",
-                scene.name.c_str(), o.width, o.height, primary.size(),
-                100.0 * double(peers[0].hits) / double(primary.size()), shadow.size(),
-                scene.lights.size(), a.rounds);
-    std::printf("rtlab on %s; %s\n\n", cl.device().label().c_str(),
-                embree ? ("Embree " + embree->version() + " on " + std::to_string(a.threads) +
-                          " threads").c_str()
-                       : "built without Embree: ratios against the first structure");
+    std::printf(
+        "rtlab-trace-bench: %s, %dx%d, %zu primary rays (%.1f%% hit), %zu shadow rays to %zu "
+        "light(s), %d rounds interleaved\n",
+        scene.name.c_str(), o.width, o.height, primary.size(),
+        100.0 * double(peers[0].hits) / double(primary.size()), shadow.size(), scene.lights.size(),
+        a.rounds);
+    std::printf(
+        "rtlab on %s; %s\n\n", cl.device().label().c_str(),
+        embree ? ("Embree " + embree->version() + " on " + std::to_string(a.threads) + " threads")
+                     .c_str()
+               : "built without Embree: ratios against the first structure");
     std::string versus = "x " + peers[0].name.substr(peers[0].name.find(' ') + 1);
     std::printf("%-15s %10s %14s %14s %10s %10s %9s %9s\n", "peer", "build ms", "primary Mray/s",
                 "shadow Mray/s", "hits", "occluded", versus.c_str(), "mismatch");
     bool agree = true;
     std::string kernelOnly, sameAsSingle;
     nlohmann::json rows = nlohmann::json::array();
-    double ep = mrays(primary.size(), peers[0].primaryS), es = mrays(shadow.size(), peers[0].shadowS);
+    double ep = mrays(primary.size(), peers[0].primaryS),
+           es = mrays(shadow.size(), peers[0].shadowS);
     for (const PeerResult& p : peers) {
         double mp = mrays(primary.size(), p.primaryS), ms = mrays(shadow.size(), p.shadowS);
         bool ok = p.primaryMismatch <= allowed(primary.size()) &&
@@ -196,10 +198,12 @@ bool report(const Args& a, const Scene& scene, const RenderOptions& o, ClContext
         agree = agree && ok;
         std::printf("%-15s %10.1f %14.2f %14.2f %10lld %10lld %4.2f/%4.2f %4lld/%lld%s\n",
                     p.name.c_str(), p.buildMs, mp, ms, p.hits, p.blocked, ep > 0 ? mp / ep : 0,
-                    es > 0 ? ms / es : 0, p.primaryMismatch, p.shadowMismatch, ok ? "" : "  DISAGREE");
+                    es > 0 ? ms / es : 0, p.primaryMismatch, p.shadowMismatch,
+                    ok ? "" : "  DISAGREE");
         if (!p.primaryDevS.empty())
-            kernelOnly += " " + p.name + " " + std::to_string(mrays(primary.size(), p.primaryDevS)) +
-                          " / " + std::to_string(mrays(shadow.size(), p.shadowDevS)) + ";";
+            kernelOnly += " " + p.name + " " +
+                          std::to_string(mrays(primary.size(), p.primaryDevS)) + " / " +
+                          std::to_string(mrays(shadow.size(), p.shadowDevS)) + ";";
         rows.push_back({{"peer", p.name},
                         {"build_ms", p.buildMs},
                         {"primary_mrays_per_s", mp},
@@ -241,17 +245,16 @@ bool report(const Args& a, const Scene& scene, const RenderOptions& o, ClContext
     // tree it collapses, over the same triangle order.
     AccelData wide = buildAccel(scene, RenderOptions::Accel::Wide);
     auto costJson = [&](const char* label, const TraversalCost& pc, const TraversalCost& sc) {
-        std::printf("%s, per ray (host count over %zu + %zu rays): primary %.1f nodes, %.1f "
-                    "triangles, %.0f B; shadow %.1f nodes, %.1f triangles, %.0f B\n",
-                    label, pc.rays, sc.rays, pc.nodes, pc.triangles, pc.bytes, sc.nodes,
-                    sc.triangles, sc.bytes);
-        return nlohmann::json{{"primary_nodes_per_ray", pc.nodes},
-                              {"primary_triangles_per_ray", pc.triangles},
-                              {"primary_bytes_per_ray", pc.bytes},
-                              {"shadow_nodes_per_ray", sc.nodes},
-                              {"shadow_triangles_per_ray", sc.triangles},
-                              {"shadow_bytes_per_ray", sc.bytes},
-                              {"rays_sampled", pc.rays + sc.rays}};
+        std::printf(
+            "%s, per ray (host count over %zu + %zu rays): primary %.1f nodes, %.1f "
+            "triangles, %.0f B; shadow %.1f nodes, %.1f triangles, %.0f B\n",
+            label, pc.rays, sc.rays, pc.nodes, pc.triangles, pc.bytes, sc.nodes, sc.triangles,
+            sc.bytes);
+        return nlohmann::json{
+            {"primary_nodes_per_ray", pc.nodes},        {"primary_triangles_per_ray", pc.triangles},
+            {"primary_bytes_per_ray", pc.bytes},        {"shadow_nodes_per_ray", sc.nodes},
+            {"shadow_triangles_per_ray", sc.triangles}, {"shadow_bytes_per_ray", sc.bytes},
+            {"rays_sampled", pc.rays + sc.rays}};
     };
     std::printf("\n");
     nlohmann::json bvhCost = costJson("binary BVH", binaryTraversalCost(wide, primary, false),
@@ -273,52 +276,53 @@ bool report(const Args& a, const Scene& scene, const RenderOptions& o, ClContext
     for (int size : sizes) {
         PacketCost pc = widePacketTraversalCost(wide, primary, false, size);
         PacketCost sc = widePacketTraversalCost(wide, shadow, true, size);
-        std::printf("wide BVH, packets of %d (host count over %zu + %zu packets): primary %.1f "
-                    "nodes, %.1f triangles per packet, %.0f%% / %.0f%% of its rays served per node "
-                    "/ triangle; shadow %.1f nodes, %.1f triangles, %.0f%% / %.0f%%\n",
-                    size, pc.packets, sc.packets, pc.nodes, pc.triangles, 100 * pc.nodeLanes,
-                    100 * pc.triangleLanes, sc.nodes, sc.triangles, 100 * sc.nodeLanes,
-                    100 * sc.triangleLanes);
-        packetCost["p" + std::to_string(size)] = {
-            {"primary_nodes_per_packet", pc.nodes},
-            {"primary_triangles_per_packet", pc.triangles},
-            {"primary_node_lane_use", pc.nodeLanes},
-            {"primary_triangle_lane_use", pc.triangleLanes},
-            {"shadow_nodes_per_packet", sc.nodes},
-            {"shadow_triangles_per_packet", sc.triangles},
-            {"shadow_node_lane_use", sc.nodeLanes},
-            {"shadow_triangle_lane_use", sc.triangleLanes},
-            {"packets_sampled", pc.packets + sc.packets}};
+        std::printf(
+            "wide BVH, packets of %d (host count over %zu + %zu packets): primary %.1f "
+            "nodes, %.1f triangles per packet, %.0f%% / %.0f%% of its rays served per node "
+            "/ triangle; shadow %.1f nodes, %.1f triangles, %.0f%% / %.0f%%\n",
+            size, pc.packets, sc.packets, pc.nodes, pc.triangles, 100 * pc.nodeLanes,
+            100 * pc.triangleLanes, sc.nodes, sc.triangles, 100 * sc.nodeLanes,
+            100 * sc.triangleLanes);
+        packetCost["p" + std::to_string(size)] = {{"primary_nodes_per_packet", pc.nodes},
+                                                  {"primary_triangles_per_packet", pc.triangles},
+                                                  {"primary_node_lane_use", pc.nodeLanes},
+                                                  {"primary_triangle_lane_use", pc.triangleLanes},
+                                                  {"shadow_nodes_per_packet", sc.nodes},
+                                                  {"shadow_triangles_per_packet", sc.triangles},
+                                                  {"shadow_node_lane_use", sc.nodeLanes},
+                                                  {"shadow_triangle_lane_use", sc.triangleLanes},
+                                                  {"packets_sampled", pc.packets + sc.packets}};
     }
     if (!a.out.empty()) {
         nlohmann::json doc = bench::deviceJson(cl.device());
-        doc.update({{"bench", "trace-peer"},
-                    {"scene", scene.name},
-                    {"scene_file", a.scene},
-                    {"width", o.width},
-                    {"height", o.height},
-                    {"camera_radii", a.distance},
-                    {"camera_pitch_deg", scene.camera.pitch * 180.0 / M_PI},
-                    {"triangles", scene.triangles.size()},
-                    {"primary_rays", primary.size()},
-                    {"shadow_rays", shadow.size()},
-                    {"rounds", a.rounds},
-                    {"local_size", a.local},
-                    {"coherent_rays", a.coherent},
-                    // Which kernel sources ran: the embedded ones, or a tree ($RTLAB_KERNEL_DIR),
-                    // and any extra compiler options ($RTLAB_CL_OPTIONS), for A/B runs.
-                    {"kernel_sources", std::getenv("RTLAB_KERNEL_DIR") ? std::getenv("RTLAB_KERNEL_DIR")
-                                                                      : "embedded"},
-                    {"cl_options", std::getenv("RTLAB_CL_OPTIONS") ? std::getenv("RTLAB_CL_OPTIONS") : ""},
-                    {"reference", peers[0].name},
-                    {"embree_version", embree ? embree->version() : "none"},
-                    {"embree_threads", embree ? a.threads : 0},
-                    {"agree", agree},
-                    {"peers", rows},
-                    {"bvh_cost", bvhCost},
-                    {"cwbvh_cost", cwCost},
-                    {"wide_cost", cost},
-                    {"wide_packet_cost", packetCost}});
+        doc.update(
+            {{"bench", "trace-peer"},
+             {"scene", scene.name},
+             {"scene_file", a.scene},
+             {"width", o.width},
+             {"height", o.height},
+             {"camera_radii", a.distance},
+             {"camera_pitch_deg", scene.camera.pitch * 180.0 / M_PI},
+             {"triangles", scene.triangles.size()},
+             {"primary_rays", primary.size()},
+             {"shadow_rays", shadow.size()},
+             {"rounds", a.rounds},
+             {"local_size", a.local},
+             {"coherent_rays", a.coherent},
+             // Which kernel sources ran: the embedded ones, or a tree ($RTLAB_KERNEL_DIR),
+             // and any extra compiler options ($RTLAB_CL_OPTIONS), for A/B runs.
+             {"kernel_sources",
+              std::getenv("RTLAB_KERNEL_DIR") ? std::getenv("RTLAB_KERNEL_DIR") : "embedded"},
+             {"cl_options", std::getenv("RTLAB_CL_OPTIONS") ? std::getenv("RTLAB_CL_OPTIONS") : ""},
+             {"reference", peers[0].name},
+             {"embree_version", embree ? embree->version() : "none"},
+             {"embree_threads", embree ? a.threads : 0},
+             {"agree", agree},
+             {"peers", rows},
+             {"bvh_cost", bvhCost},
+             {"cwbvh_cost", cwCost},
+             {"wide_cost", cost},
+             {"wide_packet_cost", packetCost}});
         std::filesystem::create_directories(a.out);
         char radii[32] = "";
         if (a.distance > 0) std::snprintf(radii, sizeof radii, "-r%g", a.distance);
@@ -370,7 +374,8 @@ int run(const Args& a) {
     // with no divergence at all, against which the real rays' figure measures what it costs.
     for (size_t i = 0, n = size_t(a.coherent); n > 1 && i < primary.size(); i += n) {
         BatchRay middle = primary[std::min(primary.size() - 1, i + n / 2)];
-        std::fill(primary.begin() + long(i), primary.begin() + long(std::min(primary.size(), i + n)), middle);
+        std::fill(primary.begin() + long(i),
+                  primary.begin() + long(std::min(primary.size(), i + n)), middle);
     }
     cl::Buffer primaryIn = uploadRays(cl, primary);
     cl::Buffer tOut(cl.context(), CL_MEM_WRITE_ONLY, primary.size() * 4);
@@ -462,7 +467,8 @@ int main(int argc, char** argv) {
     app.add_option("--device", a.device, "OpenCL device for rtlab [cpu]");
     app.add_option("--rounds", a.rounds, "Timed rounds after one warm-up [5]")
         ->check(CLI::Range(1, 1000));
-    app.add_option("--threads", a.threads, "Embree threads [every core]")->check(CLI::Range(1, 4096));
+    app.add_option("--threads", a.threads, "Embree threads [every core]")
+        ->check(CLI::Range(1, 4096));
     app.add_option("--distance", a.distance,
                    "Camera distance from the mesh's centre in bounding radii [scene camera]")
         ->check(CLI::PositiveNumber);

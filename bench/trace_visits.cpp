@@ -20,7 +20,9 @@ struct V3 {
     double x, y, z;
 };
 V3 sub(const dev::Float3& a, const dev::Float3& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-V3 cross(V3 a, V3 b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
+V3 cross(V3 a, V3 b) {
+    return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
 double dot(V3 a, V3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
 
 double hitTriangle(const dev::Triangle& t, const BatchRay& r) {
@@ -124,7 +126,8 @@ TraversalCost binaryTraversalCost(const AccelData& data, const std::vector<Batch
                 bool swap = tb < ta;
                 float tNear = swap ? tb : ta, tFar = swap ? ta : tb;
                 if (tNear != INFINITY) {
-                    if (tFar != INFINITY) stack[top] = swap ? n.first : n.first + 1, stackT[top++] = tFar;
+                    if (tFar != INFINITY)
+                        stack[top] = swap ? n.first : n.first + 1, stackT[top++] = tFar;
                     index = swap ? n.first + 1 : n.first;
                     continue;
                 }
@@ -142,8 +145,7 @@ TraversalCost binaryTraversalCost(const AccelData& data, const std::vector<Batch
     double n = double(cost.rays);
     cost.nodes = double(nodes) / n;
     cost.triangles = double(triangles) / n;
-    cost.bytes = (32.0 * double(cost.rays) + 64.0 * double(pairs)) / n +
-                 36 * cost.triangles;
+    cost.bytes = (32.0 * double(cost.rays) + 64.0 * double(pairs)) / n + 36 * cost.triangles;
     return cost;
 }
 
@@ -175,7 +177,8 @@ TraversalCost wideTraversalCost(const AccelData& data, const std::vector<BatchRa
             for (int k = 0; k < 4; ++k) {
                 if (n.count[k] != 0 || !(t[k] < best)) continue;
                 int j = m++;
-                for (; j > 0 && nearT[j - 1] > t[k]; --j) near[j] = near[j - 1], nearT[j] = nearT[j - 1];
+                for (; j > 0 && nearT[j - 1] > t[k]; --j)
+                    near[j] = near[j - 1], nearT[j] = nearT[j - 1];
                 near[j] = n.child[k], nearT[j] = t[k];
             }
             if (m > 0) {
@@ -230,7 +233,8 @@ TraversalCost cwbvhTraversalCost(const AccelData& data, const std::vector<BatchR
                 if ((slots & ~unsigned(n.innerMask)) >> k & 1)
                     entries |= ((2u << (n.meta[k] >> 5)) - 1u) << (n.meta[k] & 31);
             for (; entries && !done; entries &= entries - 1) {
-                const dev::CwbvhPrim& p = data.cwbvhPrims[size_t(n.primBase + std::countr_zero(entries))];
+                const dev::CwbvhPrim& p =
+                    data.cwbvhPrims[size_t(n.primBase + std::countr_zero(entries))];
                 if (p.ref < 0) continue;  // a sphere: not counted
                 done = testTriangle(data.triangles[size_t(p.ref)], r, anyHit, best, triangles);
             }
@@ -251,7 +255,8 @@ TraversalCost cwbvhTraversalCost(const AccelData& data, const std::vector<BatchR
             unsigned k = unsigned(std::countr_zero(groupBits & 0xFF));
             groupBits &= ~(1u << k);
             unsigned slot = k ^ octant;
-            index = int(groupBase + unsigned(std::popcount((groupBits >> 8) & ((1u << slot) - 1u))));
+            index =
+                int(groupBase + unsigned(std::popcount((groupBits >> 8) & ((1u << slot) - 1u))));
         }
     });
     cost.nodes = double(nodes) / double(cost.rays);

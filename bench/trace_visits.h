@@ -1,8 +1,8 @@
 // rtlab — the work one ray does in the binary and the wide BVHs (issue 18), counted on the host:
 // node visits, triangles tested and bytes fetched per ray, in the traversal order of
-// core/cl/accel.cl (Bvh_Query), core/cl/accel_wide.cl and core/cl/accel_cwbvh.cl; and per packet of rays in that of
-// core/cl/accel_wide_packet.cl, with the share of its rays each node and triangle serves.
-// rtlab-trace-bench prints it beside the rays/s, so that a missed figure names its bound.
+// core/cl/accel.cl (Bvh_Query), core/cl/accel_wide.cl and core/cl/accel_cwbvh.cl; and per packet of
+// rays in that of core/cl/accel_wide_packet.cl, with the share of its rays each node and triangle
+// serves. rtlab-trace-bench prints it beside the rays/s, so that a missed figure names its bound.
 #pragma once
 
 #include <vector>
@@ -15,8 +15,8 @@ namespace rt {
 struct TraversalCost {
     double nodes = 0;      // nodes visited per ray
     double triangles = 0;  // triangle tests per ray
-    double bytes = 0;      // node records and triangle vertices (36 B) read per ray (wide: 64 B a node)
-    size_t rays = 0;       // how many rays were followed (an even sample of the batch)
+    double bytes = 0;  // node records and triangle vertices (36 B) read per ray (wide: 64 B a node)
+    size_t rays = 0;   // how many rays were followed (an even sample of the batch)
 };
 
 // Binary BVH: nodes are inner and leaf visits; bytes count the root record (32 B), each inner
@@ -37,10 +37,10 @@ TraversalCost cwbvhTraversalCost(const AccelData& cwbvh, const std::vector<Batch
 // The packet traversal of core/cl/accel_wide_packet.cl (Wide_QueryPacket), `packet` consecutive
 // rays at a time: what a packet does, and how many of its rays each step serves.
 struct PacketCost {
-    double nodes = 0;      // nodes visited per packet
-    double triangles = 0;  // triangles tested per packet (each against every ray of it)
-    double nodeLanes = 0;  // of a visited node: the share of the packet's rays that enter it
-                           // before their current hit (the rest of the lanes ride along)
+    double nodes = 0;          // nodes visited per packet
+    double triangles = 0;      // triangles tested per packet (each against every ray of it)
+    double nodeLanes = 0;      // of a visited node: the share of the packet's rays that enter it
+                               // before their current hit (the rest of the lanes ride along)
     double triangleLanes = 0;  // of a tested triangle: the share of rays that enter its leaf
     size_t packets = 0;        // how many packets were followed (an even sample of the batch)
     int size = 0;              // rays per packet

@@ -37,14 +37,14 @@ struct AccelStats {
 struct AccelData {
     std::vector<dev::Sphere> spheres;
     std::vector<dev::Triangle> triangles;
-    std::vector<dev::MeshInstance> meshes;  // bounding spheres padded against rounding
-    std::vector<dev::Kdop> kdops;           // bv: one per mesh
-    std::vector<dev::BvhNode> bvh;          // bvh, wide: root at 0 (wide: the tree it collapses)
-    std::vector<dev::WideNode> wide;        // wide: root at 0, uploaded in place of bvh
-    std::vector<dev::CwbvhNode> cwbvh;      // cwbvh: root at 0, uploaded in place of bvh
-    std::vector<dev::CwbvhPrim> cwbvhPrims; // cwbvh: leaf entries, uploaded in place of cells
-    dev::Grid grid{};                       // grid: the cell layout of `cells`
-    std::vector<int> cells;                 // grid: cell c's refs are cells[cells[c]..cells[c+1])
+    std::vector<dev::MeshInstance> meshes;   // bounding spheres padded against rounding
+    std::vector<dev::Kdop> kdops;            // bv: one per mesh
+    std::vector<dev::BvhNode> bvh;           // bvh, wide: root at 0 (wide: the tree it collapses)
+    std::vector<dev::WideNode> wide;         // wide: root at 0, uploaded in place of bvh
+    std::vector<dev::CwbvhNode> cwbvh;       // cwbvh: root at 0, uploaded in place of bvh
+    std::vector<dev::CwbvhPrim> cwbvhPrims;  // cwbvh: leaf entries, uploaded in place of cells
+    dev::Grid grid{};                        // grid: the cell layout of `cells`
+    std::vector<int> cells;                  // grid: cell c's refs are cells[cells[c]..cells[c+1])
     std::vector<int> sphereSource, triangleSource;
     AccelStats stats;
 };

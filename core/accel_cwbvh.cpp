@@ -156,8 +156,8 @@ class Collapser {
                     if (taken[s]) continue;
                     float score = 0;
                     for (int a = 0; a < 3; ++a) {
-                        float d = (kids[i].box.lo[a] + kids[i].box.hi[a]) -
-                                  (node.lo[a] + node.hi[a]);
+                        float d =
+                            (kids[i].box.lo[a] + kids[i].box.hi[a]) - (node.lo[a] + node.hi[a]);
                         score += (s >> a & 1) ? d : -d;
                     }
                     if (bi < 0 || score > best) best = score, bi = int(i), bs = s;
@@ -206,7 +206,8 @@ class Collapser {
                 continue;
             }
             n.meta[s] = uint8_t(offset | (k.count - 1) << 5);
-            for (int i = k.first; i < k.first + k.count; ++i) prims_.push_back(primOf(i, k.spheres));
+            for (int i = k.first; i < k.first + k.count; ++i)
+                prims_.push_back(primOf(i, k.spheres));
             offset += k.count;
         }
         nodes_[index] = n;

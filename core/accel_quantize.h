@@ -106,8 +106,11 @@ class PathCheck {
     };
 
     PathCheck(const AccelData& data, size_t nodes, int stackLimit)
-        : data_(data), nodeSeen_(nodes), sphereSeen_(data.spheres.size()),
-          triangleSeen_(data.triangles.size()), stackLimit_(stackLimit) {}
+        : data_(data),
+          nodeSeen_(nodes),
+          sphereSeen_(data.spheres.size()),
+          triangleSeen_(data.triangles.size()),
+          stackLimit_(stackLimit) {}
 
     // visit(item, where) checks one node and push()es its inner children; it returns "" or the
     // first violation, as run() does.
@@ -129,7 +132,8 @@ class PathCheck {
     void push(Item item) { stack_.push_back(std::move(item)); }
 
     // Primitive p, a sphere or a triangle, in a leaf below the boxes `path`.
-    std::string place(bool sphere, size_t p, const std::vector<Box>& path, const std::string& where) {
+    std::string place(bool sphere, size_t p, const std::vector<Box>& path,
+                      const std::string& where) {
         int& seen = sphere ? sphereSeen_[p] : triangleSeen_[p];
         std::string what = (sphere ? "sphere " : "triangle ") + std::to_string(p);
         if (seen++) return what + " is in two leaves";

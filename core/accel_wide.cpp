@@ -56,7 +56,8 @@ class Collapser {
             int best = -1;
             for (int k = 0; k < int(kids.size()); ++k) {
                 const dev::BvhNode& c = bvh_[kids[k]];
-                if (c.count == 0 && (best < 0 || halfArea(boxOf(c)) > halfArea(boxOf(bvh_[kids[best]]))))
+                if (c.count == 0 &&
+                    (best < 0 || halfArea(boxOf(c)) > halfArea(boxOf(bvh_[kids[best]]))))
                     best = k;
             }
             if (best < 0) break;

@@ -167,8 +167,8 @@ std::vector<DeviceInfo> listDevices() {
             info.maxAlloc = d.getInfo<CL_DEVICE_MAX_MEM_ALLOC_SIZE>();
             info.localMem = d.getInfo<CL_DEVICE_LOCAL_MEM_SIZE>();
             info.maxWorkGroup = d.getInfo<CL_DEVICE_MAX_WORK_GROUP_SIZE>();
-            info.correctlyRoundedDivSqrt =
-                (d.getInfo<CL_DEVICE_SINGLE_FP_CONFIG>() & CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT) != 0;
+            info.correctlyRoundedDivSqrt = (d.getInfo<CL_DEVICE_SINGLE_FP_CONFIG>() &
+                                            CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT) != 0;
             out.push_back(info);
         }
     }
@@ -199,7 +199,8 @@ DeviceInfo selectDevice(const std::string& requested) {
             if (d.type == "CPU") return d;
         return devices.front();
     }
-    bool numeric = std::all_of(spec.begin(), spec.end(), [](unsigned char c) { return std::isdigit(c); });
+    bool numeric =
+        std::all_of(spec.begin(), spec.end(), [](unsigned char c) { return std::isdigit(c); });
     if (numeric) {
         size_t i = std::stoul(spec);
         if (i < devices.size()) return devices[i];
@@ -210,7 +211,8 @@ DeviceInfo selectDevice(const std::string& requested) {
         if (lower(d.type) == lower(spec)) return d;
     if (lower(spec) == "gpu" || lower(spec) == "cpu") {
         std::string have;
-        for (const DeviceInfo& d : devices) have += (have.empty() ? "" : ", ") + d.name + " [" + d.type + "]";
+        for (const DeviceInfo& d : devices)
+            have += (have.empty() ? "" : ", ") + d.name + " [" + d.type + "]";
         throw Error(source + " " + spec + ": no " + (lower(spec) == "gpu" ? "GPU" : "CPU") +
                     " device found (OpenCL sees: " + have + ")");
     }
@@ -218,7 +220,8 @@ DeviceInfo selectDevice(const std::string& requested) {
         if (lower(d.name).find(lower(spec)) != std::string::npos ||
             lower(d.platformName).find(lower(spec)) != std::string::npos)
             return d;
-    throw Error(source + " '" + spec + "': no device name or platform matches (see `rtlab devices`)");
+    throw Error(source + " '" + spec +
+                "': no device name or platform matches (see `rtlab devices`)");
 }
 
 double eventMs(const cl::Event& event) {
@@ -251,7 +254,8 @@ static std::filesystem::path cacheDir() {
     return {};
 }
 
-cl::Program ClContext::program(const std::string& mainFile, const std::vector<std::string>& defines) {
+cl::Program ClContext::program(const std::string& mainFile,
+                               const std::vector<std::string>& defines) {
     std::string options = "-cl-std=CL1.2";
     // OpenCL lets float division and sqrt be 2.5-3 ulp; NVIDIA's compiler then picks different
     // approximations in different kernels, and the pipelines' images drift apart
@@ -277,7 +281,8 @@ cl::Program ClContext::program(const std::string& mainFile, const std::vector<st
     const auto start = std::chrono::steady_clock::now();
     auto spent = [&] {
         counts_.ms +=
-            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+                .count();
     };
     char hash[32];
     std::snprintf(hash, sizeof hash, "%016llx", (unsigned long long)fnv1a(key));
@@ -337,15 +342,14 @@ cl::Program ClContext::program(const std::string& mainFile, const std::vector<st
                 kernels = p.getInfo<CL_PROGRAM_NUM_KERNELS>();
             } catch (const cl::Error&) {
             }
-            std::fprintf(stderr, "compiled %s (%zu kernels) in %.1f s\n", mainFile.c_str(),
-                         kernels,
-                         std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
-                             .count());
+            std::fprintf(
+                stderr, "compiled %s (%zu kernels) in %.1f s\n", mainFile.c_str(), kernels,
+                std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
         }
     } catch (const cl::Error& e) {
         std::string log = buildLog(p);
         throw Error("building " + mainFile + " for " + device_.name + " failed with " +
-                    clErrorName(e.err()) + " (options: " + options + ")\n" + log,
+                        clErrorName(e.err()) + " (options: " + options + ")\n" + log,
                     FailureKind::OpenCl);
     }
     programs_[key] = p;
@@ -364,7 +368,8 @@ cl::Program ClContext::program(const std::string& mainFile, const std::vector<st
                        std::to_string(std::hash<std::thread::id>()(std::this_thread::get_id())) +
                        ".tmp";
                 std::ofstream out(tmp, std::ios::binary);
-                out.write(reinterpret_cast<const char*>(bins[0].data()), std::streamsize(bins[0].size()));
+                out.write(reinterpret_cast<const char*>(bins[0].data()),
+                          std::streamsize(bins[0].size()));
                 out.close();
                 if (out) std::filesystem::rename(tmp, file, ec);
             }
@@ -389,13 +394,13 @@ static std::string mib(double bytes) {
 cl::Buffer ClContext::allocate(size_t bytes, cl_mem_flags flags, const std::string& what) {
     if (bytes > device_.maxAlloc)
         throw Error(what + " needs " + mib(double(bytes)) + " in one buffer, but " + device_.name +
-                    " allows at most " + mib(double(device_.maxAlloc)) +
-                    " per allocation (CL_DEVICE_MAX_MEM_ALLOC_SIZE)",
+                        " allows at most " + mib(double(device_.maxAlloc)) +
+                        " per allocation (CL_DEVICE_MAX_MEM_ALLOC_SIZE)",
                     FailureKind::OutOfMemory);
     if (allocated_ + bytes > device_.globalMem)
         throw Error(what + " needs " + mib(double(bytes)) + " but only " +
-                    mib(double(device_.globalMem - allocated_)) + " of " + device_.name +
-                    "'s global memory is left",
+                        mib(double(device_.globalMem - allocated_)) + " of " + device_.name +
+                        "'s global memory is left",
                     FailureKind::OutOfMemory);
     try {
         // Fault injection (issue 8, tests/stability_test.cpp): RTLAB_FAIL_ALLOC_AFTER=n fails

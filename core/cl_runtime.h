@@ -3,7 +3,6 @@
 #pragma once
 
 #include <CL/opencl.hpp>
-
 #include <atomic>
 #include <cstdint>
 #include <map>
@@ -47,7 +46,7 @@ DeviceInfo selectDevice(const std::string& spec);
 double eventMs(const cl::Event& event);
 
 class ClContext {
-public:
+  public:
     explicit ClContext(const DeviceInfo& device, KernelSources sources = KernelSources());
 
     const DeviceInfo& device() const { return device_; }
@@ -82,7 +81,7 @@ public:
     void release(size_t bytes) { allocated_ -= bytes < allocated_ ? bytes : allocated_; }
     size_t allocatedBytes() const { return allocated_; }
 
-private:
+  private:
     DeviceInfo device_;
     KernelSources sources_;
     cl::Context context_;

@@ -24,26 +24,35 @@ enum class FailureKind {
 
 inline const char* failureKindName(FailureKind k) {
     switch (k) {
-        case FailureKind::None: return "";
-        case FailureKind::PrivateTree: return "private_tree";
-        case FailureKind::TreeRow: return "tree_row";
-        case FailureKind::OutOfMemory: return "out_of_memory";
-        case FailureKind::OpenCl: return "opencl";
-        case FailureKind::InvalidOption: return "invalid_option";
-        case FailureKind::Skipped: return "skipped";
-        case FailureKind::Timeout: return "timeout";
-        case FailureKind::Other: return "other";
+        case FailureKind::None:
+            return "";
+        case FailureKind::PrivateTree:
+            return "private_tree";
+        case FailureKind::TreeRow:
+            return "tree_row";
+        case FailureKind::OutOfMemory:
+            return "out_of_memory";
+        case FailureKind::OpenCl:
+            return "opencl";
+        case FailureKind::InvalidOption:
+            return "invalid_option";
+        case FailureKind::Skipped:
+            return "skipped";
+        case FailureKind::Timeout:
+            return "timeout";
+        case FailureKind::Other:
+            return "other";
     }
     return "other";
 }
 
 class Error : public std::runtime_error {
-public:
+  public:
     explicit Error(const std::string& message, FailureKind kind = FailureKind::Other)
         : std::runtime_error(message), kind_(kind) {}
     FailureKind kind() const { return kind_; }
 
-private:
+  private:
     FailureKind kind_;
 };
 

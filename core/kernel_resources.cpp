@@ -34,7 +34,8 @@ std::map<std::string, double> parsePtxasLog(const std::string& log) {
     return out;
 }
 
-std::map<std::string, double> kernelResources(const cl::Program& program, const cl::Device& device) {
+std::map<std::string, double> kernelResources(const cl::Program& program,
+                                              const cl::Device& device) {
     // Keyed by the program handle: a pipeline asks every frame, the answer changes only with it.
     // The log is part of the key, so a handle the driver reuses for another program is no hit.
     static std::map<std::pair<cl_program, std::string>, std::map<std::string, double>> cache;

@@ -20,7 +20,7 @@ struct EmbeddedSource {
 const std::vector<EmbeddedSource>& embeddedKernelSources();
 
 class KernelSources {
-public:
+  public:
     // Empty dir: the embedded copies. Otherwise each file is read from dir at the path it was
     // embedded from (the build knows every pipeline folder; this file names none), else from
     // dir itself.
@@ -32,7 +32,7 @@ public:
     std::string resolve(const std::string& mainFile) const;
     bool fromDisk() const { return !dir_.empty(); }
 
-private:
+  private:
     std::filesystem::path dir_;
 };
 

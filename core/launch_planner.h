@@ -40,7 +40,7 @@ struct LaunchTile {
 };
 
 class LaunchPlanner {
-public:
+  public:
     // targetMs <= 0 disables splitting: every tile is the whole remaining frame.
     // key identifies the workload (scene, size, settings); a new key forgets what was learned.
     // width > 0 lets a tile be part of one row, in steps of colStep columns (the work-group
@@ -78,8 +78,10 @@ public:
         // Unseen rows, priced at the costliest row seen; grow at most twofold in pixels.
         double pixelCap = 2.0 * lastPixels_;
         int rows = int(budget / maxRowMs_);
-        if (width_ > 0 && lastPixels_ > 0) rows = std::min(rows, int(pixelCap / width_));
-        else if (lastPixels_ > 0) rows = std::min(rows, int(pixelCap));  // row units
+        if (width_ > 0 && lastPixels_ > 0)
+            rows = std::min(rows, int(pixelCap / width_));
+        else if (lastPixels_ > 0)
+            rows = std::min(rows, int(pixelCap));  // row units
         if (rows >= 1) return {std::min(rows, remaining), 0, 0};
         return width_ > 0 ? columns(budget) : LaunchTile{1, 0, 0};
     }
@@ -121,7 +123,7 @@ public:
     }
     void record(int rows, double ms) { record(LaunchTile{rows, 0, 0}, ms); }
 
-private:
+  private:
     // Rows measured before: whole segments while they fit; a part of the first segment (priced
     // as a cut) when even that one does not; columns of one row when no part does.
     LaunchTile measuredRows(int remaining, double budget) const {
@@ -271,7 +273,7 @@ private:
     double slack_ = 1.0, slow_ = 1.0, fast_ = 1.0;
     std::string key_;
     int width_ = 0, colStep_ = 1;
-    std::vector<double> profile_;  // ms per row, by row of the frame (passes one after another)
+    std::vector<double> profile_;    // ms per row, by row of the frame (passes one after another)
     std::vector<unsigned> segment_;  // which launch measured each row
     // Rows launched in column pieces: the pieces (columns and what they took), by row.
     struct Piece {
@@ -281,8 +283,8 @@ private:
     std::map<size_t, std::vector<Piece>> columns_;
     std::vector<Piece> pieces_;  // of the row being launched in pieces
     unsigned segmentId_ = 0;
-    size_t pos_ = 0;  // the frame's next row
-    int col_ = 0;     // the next column of a row launched in pieces (0: at a row start)
+    size_t pos_ = 0;      // the frame's next row
+    int col_ = 0;         // the next column of a row launched in pieces (0: at a row start)
     int lastPixels_ = 0;  // pixels of the last launch (rows when planning whole rows only)
 };
 

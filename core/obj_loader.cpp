@@ -306,10 +306,12 @@ ObjMaterial toMaterial(const tinyobj::material_t& m) {
 // /dev/urandom (or a FIFO) would otherwise be read forever. A refused library is reported like a
 // missing one, and the model renders with the default material.
 class BoundedMtlReader : public tinyobj::MaterialReader {
-public:
-    explicit BoundedMtlReader(fs::path base) : base_(std::move(base)), files_(base_.string() + "/") {}
+  public:
+    explicit BoundedMtlReader(fs::path base)
+        : base_(std::move(base)), files_(base_.string() + "/") {}
     bool operator()(const std::string& name, std::vector<tinyobj::material_t>* materials,
-                    std::map<std::string, int>* names, std::string* warn, std::string* err) override {
+                    std::map<std::string, int>* names, std::string* warn,
+                    std::string* err) override {
         std::error_code ec;
         const fs::path file = base_ / name;
         if (!fs::is_regular_file(file, ec) || fs::file_size(file, ec) > kMaxMtlBytes || ec) {
@@ -319,7 +321,7 @@ public:
         return files_(name, materials, names, warn, err);
     }
 
-private:
+  private:
     static constexpr std::uintmax_t kMaxMtlBytes = 64u << 20;
     fs::path base_;
     tinyobj::MaterialFileReader files_;

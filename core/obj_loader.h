@@ -4,10 +4,9 @@
 #pragma once
 
 #include <filesystem>
+#include <glm/glm.hpp>
 #include <string>
 #include <vector>
-
-#include <glm/glm.hpp>
 
 namespace rt {
 
@@ -16,9 +15,9 @@ namespace rt {
 struct ObjMaterial {
     std::string name;
     glm::vec3 ambient{0.f}, diffuse{0.8f}, specular{0.f};  // Ka, Kd, Ks
-    float shininess = 1.f;                                  // Ns
-    float ior = 1.f;                                        // Ni
-    float dissolve = 1.f;                                   // d (or 1 - Tr)
+    float shininess = 1.f;                                 // Ns
+    float ior = 1.f;                                       // Ni
+    float dissolve = 1.f;                                  // d (or 1 - Tr)
     int illum = 2;
 };
 

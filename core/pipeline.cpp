@@ -11,10 +11,14 @@ namespace rt {
 
 const char* rayTypeName(int type) {
     switch (type) {
-        case RT_RAY_PRIMARY: return "primary";
-        case RT_RAY_REFLECTION: return "reflection";
-        case RT_RAY_REFRACTION: return "refraction";
-        case RT_RAY_SHADOW: return "shadow";
+        case RT_RAY_PRIMARY:
+            return "primary";
+        case RT_RAY_REFLECTION:
+            return "reflection";
+        case RT_RAY_REFRACTION:
+            return "refraction";
+        case RT_RAY_SHADOW:
+            return "shadow";
     }
     return "?";
 }
@@ -28,9 +32,12 @@ RenderOptions::Offset parseOffset(const std::string& name) {
 
 const char* offsetName(RenderOptions::Offset offset) {
     switch (offset) {
-        case RenderOptions::Offset::Fixed: return "fixed";
-        case RenderOptions::Offset::Scaled: return "scaled";
-        case RenderOptions::Offset::Bound: return "bound";
+        case RenderOptions::Offset::Fixed:
+            return "fixed";
+        case RenderOptions::Offset::Scaled:
+            return "scaled";
+        case RenderOptions::Offset::Bound:
+            return "bound";
     }
     return "?";
 }
@@ -59,7 +66,7 @@ void checkOptions(const Scene& scene, const RenderOptions& o) {
     auto range = [](const char* flag, long long v, long long lo, long long hi) {
         if (v < lo || v > hi)
             throw Error(std::string(flag) + " " + std::to_string(v) + ": must be in " +
-                        std::to_string(lo) + ".." + std::to_string(hi),
+                            std::to_string(lo) + ".." + std::to_string(hi),
                         FailureKind::InvalidOption);
     };
     range("--size (width)", o.width, 1, 16384);
@@ -75,7 +82,7 @@ void checkOptions(const Scene& scene, const RenderOptions& o) {
         throw Error("shadow strength must be in [0, 1]", FailureKind::InvalidOption);
     if (scene.lights.size() > RT_MAX_LIGHTS)
         throw Error(scene.source.string() + ": at most " + std::to_string(RT_MAX_LIGHTS) +
-                    " lights are supported",
+                        " lights are supported",
                     FailureKind::InvalidOption);
 }
 
@@ -91,7 +98,8 @@ void checkPrivateTree(int branching, int bounces, const std::string& who, bool s
     while (fits > 0 && treePrivateBytes(branching, fits) > kPrivateTreeLimit) --fits;
     std::string msg = "--bounces " + std::to_string(bounces) + ": the " + who + " keeps " +
                       std::to_string(treeNodeCount(branching, bounces)) + " ray-tree nodes (" +
-                      std::to_string(need / 1024) + " KiB) in private memory per work-item, over rtlab's " +
+                      std::to_string(need / 1024) +
+                      " KiB) in private memory per work-item, over rtlab's " +
                       std::to_string(kPrivateTreeLimit / 1024) + " KiB cap; the highest bounce " +
                       "limit that fits is " + std::to_string(fits);
     if (suggestWeighted) msg += " (or use --layout weighted)";
@@ -189,7 +197,8 @@ DeviceScene::DeviceScene(ClContext& cl, const Scene& scene, RenderOptions::Accel
             cells_ = upload(cl, accel.cwbvhPrims, "the leaf-primitive buffer", bytes_);
         else
             cells_ = upload(cl, accel.cells, "the grid buffer", bytes_);
-        rayCounts_ = cl.allocate(RT_COUNTERS * sizeof(cl_uint), CL_MEM_READ_WRITE, "the ray counters");
+        rayCounts_ =
+            cl.allocate(RT_COUNTERS * sizeof(cl_uint), CL_MEM_READ_WRITE, "the ray counters");
         bytes_ += RT_COUNTERS * sizeof(cl_uint);
     } catch (...) {
         cl_.release(bytes_);
@@ -238,7 +247,8 @@ Launch launch2d(const DeviceInfo& device, int width, int rows) {
     // A fixed work-group shape: PoCL compiles a work-group function per local size, so letting the
     // runtime choose one per tile shape would recompile for every new tile height.
     const size_t lx = device.isGpu() ? 16 : 64, ly = device.isGpu() ? 8 : 1;
-    return {cl::NDRange((width + lx - 1) / lx * lx, (rows + ly - 1) / ly * ly), cl::NDRange(lx, ly)};
+    return {cl::NDRange((width + lx - 1) / lx * lx, (rows + ly - 1) / ly * ly),
+            cl::NDRange(lx, ly)};
 }
 
 int columnStep(const DeviceInfo& device) { return int(launch2d(device, 1, 1).local[0]); }
@@ -249,8 +259,8 @@ TileRange tileRange(const DeviceInfo& device, int width, const LaunchTile& tile)
         return {cl::NullRange, rows.global, rows.local};
     }
     const size_t step = size_t(columnStep(device));
-    return {cl::NDRange(size_t(tile.col0), 0), cl::NDRange((size_t(tile.cols) + step - 1) / step * step, 1),
-            cl::NDRange(step, 1)};
+    return {cl::NDRange(size_t(tile.col0), 0),
+            cl::NDRange((size_t(tile.cols) + step - 1) / step * step, 1), cl::NDRange(step, 1)};
 }
 
 }  // namespace rt

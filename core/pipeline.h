@@ -1,6 +1,7 @@
 // rtlab — what the pipelines share on the host: the Pipeline interface that `rtlab render`, the
-// benchmarks and the viewer drive (pipelines are found by name in core/pipeline_registry.h), the device copy of a scene, and the feature defines that make
-// each program model no more than its scene needs.
+// benchmarks and the viewer drive (pipelines are found by name in core/pipeline_registry.h), the
+// device copy of a scene, and the feature defines that make each program model no more than its
+// scene needs.
 #pragma once
 
 #include <array>
@@ -8,11 +9,10 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <utility>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "core/accel.h"
 #include "core/cl_runtime.h"
@@ -38,15 +38,15 @@ const char* offsetName(RenderOptions::Offset offset);
 struct FrameStats {
     // Device time per kernel, summed over every launch of the frame (profiling events), in ms.
     std::vector<std::pair<std::string, double>> kernelMs;
-    double deviceMs = 0;        // sum of kernelMs
-    double hostMs = 0;          // wall time of render() on the host
+    double deviceMs = 0;  // sum of kernelMs
+    double hostMs = 0;    // wall time of render() on the host
     // Device buffers the frame used, by name, in bytes (the scene's own are in accel).
     std::vector<std::pair<std::string, size_t>> buffers;
-    size_t privateBytes = 0;    // private ray storage per work-item (estimate from the layout)
-    int tiles = 1;              // row tiles the frame was split into
-    int launches = 0;           // kernel launches (time-bounded tiles x passes)
-    double longestLaunchMs = 0; // the longest single launch of the frame (watchdog margin)
-    std::string program;        // how the program was obtained: built, disk or memory cache
+    size_t privateBytes = 0;     // private ray storage per work-item (estimate from the layout)
+    int tiles = 1;               // row tiles the frame was split into
+    int launches = 0;            // kernel launches (time-bounded tiles x passes)
+    double longestLaunchMs = 0;  // the longest single launch of the frame (watchdog margin)
+    std::string program;         // how the program was obtained: built, disk or memory cache
     // Rays traced on the device by type; filled only when RenderOptions::countRays is set,
     // because the atomics cost time.
     RayCounts rays{};
@@ -64,7 +64,7 @@ struct FrameStats {
 };
 
 class Pipeline {
-public:
+  public:
     virtual ~Pipeline() = default;
     // The registered name (PipelineRegistry): "mega".
     virtual const char* name() const = 0;
@@ -78,7 +78,7 @@ public:
     using Progress = std::function<void(long long done, long long total)>;
     void setProgress(Progress progress) { progress_ = std::move(progress); }
 
-protected:
+  protected:
     void reportProgress(long long done, long long total) const {
         if (progress_) progress_(done, total);
     }
@@ -107,7 +107,7 @@ void checkPrivateTree(int branching, int bounces, const std::string& who, bool s
 
 // The scene's object arrays on the device, with the acceleration structure of one --accel mode.
 class DeviceScene {
-public:
+  public:
     DeviceScene(ClContext& cl, const Scene& scene, RenderOptions::Accel accel);
     ~DeviceScene();
     DeviceScene(const DeviceScene&) = delete;
@@ -131,7 +131,7 @@ public:
     // Which structure was built, in how long, and how large it is (for FrameStats::accel).
     const AccelStats& accelStats() const { return stats_; }
 
-private:
+  private:
     ClContext& cl_;
     const Scene* source_;
     RenderOptions::Accel accel_;

@@ -18,7 +18,7 @@ using OptionValue = std::variant<long long, std::string>;
 // The values set for pipeline options, by option name. An option that is not set has its
 // declared default, so a RenderOptions made without any front end still renders as declared.
 class PipelineOptionValues {
-public:
+  public:
     void set(const std::string& name, OptionValue value) { values_[name] = std::move(value); }
     void reset(const std::string& name) { values_.erase(name); }
     const OptionValue* find(const std::string& name) const {
@@ -27,7 +27,7 @@ public:
     }
     bool operator==(const PipelineOptionValues&) const = default;
 
-private:
+  private:
     std::map<std::string, OptionValue> values_;
 };
 

@@ -10,13 +10,15 @@
 namespace rt {
 
 void PipelineRegistry::add(PipelineInfo info) {
-    if (info.name.empty() || !info.make) throw Error("a pipeline registered without a name or factory");
+    if (info.name.empty() || !info.make)
+        throw Error("a pipeline registered without a name or factory");
     if (find(info.name)) throw Error("pipeline '" + info.name + "' is registered twice");
     std::vector<const PipelineOption*> known = options();
     for (const PipelineOption& o : info.options) {
         if (o.name.empty() || o.sweepKey.empty() || o.cellTag.empty() ||
             o.label.find("{}") == std::string::npos)
-            throw Error("pipeline '" + info.name + "' declares an option without a name, sweep "
+            throw Error("pipeline '" + info.name +
+                        "' declares an option without a name, sweep "
                         "key, cell tag or label with {}");
         for (const PipelineOption* k : known)
             if (k->name == o.name || k->sweepKey == o.sweepKey || k->cellTag == o.cellTag)
@@ -35,7 +37,8 @@ const PipelineInfo* PipelineRegistry::find(const std::string& name) const {
 
 const PipelineInfo& PipelineRegistry::get(const std::string& name) const {
     if (const PipelineInfo* p = find(name)) return *p;
-    throw Error("--pipeline " + name + ": must be one of " + joinedNames(), FailureKind::InvalidOption);
+    throw Error("--pipeline " + name + ": must be one of " + joinedNames(),
+                FailureKind::InvalidOption);
 }
 
 std::vector<std::string> PipelineRegistry::names(bool devicesOnly) const {
@@ -83,15 +86,16 @@ std::unique_ptr<Pipeline> PipelineRegistry::make(const std::string& name, ClCont
 namespace {
 
 class CpuPipeline : public Pipeline {
-public:
+  public:
     const char* name() const override { return "cpu"; }
     Image render(const Scene& scene, const RenderOptions& options) override {
         checkOptions(scene, options);
         stats_ = {};
         auto t0 = std::chrono::steady_clock::now();
         Image image = renderReference(scene, options, 0, progress_);
-        stats_.hostMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
-                            .count();
+        stats_.hostMs =
+            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
+                .count();
         return image;
     }
 };

@@ -1,7 +1,8 @@
 // rtlab — the registry of pipelines: what a front end (CLI, viewer, sweeps, benchmarks) may know
 // about a pipeline is its entry here: a name, a one-line title and description, a factory, what
-// it supports, and the options it declares for itself (core/pipeline_options.h). The core declares the registry and registers only its own CPU reference; each
-// pipeline folder registers itself (pipelines/registry.h holds the filled registry).
+// it supports, and the options it declares for itself (core/pipeline_options.h). The core declares
+// the registry and registers only its own CPU reference; each pipeline folder registers itself
+// (pipelines/registry.h holds the filled registry).
 #pragma once
 
 #include <functional>
@@ -41,7 +42,7 @@ struct PipelineInfo {
 };
 
 class PipelineRegistry {
-public:
+  public:
     // Throws rt::Error on an empty or duplicate name: two folders may not claim one name, nor
     // two pipelines one option name, sweep key or cell tag.
     void add(PipelineInfo info);
@@ -62,7 +63,7 @@ public:
     // Creates a pipeline by name; throws when it needs a device and cl is null.
     std::unique_ptr<Pipeline> make(const std::string& name, ClContext* cl) const;
 
-private:
+  private:
     std::vector<PipelineInfo> entries_;
 };
 

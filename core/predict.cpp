@@ -87,9 +87,8 @@ Prediction predictDesign(const LaneEstimate& estimate, double queueBelowLanes) {
     const double threshold = queueBelowLanes * estimate.lanes / 32.0;
     char reason[256];
     const bool queue = estimate.busyLanes < threshold;
-    std::snprintf(reason, sizeof reason,
-                  "%.1f busy lanes of %d a step (%s %.1f): %s", estimate.busyLanes,
-                  estimate.lanes, queue ? "below" : "at or above", threshold,
+    std::snprintf(reason, sizeof reason, "%.1f busy lanes of %d a step (%s %.1f): %s",
+                  estimate.busyLanes, estimate.lanes, queue ? "below" : "at or above", threshold,
                   queue ? "the trees of neighbouring pixels disagree, compacted queues win"
                         : "neighbouring pixels trace alike trees, one tree a work-item wins");
     return {queue ? "queue" : "tree-per-work-item", reason};

@@ -30,7 +30,7 @@ struct WarpShape {
 double busyLanes(const std::vector<int>& sizes, int lanes);
 
 struct LaneEstimate {
-    double busyLanes = 0;     // of shape.lanes()
+    double busyLanes = 0;  // of shape.lanes()
     int lanes = 32;
     int warps = 0;            // warps traced
     double raysPerPixel = 0;  // mean closest-hit rays of a pixel's trees

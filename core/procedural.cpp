@@ -67,7 +67,8 @@ double pattern(int pattern, glm::dvec3 p, int octaves) {
         const double r = std::sqrt(p.x * p.x + p.z * p.z) + 0.5 * fbm(p, octaves, false);
         return 0.5 + 0.5 * std::sin(6.2831853 * r);
     }
-    if (pattern == RT_PATTERN_GRANITE) return std::clamp(0.5 + 1.5 * fbm(p, octaves, false), 0.0, 1.0);
+    if (pattern == RT_PATTERN_GRANITE)
+        return std::clamp(0.5 + 1.5 * fbm(p, octaves, false), 0.0, 1.0);
     return 0;
 }
 

@@ -410,8 +410,7 @@ class Tracer {
             const double spec = std::pow(std::max(glm::dot(n, h), 0.0), double(m.exponent));
             // The device counts no shadow rays toward a light behind the geometric normal.
             const double vis = glm::dot(s.n, l) > 0 ? visibility(s, int(j), origin, key) : 1.0;
-            colour += vis * toD(light.color) *
-                      (diffuse * nl + toD(m.specular) * spec);
+            colour += vis * toD(light.color) * (diffuse * nl + toD(m.specular) * spec);
         }
         return colour;
     }
@@ -514,7 +513,8 @@ class Tracer {
   private:
     int treeSize(const Ray& ray, int depth, long long* primary = nullptr) const {
         const Hit hit = closestHit(ray);
-        if (primary) *primary = hit.kind == RT_KIND_MISS ? -1 : (long long)(hit.kind) << 32 | hit.object;
+        if (primary)
+            *primary = hit.kind == RT_KIND_MISS ? -1 : (long long)(hit.kind) << 32 | hit.object;
         if (hit.kind == RT_KIND_MISS) return 1;
         const Surface s = surface(ray, hit);
         const Children c = children(s, scene_.materials[s.material], ray.dir, depth);
@@ -577,17 +577,23 @@ Image render(const Scene& scene, const RenderOptions& options, int threads,
         if (progress && passStart + rows > reported) progress(reported = passStart + rows, total);
     };
     if (!adaptive) {
-        forEachRow(options.height, threads, [&](int y) {
-            for (int x = 0; x < options.width; ++x) store(image, x, y, fullGrid(x, y));
-        }, done);
+        forEachRow(
+            options.height, threads,
+            [&](int y) {
+                for (int x = 0; x < options.width; ++x) store(image, x, y, fullGrid(x, y));
+            },
+            done);
         return image;
     }
 
     // Section 11: centre samples, then the full grid where a 4-neighbour differs by > 0.1.
-    forEachRow(options.height, threads, [&](int y) {
-        for (int x = 0; x < options.width; ++x)
-            store(image, x, y, tracer.pixel(x, y, 0, 0.5, 0.5));
-    }, done);
+    forEachRow(
+        options.height, threads,
+        [&](int y) {
+            for (int x = 0; x < options.width; ++x)
+                store(image, x, y, tracer.pixel(x, y, 0, 0.5, 0.5));
+        },
+        done);
     passStart = options.height;
     const Image centre = image;
     auto differs = [&](int x, int y, int nx, int ny) {
@@ -598,13 +604,16 @@ Image render(const Scene& scene, const RenderOptions& options, int threads,
             if (std::abs(a[c] - b[c]) > 0.1f) return true;
         return false;
     };
-    forEachRow(options.height, threads, [&](int y) {
-        for (int x = 0; x < options.width; ++x) {
-            if (differs(x, y, x - 1, y) || differs(x, y, x + 1, y) || differs(x, y, x, y - 1) ||
-                differs(x, y, x, y + 1))
-                store(image, x, y, fullGrid(x, y));
-        }
-    }, done);
+    forEachRow(
+        options.height, threads,
+        [&](int y) {
+            for (int x = 0; x < options.width; ++x) {
+                if (differs(x, y, x - 1, y) || differs(x, y, x + 1, y) || differs(x, y, x, y - 1) ||
+                    differs(x, y, x, y + 1))
+                    store(image, x, y, fullGrid(x, y));
+            }
+        },
+        done);
     return image;
 }
 
@@ -634,8 +643,9 @@ std::vector<RayTreeSize> referenceRayTrees(const Scene& scene, const RenderOptio
                 RayTreeSize& t = trees[i];
                 for (int sy = 0; sy < n; ++sy)
                     for (int sx = 0; sx < n; ++sx)
-                        t.rays += tracer.treeSize(pixels[i].x, pixels[i].y, (sx + 0.5) / n,
-                                                  (sy + 0.5) / n, sx + sy == 0 ? &t.object : nullptr);
+                        t.rays +=
+                            tracer.treeSize(pixels[i].x, pixels[i].y, (sx + 0.5) / n,
+                                            (sy + 0.5) / n, sx + sy == 0 ? &t.object : nullptr);
             }
         }
     };

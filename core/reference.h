@@ -3,11 +3,10 @@
 #pragma once
 
 #include <functional>
+#include <glm/glm.hpp>
 #include <memory>
 #include <optional>
 #include <vector>
-
-#include <glm/glm.hpp>
 
 #include "core/image.h"
 #include "core/scene.h"
@@ -39,8 +38,7 @@ struct RayTreeSize {
     long long object = -1;
 };
 std::vector<RayTreeSize> referenceRayTrees(const Scene& scene, const RenderOptions& options,
-                                           const std::vector<glm::ivec2>& pixels,
-                                           int threads = 0);
+                                           const std::vector<glm::ivec2>& pixels, int threads = 0);
 
 // Building blocks, exposed for the unit tests. Directions are unit length.
 namespace ref {
@@ -81,8 +79,8 @@ struct TriangleHit {
 };
 std::optional<TriangleHit> intersectTriangleMT(const Ray& ray, glm::dvec3 v0, glm::dvec3 v1,
                                                glm::dvec3 v2);
-std::optional<TriangleHit> intersectTriangleWatertight(const Ray& ray, glm::dvec3 v0,
-                                                       glm::dvec3 v1, glm::dvec3 v2);
+std::optional<TriangleHit> intersectTriangleWatertight(const Ray& ray, glm::dvec3 v0, glm::dvec3 v1,
+                                                       glm::dvec3 v2);
 
 glm::dvec3 reflect(glm::dvec3 d, glm::dvec3 n);
 // n faces the incoming ray; eta = n1/n2. nullopt on total internal reflection.

@@ -17,15 +17,15 @@ namespace rt {
 // Settings a scene file may default and the command line may override.
 struct RenderOptions {
     int width = 320, height = 240;
-    int bounces = 3;        // B
-    int shadowSamples = 1;  // per light with radius > 0 (hard shadows use 1)
-    int aa = 1;             // N: N x N sub-pixel samples
+    int bounces = 3;          // B
+    int shadowSamples = 1;    // per light with radius > 0 (hard shadows use 1)
+    int aa = 1;               // N: N x N sub-pixel samples
     bool adaptiveAa = false;  // supersample only pixels on edges (report section 2.1.2)
     float shadowStrength = 1.0f;
 
     // Accuracy switches (issue 3). Defaults are the robust methods.
-    bool robustSphere = true;   // false: report Algorithm 2 (plain quadratic)
-    bool watertight = true;     // false: report Algorithm 3 (Moller-Trumbore)
+    bool robustSphere = true;  // false: report Algorithm 2 (plain quadratic)
+    bool watertight = true;    // false: report Algorithm 3 (Moller-Trumbore)
     // Secondary-ray origins (core/SHADING.md section 3): a fixed 1e-4, 1e-4 max(1, |p|), or a
     // bound on the hit point's rounding error (issue 17, the default).
     enum class Offset { Fixed, Scaled, Bound };
@@ -33,11 +33,11 @@ struct RenderOptions {
 
     // Pipeline choices; the CPU reference ignores them.
     enum class Layout { Tree, Weighted };
-    Layout layout = Layout::Tree;   // private rays: the full ray tree, or a weighted stack
-    size_t memoryBudget = 0;        // bytes a global ray tree may use (0 = device max)
+    Layout layout = Layout::Tree;  // private rays: the full ray tree, or a weighted stack
+    size_t memoryBudget = 0;       // bytes a global ray tree may use (0 = device max)
     enum class Accel { None, Bv, Grid, Bvh, Wide, Cwbvh };
-    Accel accel = Accel::Bv;        // how rays find triangles (issue 5)
-    bool countRays = false;         // count rays by type on the device (slower; benchmarks)
+    Accel accel = Accel::Bv;  // how rays find triangles (issue 5)
+    bool countRays = false;   // count rays by type on the device (slower; benchmarks)
     // Split frames into row tiles so no launch runs past this (display watchdogs); 0 = off.
     double maxLaunchMs = 0;
     // The values of the options pipelines declare for themselves (PipelineInfo::options), by
@@ -61,8 +61,8 @@ struct Environment {
 };
 
 struct Scene {
-    std::string name;                // file stem
-    std::filesystem::path source;    // file it came from (for messages)
+    std::string name;              // file stem
+    std::filesystem::path source;  // file it came from (for messages)
     dev::Camera camera{};
     std::vector<dev::Material> materials;
     std::vector<std::string> materialNames;  // parallel to materials

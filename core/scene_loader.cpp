@@ -6,11 +6,11 @@
 
 #include <algorithm>
 #include <cctype>
-#include <fstream>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <fstream>
 #include <glm/gtc/matrix_transform.hpp>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -422,7 +422,8 @@ class Loader {
             p.fail("unknown pattern '" + printable(s) +
                    "' (none, checker, marble, wood, granite or bump)");
         });
-        mat.octaves = m.opt("octaves", 4, [](const Node& o) { return o.integer(0, RT_MAX_OCTAVES); });
+        mat.octaves =
+            m.opt("octaves", 4, [](const Node& o) { return o.integer(0, RT_MAX_OCTAVES); });
         mat.patternScale = m.opt("scale", 1.f, readPositive);
         mat.diffuse2 = m.opt("diffuse2", dev::Float3{0.1f, 0.1f, 0.1f}, readColor);
         mat.bump = m.opt("bump", 0.5f, readNonNegative);
@@ -821,7 +822,8 @@ void rejectNonJson(const fs::path& path) {
         break;
     }
     if (seen == 0 || !in) return;  // empty: the loader's own message
-    throw Error(path.string() + ": not a scene file (a scene is a JSON object; rtlab reads .json "
+    throw Error(path.string() +
+                ": not a scene file (a scene is a JSON object; rtlab reads .json "
                 "scenes and .obj, .gltf, .glb and .ply models)");
 }
 

@@ -41,8 +41,7 @@ long long countNonFinite(const Image& image) {
     const float weights[3] = {1.f, 1.f, 1.f};
     OIIO::ImageBuf sum = OIIO::ImageBufAlgo::channel_sum(raw, OIIO::cspan<float>(weights, 3));
     const OIIO::ImageBufAlgo::PixelStats stats = OIIO::ImageBufAlgo::computePixelStats(sum);
-    if (sum.has_error() || stats.nancount.empty())
-        throw Error("countNonFinite: " + sum.geterror());
+    if (sum.has_error() || stats.nancount.empty()) throw Error("countNonFinite: " + sum.geterror());
     return (long long)(stats.nancount[0] + stats.infcount[0]);
 }
 

@@ -9,12 +9,12 @@
 namespace rt {
 
 struct ImageDiff {
-    double meanAbs = 0;          // mean absolute difference over all channels
-    double maxAbs = 0;           // largest absolute difference of any channel
+    double meanAbs = 0;  // mean absolute difference over all channels
+    double maxAbs = 0;   // largest absolute difference of any channel
     double rmse = 0;
-    double fractionWithin = 1;   // fraction of pixels whose channels all lie within tolerance
-    long long pixelsOver = 0;    // pixels with some channel above tolerance (or non-finite)
-    long long nonfinite = 0;     // pixels with a NaN or infinite channel, in either image
+    double fractionWithin = 1;  // fraction of pixels whose channels all lie within tolerance
+    long long pixelsOver = 0;   // pixels with some channel above tolerance (or non-finite)
+    long long nonfinite = 0;    // pixels with a NaN or infinite channel, in either image
     // True when both images are finite everywhere and every pixel is within tolerance.
     bool allWithin() const { return nonfinite == 0 && pixelsOver == 0; }
 };

@@ -4,8 +4,8 @@
 #include <chrono>
 
 #include "core/error.h"
-#include "core/pipeline_registry.h"
 #include "core/kernel_resources.h"
+#include "core/pipeline_registry.h"
 
 namespace rt {
 

@@ -9,7 +9,7 @@
 namespace rt {
 
 class MegakernelPipeline : public Pipeline {
-public:
+  public:
     explicit MegakernelPipeline(ClContext& cl) : cl_(cl) {}
     // Keeps the context's device-memory tally true.
     ~MegakernelPipeline() override { cl_.release(imageBytes_ + centerBytes_); }
@@ -19,7 +19,7 @@ public:
     // The defines the program is built with (tests check them).
     static std::vector<std::string> defines(const Scene& scene, const RenderOptions& options);
 
-private:
+  private:
     ClContext& cl_;
     std::unique_ptr<DeviceScene> scene_;
     cl::Buffer image_, centers_;

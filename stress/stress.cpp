@@ -15,7 +15,7 @@
 //   (f) NaN and Inf rays through every acceleration structure;
 //   (g) scale sweep: pixels that change when a standard scene is scaled by 1e-4..1e5, per offset
 //       method and pipeline, and a sphere of radius 1e-3 at distance 1e4 (issue 17).
-#include <glm/glm.hpp>
+#include "stress/stress.h"
 
 #include <algorithm>
 #include <cctype>
@@ -25,6 +25,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <glm/glm.hpp>
 #include <limits>
 #include <memory>
 #include <random>
@@ -36,16 +37,14 @@
 #include "core/cl_runtime.h"
 #include "core/error.h"
 #include "core/pipeline.h"
-#include "pipelines/registry.h"
 #include "core/reference.h"
 #include "core/scene_loader.h"
-#include "stress/stress.h"
 #include "core/scene_scale.h"
+#include "pipelines/registry.h"
 
 namespace rt::stress {
 
 using glm::dvec3;
-
 
 // ---- scenes built by hand ----
 dev::Float3 f3(dvec3 v) { return {float(v.x), float(v.y), float(v.z)}; }
@@ -139,7 +138,8 @@ void closest(ClContext& cl, const Scene& scene, const RenderOptions& o,
     size_t n = rays.size() / 6;
     SceneProbe p(cl, scene, o, "Probe_Closest");
     cl::Buffer in = input(cl, rays);
-    cl::Buffer tb(cl.context(), CL_MEM_WRITE_ONLY, n * 4), wb(cl.context(), CL_MEM_WRITE_ONLY, n * 8);
+    cl::Buffer tb(cl.context(), CL_MEM_WRITE_ONLY, n * 4),
+        wb(cl.context(), CL_MEM_WRITE_ONLY, n * 8);
     p.k.setArg(DeviceScene::kFirstKernelArg, in);
     p.k.setArg(DeviceScene::kFirstKernelArg + 1, tb);
     p.k.setArg(DeviceScene::kFirstKernelArg + 2, wb);
@@ -262,7 +262,8 @@ AcneResult acne(ClContext& cl, double scale, RenderOptions::Offset offset, int p
     std::vector<float> rays;
     for (int i = 0; i < primary; ++i) {
         dvec3 c = i % 2 ? sphereC : meshC, p;
-        do p = dvec3(u(rng), u(rng), 0); while (glm::length(p) > 0.95);
+        do p = dvec3(u(rng), u(rng), 0);
+        while (glm::length(p) > 0.95);
         pushRay(rays, dvec3(0), c + scale * p);
     }
     SceneProbe probe(cl, scene, o, "Probe_Spawn");
@@ -303,7 +304,8 @@ ReintersectResult reintersect(ClContext& cl, RenderOptions::Offset offset, doubl
     for (int i = 0; i < triangles; ++i) {
         dvec3 v[3];
         for (dvec3& p : v) p = dvec3(coord(), coord(), coord());
-        dvec3 org = mixed ? dvec3(coord(), coord(), coord()) : 4.0 * dvec3(coord(), coord(), coord());
+        dvec3 org =
+            mixed ? dvec3(coord(), coord(), coord()) : 4.0 * dvec3(coord(), coord(), coord());
         double a = u(rng), b = u(rng);
         if (a + b > 1) a = 1 - a, b = 1 - b;
         dvec3 target = (1 - a - b) * v[0] + a * v[1] + b * v[2];
@@ -368,7 +370,8 @@ CriticalResult criticalAngle(ClContext& cl) {
         bool ok = b[0] != 0.f;
         float F = b[4];
         if (!ok) ++r.tirDevice;
-        if (!std::isfinite(F) || !std::isfinite(b[1]) || !std::isfinite(b[2]) || !std::isfinite(b[3]))
+        if (!std::isfinite(F) || !std::isfinite(b[1]) || !std::isfinite(b[2]) ||
+            !std::isfinite(b[3]))
             ++r.nonFinite;
         if (!(F >= 0.f && F <= 1.f) || (!ok && F != 1.f)) ++r.inconsistent;
         if (ok && std::abs(std::sqrt(b[1] * b[1] + b[2] * b[2] + b[3] * b[3]) - 1.f) > 1e-4f)
@@ -398,7 +401,8 @@ std::vector<Counts> grazing(ClContext& cl, bool watertight, int perAngle) {
             a = 0.05 + 0.9 * a, b = 0.05 + 0.9 * b * (1 - a);  // keep clear of the edges
             dvec3 p = (1 - a - b) * dvec3(-1, 0, -1) + a * dvec3(1, 0, -1) + b * dvec3(0, 0, 1.2);
             double elev = k == 0 ? 0.0 : std::pow(10.0, -k), phi = ang(rng);
-            dvec3 d(std::cos(elev) * std::cos(phi), -std::sin(elev), std::cos(elev) * std::sin(phi));
+            dvec3 d(std::cos(elev) * std::cos(phi), -std::sin(elev),
+                    std::cos(elev) * std::sin(phi));
             dvec3 o = p - 10.0 * d;
             if (k == 0) o.y = 0;  // exactly in the plane
             dev::Float3 of = f3(o), df = f3(d);
@@ -407,7 +411,8 @@ std::vector<Counts> grazing(ClContext& cl, bool watertight, int perAngle) {
         }
     size_t n = rays.size() / 6;
     cl::Kernel kern(program, "Probe_TriangleHits");
-    cl::Buffer rb = input(cl, rays), tb = input(cl, tri), hb(cl.context(), CL_MEM_WRITE_ONLY, n * 4);
+    cl::Buffer rb = input(cl, rays), tb = input(cl, tri),
+               hb(cl.context(), CL_MEM_WRITE_ONLY, n * 4);
     kern.setArg(0, rb);
     kern.setArg(1, tb);
     kern.setArg(2, cl_int(1));
@@ -494,8 +499,8 @@ NanResult nanRays(ClContext& cl, RenderOptions::Accel accel) {
     o.bounces = 2;
     const float bad[3] = {std::numeric_limits<float>::quiet_NaN(), INFINITY, -INFINITY};
     std::vector<float> rays;
-    for (int which = 0; which < 3; ++which)      // origin, direction, both
-        for (int v = 0; v < 3; ++v)              // NaN, +Inf, -Inf
+    for (int which = 0; which < 3; ++which)       // origin, direction, both
+        for (int v = 0; v < 3; ++v)               // NaN, +Inf, -Inf
             for (int mask = 1; mask < 8; ++mask)  // which components
                 for (int i = 0; i < 4; ++i) {
                     float r[6] = {0, 1, 0, 0.1f * float(i - 1), 0, 1};
@@ -553,7 +558,8 @@ std::vector<long long> scaleSweep(ClContext& cl, const Scene& scene, RenderOptio
 
 // A Blinn-Phong sphere of radius r at distance D straight ahead, lit from the camera: the
 // centre pixel (odd image, ray exactly +z) of a device pipeline against the CPU reference.
-double farSphereCentreError(ClContext& cl, const std::string& kind, bool robust, double D, double r) {
+double farSphereCentreError(ClContext& cl, const std::string& kind, bool robust, double D,
+                            double r) {
     Scene s = emptyScene("far-sphere");
     s.spheres.push_back({{0, 0, float(D)}, float(r), 0, {0, 0, 0}});
     s.lights.push_back({{0, 0, 0}, 0.f, {1, 1, 1}, 0.f});

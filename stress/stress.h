@@ -5,7 +5,6 @@
 #pragma once
 
 #include <glm/glm.hpp>
-
 #include <string>
 #include <vector>
 
@@ -31,8 +30,8 @@ struct LeakResult {
 };
 
 struct SphereResult {
-    Counts misses;      // rays aimed within 0.9 r of the centre that missed
-    Counts falseHits;   // rays aimed 1.1 r to 2 r off the centre that hit
+    Counts misses;     // rays aimed within 0.9 r of the centre that missed
+    Counts falseHits;  // rays aimed 1.1 r to 2 r off the centre that hit
 };
 
 struct AcneResult {
@@ -71,8 +70,8 @@ SphereResult tinySpheres(ClContext& cl, bool robust, double distance, double rad
 constexpr RenderOptions::Offset kOffsets[] = {
     RenderOptions::Offset::Fixed, RenderOptions::Offset::Scaled, RenderOptions::Offset::Bound};
 AcneResult acne(ClContext& cl, double scale, RenderOptions::Offset offset, int primary, int spawn);
-ReintersectResult reintersect(ClContext& cl, RenderOptions::Offset offset, double lo, double hi, bool mixed,
-                              int triangles, int spawn);
+ReintersectResult reintersect(ClContext& cl, RenderOptions::Offset offset, double lo, double hi,
+                              bool mixed, int triangles, int spawn);
 // (d) refraction at the critical angle, and grazing rays per angle.
 CriticalResult criticalAngle(ClContext& cl);
 std::vector<Counts> grazing(ClContext& cl, bool watertight, int perAngle = 512);

@@ -1,11 +1,14 @@
 // rtlab-stress [--device SPEC] [--out DIR] [--quick] — runs the stress cases (stress.h) on one
-// OpenCL device and writes results/<device-slug>/stability.md (sections (a) to (g), stress.cpp): each case's figures for the plain
-// and the robust method, and whether the robust one holds its bar.
+// OpenCL device and writes results/<device-slug>/stability.md (sections (a) to (g), stress.cpp):
+// each case's figures for the plain and the robust method, and whether the robust one holds its
+// bar.
 #include <algorithm>
 #include <cctype>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -20,9 +23,6 @@
 #include "core/version.h"
 #include "pipelines/registry.h"
 #include "stress/stress.h"
-
-#include <chrono>
-#include <ctime>
 
 namespace {
 
@@ -84,7 +84,9 @@ void scaleSection(ClContext& cl, bool quick, Report& R) {
     const int w = quick ? 80 : 160, h = quick ? 60 : 120;
     md << "## (g) Scale sweep\n\n"
        << "Each standard scene and its copies scaled by 10^e (positions, radii, plane offsets, "
-          "lights and camera; core/scene_scale.h), " << w << " x " << h << ", bounces <= 4, "
+          "lights and camera; core/scene_scale.h), "
+       << w << " x " << h
+       << ", bounces <= 4, "
           "shadow samples <= 4: pixels of the scaled render more than 2/255 from the unscaled "
           "one, per offset method (core/SHADING.md section 3: fixed = 1e-4, scaled = 1e-4 "
           "max(1, |p|), bound = past the hit point's rounding-error bound) and pipeline. Bar: "
@@ -128,7 +130,8 @@ void scaleSection(ClContext& cl, bool quick, Report& R) {
           "issue 17 the robust test's normal was (p - c) / r, 15/255 too dark at D = 1e4); "
           "*--plain-sphere*: the report's test and normal, for comparison (the quadratic "
           "misses such spheres). Bar: within 1/255 for the robust sphere at D = 1e4.\n\n"
-       << "| D | r | pipeline | --plain-sphere | robust | bar |\n| --- | --- | --- | --- | --- | --- |\n";
+       << "| D | r | pipeline | --plain-sphere | robust | bar |\n| --- | --- | --- | --- | --- | "
+          "--- |\n";
     for (double D : {1e2, 1e3, 1e4})
         for (const std::string& k : pipelineRegistry().names(true)) {
             double plain = farSphereCentreError(cl, k, false, D, 1e-3);
@@ -193,7 +196,8 @@ void runAll(ClContext& cl, bool quick, Report& R) {
        << "A triangulated sphere (24 x 48) and an analytic sphere of radius s at distance 4 s "
           "from the camera at the origin; from each of 2,000 primary hits, 64 random rays leave "
           "as the pipelines spawn them (`Probe_Spawn`: hit point and origins from "
-          "`RayTree_TraceNode` and `RayTree_SpawnOrigin`). *out*: reflection/shadow side, a hit on the same object is acne; "
+          "`RayTree_TraceNode` and `RayTree_SpawnOrigin`). *out*: reflection/shadow side, a hit on "
+          "the same object is acne; "
           "*in*: refraction side, a hit on the same triangle (or on the sphere within 1e-3 r) is "
           "acne; *escaped*: refraction rays that never hit the object they start in, because "
           "the offset pushed the origin through it. fixed = 1e-4, scaled = 1e-4 max(1, |p|), "
@@ -209,15 +213,16 @@ void runAll(ClContext& cl, bool quick, Report& R) {
                            (off == RenderOptions::Offset::Scaled && (s == 1e-3 || s == 1e5));
             long long bad = a.meshOut.bad + a.meshIn.bad + a.meshEscape.bad + a.sphereOut.bad +
                             a.sphereIn.bad + a.sphereEscape.bad;
-            md << "| " << fmt("%g", s) << " | " << offsetName(off) << " | "
-               << counts(a.meshOut) << " | " << counts(a.meshIn) << " | "
-               << counts(a.meshEscape) << " | " << counts(a.sphereOut) << " | "
-               << counts(a.sphereIn) << " | " << counts(a.sphereEscape) << " | "
+            md << "| " << fmt("%g", s) << " | " << offsetName(off) << " | " << counts(a.meshOut)
+               << " | " << counts(a.meshIn) << " | " << counts(a.meshEscape) << " | "
+               << counts(a.sphereOut) << " | " << counts(a.sphereIn) << " | "
+               << counts(a.sphereEscape) << " | "
                << (barCase ? R.check(bad == 0) : std::string("recorded")) << " |\n";
         }
     md << "\npbrt-v4's `Triangle.Reintersect` (`Probe_Reintersect`): 1,000 lone triangles, a ray "
           "from a random origin to a random point of each (hit point as the pipelines compute "
-          "it: o + t d, or from the barycentrics for the bound offset), then 1,000 random directions leave it with the offset on the side they "
+          "it: o + t d, or from the barycentrics for the bound offset), then 1,000 random "
+          "directions leave it with the offset on the side they "
           "point to. *mixed*: every coordinate of vertices and origin is 10^U(-8, 8) on its own, "
           "as in pbrt; *scale s*: coordinates in [-1, 1] s, origin in [-4, 4] s. pbrt's bar: 0 "
           "re-hits; pbrt meets it at mixed scales only because its triangle test also rejects "
@@ -227,8 +232,8 @@ void runAll(ClContext& cl, bool quick, Report& R) {
     auto reRow = [&](const std::string& label, bool mixed, double lo, double hi) {
         for (RenderOptions::Offset off : kOffsets) {
             ReintersectResult r = reintersect(cl, off, lo, hi, mixed, 1000 / scaleDown, 1000);
-            md << "| " << label << " | " << offsetName(off) << " | " << r.missed
-               << " | " << r.withRehits << " | " << counts(r.rehits) << " |\n";
+            md << "| " << label << " | " << offsetName(off) << " | " << r.missed << " | "
+               << r.withRehits << " | " << counts(r.rehits) << " |\n";
         }
     };
     reRow("mixed 1e-8..1e8", true, -8, 8);
@@ -247,8 +252,8 @@ void runAll(ClContext& cl, bool quick, Report& R) {
        << "| cases | total internal reflection (device) | non-finite | inconsistent F | "
           "non-unit | TIR decision differs from double | bar |\n"
        << "| --- | --- | --- | --- | --- | --- | --- |\n"
-       << "| " << c.cases << " | " << c.tirDevice << " | " << c.nonFinite << " | "
-       << c.inconsistent << " | " << c.nonUnit << " | " << c.disagree << " | "
+       << "| " << c.cases << " | " << c.tirDevice << " | " << c.nonFinite << " | " << c.inconsistent
+       << " | " << c.nonUnit << " | " << c.disagree << " | "
        << R.check(c.nonFinite == 0 && c.inconsistent == 0 && c.nonUnit == 0) << " |\n\n"
        << "Grazing rays (`Probe_TriangleHits`): 512 rays per elevation angle, aimed at interior "
           "points (5% clear of the edges) of a triangle in the plane y = 0 from 10 units away; "
@@ -272,8 +277,8 @@ void runAll(ClContext& cl, bool quick, Report& R) {
             NestedResult n = nested(cl, k, 64, 48, b);
             double within = double(n.within) / double(n.pixels);
             md << "| " << k << " | " << b << " | " << n.nonFinite << " | "
-               << fmt("%.2f%%", 100 * within) << " | " << fmt("%.3f/255", n.meanAbs * 255)
-               << " | " << fmt("%.2f/255", n.maxAbs * 255) << " | "
+               << fmt("%.2f%%", 100 * within) << " | " << fmt("%.3f/255", n.meanAbs * 255) << " | "
+               << fmt("%.2f/255", n.maxAbs * 255) << " | "
                << R.check(n.nonFinite == 0 && within >= 0.99) << " |\n";
         }
     md << "\n(" << fmt("%.1f", seconds(t0)) << " s)\n\n";
@@ -287,12 +292,13 @@ void runAll(ClContext& cl, bool quick, Report& R) {
           "is not finite. Bar: it returns (no crash, no hang) and reports no bad hit; the "
           "colours are recorded (camera rays of a loaded scene are always finite: the loader "
           "rejects non-finite cameras and geometry).\n\n"
-       << "| accel | rays | bad hits | non-finite colours | bar |\n| --- | --- | --- | --- | --- |\n";
+       << "| accel | rays | bad hits | non-finite colours | bar |\n| --- | --- | --- | --- | --- "
+          "|\n";
     for (RenderOptions::Accel a : {RenderOptions::Accel::None, RenderOptions::Accel::Bv,
                                    RenderOptions::Accel::Grid, RenderOptions::Accel::Bvh}) {
         NanResult n = nanRays(cl, a);
-        md << "| " << accelName(a) << " | " << n.rays << " | " << n.badHits << " | "
-           << n.nanPixels << " | " << R.check(n.badHits == 0) << " |\n";
+        md << "| " << accelName(a) << " | " << n.rays << " | " << n.badHits << " | " << n.nanPixels
+           << " | " << R.check(n.badHits == 0) << " |\n";
     }
     md << "\n(" << fmt("%.1f", seconds(t0)) << " s)\n\n";
     scaleSection(cl, quick, R);
@@ -333,8 +339,8 @@ int main(int argc, char** argv) {
         std::ofstream f(std::filesystem::path(out) / "stability.md");
         f << "# Numerical stress suite: " << d.name << "\n\n"
           << "Written by `rtlab-stress" << (quick ? " --quick" : "") << "` (stress/, "
-          << "issue 8) on " << d.label() << ", commit " << RTLAB_COMMIT << ", " << date
-          << ", in " << fmt("%.0f", seconds(t0)) << " s. Counts are *errors / cases (rate)*. "
+          << "issue 8) on " << d.label() << ", commit " << RTLAB_COMMIT << ", " << date << ", in "
+          << fmt("%.0f", seconds(t0)) << " s. Counts are *errors / cases (rate)*. "
           << "Each case asserts the robust method's figure (column *bar*; the same checks run "
           << "in tests/stability_test.cpp) and records the plain one's.\n\n"
           << (R.failed ? std::to_string(R.failed) + " bar(s) FAILED.\n\n" : "Every bar holds.\n\n")

@@ -47,7 +47,6 @@ fs::path stressScenes(const std::string& folder, const std::string& args) {
     return dir;
 }
 
-
 bool samePrimitive(const dev::Sphere& a, const dev::Sphere& b) {
     return std::memcmp(&a, &b, sizeof a) == 0;
 }
@@ -186,9 +185,7 @@ void expectSameImage(const Image& a, const Image& b, const std::string& what) {
     EXPECT_LE(d.meanAbs, 0.1 / 255.0) << what;
 }
 
-std::unique_ptr<Pipeline> pipeline(std::string kind) {
-    return makePipeline(kind, &test::device());
-}
+std::unique_ptr<Pipeline> pipeline(std::string kind) { return makePipeline(kind, &test::device()); }
 
 class AccelImages : public ::testing::TestWithParam<std::tuple<const char*, std::string>> {};
 
@@ -210,13 +207,13 @@ TEST_P(AccelImages, EveryModeMatchesNone) {
     }
 }
 
-INSTANTIATE_TEST_SUITE_P(StandardScenes, AccelImages,
-                         ::testing::Combine(::testing::ValuesIn(kScenes),
-                                            ::testing::ValuesIn(rt::pipelineRegistry().names(true))),
-                         [](const auto& info) {
-                             return std::string(std::get<0>(info.param)) + "_" +
-                                    std::get<1>(info.param);
-                         });
+INSTANTIATE_TEST_SUITE_P(
+    StandardScenes, AccelImages,
+    ::testing::Combine(::testing::ValuesIn(kScenes),
+                       ::testing::ValuesIn(rt::pipelineRegistry().names(true))),
+    [](const auto& info) {
+        return std::string(std::get<0>(info.param)) + "_" + std::get<1>(info.param);
+    });
 
 // The stress scenes at reduced size (4,096 spheres, 20,000 triangles): every mode against none.
 TEST(AccelStress, SmallStressScenesMatchNone) {

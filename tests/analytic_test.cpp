@@ -6,10 +6,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <glm/glm.hpp>
 #include <memory>
 #include <string>
-
-#include <glm/glm.hpp>
 
 #include "core/pipeline.h"
 #include "core/scene_loader.h"
@@ -97,9 +96,9 @@ TEST(Analytic, LitSphereCentreIsBlinnPhong) {
     const dvec3 p(0, 0, 4), n(0, 0, -1), d(0, 0, 1);
     const dvec3 l = glm::normalize(dvec3(0, 5, 0) - p), h = glm::normalize(l - d);
     const dev::Material& m = s.materials[0];
-    const dvec3 expected = d3(m.ambient) + d3(s.lights[0].color) *
-                                               (d3(m.diffuse) * glm::dot(n, l) +
-                                                d3(m.specular) * std::pow(glm::dot(n, h), 16.0));
+    const dvec3 expected =
+        d3(m.ambient) + d3(s.lights[0].color) * (d3(m.diffuse) * glm::dot(n, l) +
+                                                 d3(m.specular) * std::pow(glm::dot(n, h), 16.0));
     expectCentre(s, 0, expected);
 }
 

@@ -1,19 +1,18 @@
 // The rtlab executable: bad input ends in one line on stderr naming the file or flag, a non-zero
 // exit status, and no crash; good input writes the image.
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 
 #include <array>
 #include <cctype>
-#include <ostream>
 #include <cstdio>
-#include <fstream>
 #include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <ostream>
 #include <sstream>
 #include <string>
-#include <sys/wait.h>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "core/cl_runtime.h"
 #include "core/version.h"
@@ -93,7 +92,8 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"render scenes/spheres.json --pipeline gpu -o /tmp/x.png", "--pipeline"},
         BadCase{"sweep quick --no-charts --out /tmp/x --devices nosuchdevice",
                 "--devices nosuchdevice: 'nosuchdevice': no device name"},
-        BadCase{"sweep quick --no-charts --out /tmp/x --devices 0,97", "--devices 0,97: 97: no such"},
+        BadCase{"sweep quick --no-charts --out /tmp/x --devices 0,97",
+                "--devices 0,97: 97: no such"},
         BadCase{"sweep quick --no-charts --out /tmp/x --device 0 --devices 0",
                 "--device and --devices: give one"},
         BadCase{"sweep quick --no-charts --out /tmp/x --shard 0/0", "--shard 0/0: N must be"},
@@ -136,8 +136,7 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"render tests/data/bad_scenes/negative_radius.json -o /tmp/x.png",
                 "tests/data/bad_scenes/negative_radius.json: /spheres/"},
         BadCase{"render scenes/spheres.json --kernel-dir /no/such -o /tmp/x.png", "--kernel-dir"},
-        BadCase{"render scenes/spheres.json --bounce 3 -o /tmp/x.png",
-                "did you mean --bounces?"},
+        BadCase{"render scenes/spheres.json --bounce 3 -o /tmp/x.png", "did you mean --bounces?"},
         BadCase{"render scenes/spheres.json --bounce 3 -o /tmp/x.png", "see rtlab render --help"},
         BadCase{"render scenes/spheres.json --layout diagonal -o /tmp/x.png", "--layout"},
         BadCase{"render scenes/spheres.json --pipeline wave --adaptive --aa 2 -o /tmp/x.png",
@@ -198,8 +197,10 @@ TEST(Cli, RendersWithEveryPipeline) {
 // sizing it was asked for, and device sizing without the default launch cap (which it refuses).
 TEST(Cli, QueueFlagsReachThePipeline) {
     const std::string out = rt::test::scratchPath("queue-flags.png");
-    Result r = run("render scenes/shadows.json --size 32x24 --pipeline queue --pool 4096 "
-                   "--queue-launch device --queue-packets off --stats-json - -o " + out);
+    Result r =
+        run("render scenes/shadows.json --size 32x24 --pipeline queue --pool 4096 "
+            "--queue-launch device --queue-packets off --stats-json - -o " +
+            out);
     ASSERT_EQ(r.status, 0) << r.err;
     const nlohmann::json j = nlohmann::json::parse(r.out);
     EXPECT_EQ(j.at("extras").at("pool_rays"), 4096);
@@ -223,11 +224,13 @@ TEST(Cli, PipelineHelpListsTheRegistry) {
     Result r = run("render --help");
     EXPECT_EQ(r.status, 0);
     for (const rt::PipelineInfo& p : rt::pipelineRegistry().all()) {
-        EXPECT_NE(r.out.find(p.name + ": " + p.title), std::string::npos) << p.name << "\n" << r.out;
+        EXPECT_NE(r.out.find(p.name + ": " + p.title), std::string::npos) << p.name << "\n"
+                                                                          << r.out;
         // Each pipeline's own options are flags of every front end, with their help.
         for (const rt::PipelineOption& o : p.options) {
             EXPECT_NE(r.out.find(o.flag()), std::string::npos) << o.flag() << "\n" << r.out;
-            EXPECT_NE(r.out.find(o.help.substr(0, 30)), std::string::npos) << o.help << "\n" << r.out;
+            EXPECT_NE(r.out.find(o.help.substr(0, 30)), std::string::npos) << o.help << "\n"
+                                                                           << r.out;
         }
     }
     Result c = run("compare --help");
@@ -260,8 +263,10 @@ TEST(Cli, CompareShowsRaysRateAndLaunches) {
 // tree, so all 32 are busy and one tree a work-item is predicted; the threshold decides the rest.
 TEST(Cli, PredictSaysADesignPerScene) {
     auto predict = [](const std::string& threshold) {
-        Result r = run("predict scenes/empty.json scenes/spheres.json --size 64x36 --warps 32 "
-                       "--json --threshold " + threshold);
+        Result r =
+            run("predict scenes/empty.json scenes/spheres.json --size 64x36 --warps 32 "
+                "--json --threshold " +
+                threshold);
         EXPECT_EQ(r.status, 0) << r.err;
         EXPECT_EQ(lines(r.out), 2) << r.out;
         std::vector<nlohmann::json> rows;
@@ -348,7 +353,8 @@ TEST(Cli, ScenesAndSweepsAreListed) {
     for (const auto& e : std::filesystem::directory_iterator("scenes"))
         if (e.path().extension() == ".json")
             EXPECT_NE(scenes.out.find("  " + e.path().stem().string() + " "), std::string::npos)
-                << e.path() << "\n" << scenes.out;
+                << e.path() << "\n"
+                << scenes.out;
     EXPECT_NE(scenes.out.find("Cornell box from triangles"), std::string::npos) << scenes.out;
     EXPECT_NE(scenes.out.find("divergence/: "), std::string::npos) << scenes.out;
     Result sweeps = run("sweeps");
@@ -357,7 +363,8 @@ TEST(Cli, ScenesAndSweepsAreListed) {
     for (const auto& e : std::filesystem::directory_iterator("bench/sweeps")) {
         if (e.path().has_extension()) continue;  // README.md
         std::string name = e.path().filename().string();
-        EXPECT_NE(sweeps.out.find("  " + name + " "), std::string::npos) << name << "\n" << sweeps.out;
+        EXPECT_NE(sweeps.out.find("  " + name + " "), std::string::npos) << name << "\n"
+                                                                         << sweeps.out;
         EXPECT_NE(help.out.find(" " + name + ": "), std::string::npos) << name << "\n" << help.out;
     }
     EXPECT_NE(sweeps.out.find("a first look at a device"), std::string::npos) << sweeps.out;
@@ -367,9 +374,11 @@ TEST(Cli, ScenesAndSweepsAreListed) {
 // says so before measuring anything.
 TEST(Cli, SweepKeepsEarlierResultsWithoutForce) {
     std::filesystem::path dir = rt::test::scratchPath("keep/");
-    std::ofstream(dir / "one") << "repeats = 1\nwarmup = 0\ncount-rays = no\n[x]\nscenes = spheres\n"
-                                  "pipelines = mega\nsizes = 8x6\nbounces = 0\n";
-    std::string cmd = "sweep " + (dir / "one").string() + " --no-charts --out " + (dir / "o").string();
+    std::ofstream(dir / "one")
+        << "repeats = 1\nwarmup = 0\ncount-rays = no\n[x]\nscenes = spheres\n"
+           "pipelines = mega\nsizes = 8x6\nbounces = 0\n";
+    std::string cmd =
+        "sweep " + (dir / "one").string() + " --no-charts --out " + (dir / "o").string();
     Result first = run(cmd);
     ASSERT_EQ(first.status, 0) << first.err;
     std::ofstream(dir / "o" / "one.json", std::ios::app) << "kept";
@@ -387,8 +396,9 @@ TEST(Cli, SweepKeepsEarlierResultsWithoutForce) {
 // --stats-json - writes the JSON, and nothing else, to standard output (no file named "-").
 TEST(Cli, StatsJsonToStandardOutput) {
     std::filesystem::path dir = rt::test::scratchPath("stdout_json/");
-    std::string cmd = "cd " + dir.string() + " && " + std::string(RTLAB_BIN_DIR) + "/rtlab render " +
-                      std::string(RTLAB_SOURCE_DIR) + "/scenes/spheres.json --size 16x12 --stats-json - -o " +
+    std::string cmd = "cd " + dir.string() + " && " + std::string(RTLAB_BIN_DIR) +
+                      "/rtlab render " + std::string(RTLAB_SOURCE_DIR) +
+                      "/scenes/spheres.json --size 16x12 --stats-json - -o " +
                       (dir / "x.png").string() + " 2>/dev/null";
     FILE* p = popen(cmd.c_str(), "r");
     std::string out;
@@ -413,9 +423,9 @@ TEST(Cli, DevicesListsEveryDevice) {
 TEST(Cli, HelpExplainsEveryRenderFlag) {
     Result r = run("render --help");
     EXPECT_EQ(r.status, 0);
-    for (const char* flag : {"--pipeline", "--device", "--size", "--bounces", "--shadow-samples",
-                             "--aa", "--stats", "--memory-budget", "--layout", "--kernel-dir",
-                             "--offset"})
+    for (const char* flag :
+         {"--pipeline", "--device", "--size", "--bounces", "--shadow-samples", "--aa", "--stats",
+          "--memory-budget", "--layout", "--kernel-dir", "--offset"})
         EXPECT_NE(r.out.find(flag), std::string::npos) << flag;
 }
 
@@ -428,17 +438,18 @@ TEST(Cli, ShardsImportIntoOneSetInCellOrder) {
     std::string bench = std::string(RTLAB_BIN_DIR) + "/rtlab-bench";
     if (!std::filesystem::exists(bench)) GTEST_SKIP() << "rtlab-bench not built";
     std::filesystem::path dir = rt::test::scratchPath("shards/");
-    std::ofstream(dir / "tiny") << "repeats = 1\nwarmup = 0\ncount-rays = no\n"
-                                   "reference-bounces = 2\nreference-shadow-samples = 1\n"
-                                   "reference-aa = 1\n"
-                                   "[bounces]\nscenes = spheres cornell\npipelines = mega wave\n"
-                                   "sizes = 16x12\nbounces = 1 2\n"
-                                   "[accuracy]\nscenes = spheres\npipelines = queue\nsizes = 16x12\n"
-                                   "bounces = 2\nimages = yes\n";
+    std::ofstream(dir / "tiny")
+        << "repeats = 1\nwarmup = 0\ncount-rays = no\n"
+           "reference-bounces = 2\nreference-shadow-samples = 1\n"
+           "reference-aa = 1\n"
+           "[bounces]\nscenes = spheres cornell\npipelines = mega wave\n"
+           "sizes = 16x12\nbounces = 1 2\n"
+           "[accuracy]\nscenes = spheres\npipelines = queue\nsizes = 16x12\n"
+           "bounces = 2\nimages = yes\n";
     for (int i = 0; i < 2; ++i) {
-        std::string cmd = bench + " --sweep=" + (dir / "tiny").string() + " --out=" +
-                          (dir / ("s" + std::to_string(i))).string() + " --shard=" +
-                          std::to_string(i) + "/2 2>/dev/null";
+        std::string cmd = bench + " --sweep=" + (dir / "tiny").string() +
+                          " --out=" + (dir / ("s" + std::to_string(i))).string() +
+                          " --shard=" + std::to_string(i) + "/2 2>/dev/null";
         ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
     }
     auto load = [&](const char* out) {

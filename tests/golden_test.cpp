@@ -2,12 +2,12 @@
 // They catch any change to the reference's output; an intended change is recorded by
 // regenerating them with scripts/update-goldens (RTLAB_UPDATE_GOLDENS=1), then looking at them.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <string>
-#include <unistd.h>
 
 #include "core/reference.h"
 #include "core/scene_loader.h"
@@ -62,7 +62,8 @@ TEST_P(GoldenTest, ReferenceMatchesGolden) {
     const rt::ImageDiff diff = rt::compareImages(image, rt::readImage(golden), kTolerance);
     const bool ok = diff.fractionWithin >= kMinFractionWithin && diff.meanAbs <= kMaxMeanAbs;
     if (!ok) {
-        const fs::path actual = fs::path(::testing::TempDir()) / (GetParam() + "_actual_" + std::to_string(getpid()) + ".png");
+        const fs::path actual = fs::path(::testing::TempDir()) /
+                                (GetParam() + "_actual_" + std::to_string(getpid()) + ".png");
         rt::writeImage(image, actual);
         ADD_FAILURE() << "render differs from " << golden << ": within " << diff.fractionWithin
                       << ", mean " << diff.meanAbs * 255 << "/255, max " << diff.maxAbs * 255

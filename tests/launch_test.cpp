@@ -40,8 +40,9 @@ TEST(LaunchPlanner, LearnsRowsFromMeasuredTime) {
 }
 
 // A fake device: row r of a 1280-pixel-wide frame costs cost(r) ms, spread evenly over its
-// columns, or cost(r, col0, cols) ms for columns [col0, col0 + cols) of it. Runs frames through the planner as the megakernel does (columns allowed, steps of
-// 64) and returns, per frame, the launches: the tile, what the planner predicted, what it cost.
+// columns, or cost(r, col0, cols) ms for columns [col0, col0 + cols) of it. Runs frames through the
+// planner as the megakernel does (columns allowed, steps of 64) and returns, per frame, the
+// launches: the tile, what the planner predicted, what it cost.
 struct PlannedLaunch {
     LaunchTile tile;
     double predicted, actual;

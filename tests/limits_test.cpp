@@ -14,8 +14,8 @@
 #include "core/pipeline.h"
 #include "core/scene_loader.h"
 #include "pipelines/registry.h"
-#include "wavefront/tree/wavefront.h"
 #include "test_device.h"
+#include "wavefront/tree/wavefront.h"
 
 namespace rt {
 namespace {
@@ -117,31 +117,35 @@ TEST(LimitsSweep, SkipsOnlySettingsNoSmallerThanAFailure) {
 }
 
 // Runs a sweep file's text on the test device; rows by "pipeline WxH bB".
-std::map<std::string, nlohmann::json> run(const std::string& text, bench::SweepSummary* out = nullptr) {
+std::map<std::string, nlohmann::json> run(const std::string& text,
+                                          bench::SweepSummary* out = nullptr) {
     SweepConfig c = bench::parseSweep(text, "limits-test");
     bench::SweepRunOptions o;
     o.device = test::device().device().name;
     std::map<std::string, nlohmann::json> rows;
-    bench::SweepSummary s = bench::runSweep(c, o, nullptr, [&](const nlohmann::json& r, const Image*) {
-        std::string key = r["pipeline"].get<std::string>() + " " + std::to_string(r["width"].get<int>()) +
-                          "x" + std::to_string(r["height"].get<int>()) + " b" +
-                          std::to_string(r["bounces"].get<int>());
-        EXPECT_FALSE(rows.count(key)) << key;
-        rows[key] = r;
-    });
+    bench::SweepSummary s =
+        bench::runSweep(c, o, nullptr, [&](const nlohmann::json& r, const Image*) {
+            std::string key = r["pipeline"].get<std::string>() + " " +
+                              std::to_string(r["width"].get<int>()) + "x" +
+                              std::to_string(r["height"].get<int>()) + " b" +
+                              std::to_string(r["bounces"].get<int>());
+            EXPECT_FALSE(rows.count(key)) << key;
+            rows[key] = r;
+        });
     if (out) *out = s;
     return rows;
 }
 
 TEST(LimitsSweep, RowsRecordHowEachCellEnded) {
     bench::SweepSummary s;
-    auto rows = run("repeats = 1\nwarmup = 0\ncount-rays = no\nmax-launch-ms = 100\n"
-                    "stop-after-failure = yes\n"
-                    "[limits]\nscenes = spheres\npipelines = mega wave\nsizes = 32x18\n"
-                    "bounces = 11..13\n"
-                    "[limits]\nscenes = spheres\npipelines = wave\nmemory-budget = 100K\n"
-                    "sizes = 32x18 64x36 320x180\nbounces = 3\n",
-                    &s);
+    auto rows =
+        run("repeats = 1\nwarmup = 0\ncount-rays = no\nmax-launch-ms = 100\n"
+            "stop-after-failure = yes\n"
+            "[limits]\nscenes = spheres\npipelines = mega wave\nsizes = 32x18\n"
+            "bounces = 11..13\n"
+            "[limits]\nscenes = spheres\npipelines = wave\nmemory-budget = 100K\n"
+            "sizes = 32x18 64x36 320x180\nbounces = 3\n",
+            &s);
     ASSERT_EQ(rows.size(), 9u);
     EXPECT_EQ(s.measured, 6);
     EXPECT_EQ(s.failed, 2);
@@ -154,10 +158,11 @@ TEST(LimitsSweep, RowsRecordHowEachCellEnded) {
         EXPECT_EQ(rows[k]["image_max_diff"], 0.0) << k;  // the pipelines agree bit for bit
         EXPECT_EQ(rows[k]["image_nonfinite"], 0) << k;
     }
-    EXPECT_EQ(rows["mega 32x18 b12"]["end"],
-              "error: --bounces 12: the megakernel's tree layout keeps 8191 ray-tree nodes (511 KiB) "
-              "in private memory per work-item, over rtlab's 256 KiB cap; the highest bounce limit "
-              "that fits is 11 (or use --layout weighted)");
+    EXPECT_EQ(
+        rows["mega 32x18 b12"]["end"],
+        "error: --bounces 12: the megakernel's tree layout keeps 8191 ray-tree nodes (511 KiB) "
+        "in private memory per work-item, over rtlab's 256 KiB cap; the highest bounce limit "
+        "that fits is 11 (or use --layout weighted)");
     EXPECT_EQ(rows["mega 32x18 b12"]["failure"], "private_tree");
     EXPECT_EQ(rows["mega 32x18 b11"]["failure"], "");
     const char* k = "mega 32x18 b13";
@@ -171,7 +176,8 @@ TEST(LimitsSweep, RowsRecordHowEachCellEnded) {
     // memory (issue 14), so only its global tree bounds it: it goes on past B = 12, in row tiles
     // where the device's largest allocation is smaller than the tree (B = 13: 453 MB).
     for (const char* w : {"wave 32x18 b12", "wave 32x18 b13"}) {
-        EXPECT_EQ(rows[w]["end"].get<std::string>().rfind("ran", 0), 0u) << w << ": " << rows[w]["end"];
+        EXPECT_EQ(rows[w]["end"].get<std::string>().rfind("ran", 0), 0u)
+            << w << ": " << rows[w]["end"];
         EXPECT_EQ(rows[w]["status"], "ok") << w;
         EXPECT_EQ(rows[w]["image_nonfinite"], 0) << w;
         EXPECT_LT(rows[w]["private_bytes"].get<size_t>(), 1024u) << w;
@@ -191,10 +197,11 @@ TEST(LimitsSweep, RowsRecordHowEachCellEnded) {
 
 TEST(LimitsSweep, FrameCapStopsLargerSettings) {
     bench::SweepSummary s;
-    auto rows = run("repeats = 3\nwarmup = 0\ncount-rays = no\nstop-after-failure = yes\n"
-                    "max-frame-s = 0.000001\n"
-                    "[limits]\nscenes = spheres\npipelines = mega\nsizes = 32x18 64x36\nbounces = 1\n",
-                    &s);
+    auto rows =
+        run("repeats = 3\nwarmup = 0\ncount-rays = no\nstop-after-failure = yes\n"
+            "max-frame-s = 0.000001\n"
+            "[limits]\nscenes = spheres\npipelines = mega\nsizes = 32x18 64x36\nbounces = 1\n",
+            &s);
     ASSERT_EQ(rows.size(), 2u);
     EXPECT_EQ(rows["mega 32x18 b1"]["end"], "ran");
     EXPECT_EQ(rows["mega 32x18 b1"]["frames"], 1);  // the cap ends the timed frames early too
@@ -205,7 +212,10 @@ TEST(LimitsSweep, FrameCapStopsLargerSettings) {
 }
 
 TEST(LimitsSweep, EndStateAndFailureKind) {
-    nlohmann::json ok = {{"status", "ok"}, {"pipeline", "wave"}, {"width", 10}, {"height", 7},
+    nlohmann::json ok = {{"status", "ok"},
+                         {"pipeline", "wave"},
+                         {"width", 10},
+                         {"height", 7},
                          {"extras", {{"memory_tiles", 4}}}};
     EXPECT_EQ(bench::memoryTiles(ok), 4);
     EXPECT_EQ(bench::endState(ok), "ran (tiled into 4 tiles)");

@@ -1,5 +1,7 @@
 // Megakernel (issue 3): accuracy against the double-precision CPU reference on every standard
 // scene, single rays through the device intersection code, and the per-scene feature defines.
+#include "megakernel/megakernel.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -12,7 +14,6 @@
 #include "core/scene_loader.h"
 #include "image/compare.h"
 #include "image/image_io.h"
-#include "megakernel/megakernel.h"
 #include "test_device.h"
 #include "test_scenes.h"
 
@@ -51,7 +52,8 @@ TEST_P(MegaVsCpu, WithinAccuracyBar) {
 }
 
 INSTANTIATE_TEST_SUITE_P(StandardScenes, MegaVsCpu,
-                         ::testing::Combine(::testing::ValuesIn(kScenes), ::testing::Values(0, 2, 5)),
+                         ::testing::Combine(::testing::ValuesIn(kScenes),
+                                            ::testing::Values(0, 2, 5)),
                          [](const auto& info) {
                              return std::string(std::get<0>(info.param)) + "_B" +
                                     std::to_string(std::get<1>(info.param));
@@ -182,11 +184,12 @@ TEST(DeviceRays, RobustSphereHitsWherePlainMisses) {
 int countLeaks(bool watertight) {
     // Icosahedron subdivided once, scaled and shifted to awkward float coordinates.
     const float t = (1.f + std::sqrt(5.f)) / 2.f;
-    std::vector<glm::vec3> v = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
-                                {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
-    std::vector<int> f = {0, 11, 5, 0, 5, 1, 0, 1, 7, 0, 7, 10, 0, 10, 11, 1, 5, 9, 5, 11, 4,
-                          11, 10, 2, 10, 7, 6, 7, 1, 8, 3, 9, 4, 3, 4, 2, 3, 2, 6, 3, 6, 8,
-                          3, 8, 9, 4, 9, 5, 2, 4, 11, 6, 2, 10, 8, 6, 7, 9, 8, 1};
+    std::vector<glm::vec3> v = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0},
+                                {0, -1, t}, {0, 1, t}, {0, -1, -t}, {0, 1, -t},
+                                {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+    std::vector<int> f = {0, 11, 5,  0, 5,  1, 0, 1, 7, 0, 7,  10, 0, 10, 11, 1, 5, 9, 5, 11,
+                          4, 11, 10, 2, 10, 7, 6, 7, 1, 8, 3,  9,  4, 3,  4,  2, 3, 2, 6, 3,
+                          6, 8,  3,  8, 9,  4, 9, 5, 2, 4, 11, 6,  2, 10, 8,  6, 7, 9, 8, 1};
     const glm::vec3 centre(3.1f, -7.3f, 11.7f);
     const float scale = 3.7f;
     std::vector<float> tris;
@@ -215,8 +218,10 @@ int countLeaks(bool watertight) {
     cl::Program p = cl.program("probe.cl", defs);
     cl::Kernel k(p, "Probe_TriangleHits");
     size_t n = rays.size() / 6;
-    cl::Buffer rb(cl.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, rays.size() * 4, rays.data());
-    cl::Buffer tb(cl.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, tris.size() * 4, tris.data());
+    cl::Buffer rb(cl.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, rays.size() * 4,
+                  rays.data());
+    cl::Buffer tb(cl.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, tris.size() * 4,
+                  tris.data());
     cl::Buffer hb(cl.context(), CL_MEM_WRITE_ONLY, n * 4);
     k.setArg(0, rb);
     k.setArg(1, tb);

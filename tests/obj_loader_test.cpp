@@ -11,8 +11,8 @@
 
 #include "core/error.h"
 #include "core/scene_loader.h"
-#include "tests/test_device.h"
 #include "scratch_dir.h"
+#include "tests/test_device.h"
 
 namespace rt {
 namespace {
@@ -152,7 +152,8 @@ TEST(ObjLoader, MtlMaterialsMapOntoRtlabMaterials) {
     EXPECT_EQ(scene.materialNames[3], "glass");
     ASSERT_EQ(scene.triangles.size(), 5u);  // two quads and a triangle
     const int expected[] = {2, 2, 3, 3, 0};
-    for (int t = 0; t < 5; ++t) EXPECT_EQ(scene.triangles[t].material, expected[t]) << "triangle " << t;
+    for (int t = 0; t < 5; ++t)
+        EXPECT_EQ(scene.triangles[t].material, expected[t]) << "triangle " << t;
 
     const dev::Material& red = scene.materials[2];
     EXPECT_FLOAT_EQ(red.diffuse.x, 0.8f);
@@ -201,7 +202,8 @@ TEST(ObjLoader, OtherModelFormatsAreRefusedByName) {
             EXPECT_NE(msg.find(file), std::string::npos) << msg;
             EXPECT_NE(msg.find("files are not supported; rtlab reads .obj, .gltf, .glb and .ply "
                                "models and .json scenes"),
-                      std::string::npos) << msg;
+                      std::string::npos)
+                << msg;
         }
     }
 }

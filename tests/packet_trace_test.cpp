@@ -81,7 +81,8 @@ std::vector<BatchRay> shadowRays(const Scene& s, const std::vector<BatchRay>& ra
 void expectEveryLaneHitsAndMisses(const std::vector<int>& hit, int packet, const char* what) {
     for (int lane = 0; lane < packet; ++lane) {
         int hits = 0, misses = 0;
-        for (size_t i = size_t(lane); i < hit.size(); i += size_t(packet)) (hit[i] ? hits : misses)++;
+        for (size_t i = size_t(lane); i < hit.size(); i += size_t(packet))
+            (hit[i] ? hits : misses)++;
         EXPECT_GT(hits, 0) << what << ": lane " << lane << " of " << packet;
         EXPECT_GT(misses, 0) << what << ": lane " << lane << " of " << packet;
     }

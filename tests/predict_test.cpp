@@ -1,11 +1,12 @@
 // The warp estimate of core/predict.h: the busy-lane arithmetic, the CPU's tree sizes against the
 // rays a device pipeline counts, and the rule.
+#include "core/predict.h"
+
 #include <gtest/gtest.h>
 
 #include <numeric>
 #include <vector>
 
-#include "core/predict.h"
 #include "core/reference.h"
 #include "pipelines/registry.h"
 #include "test_device.h"
@@ -51,8 +52,8 @@ TEST(RayTreeSizes, AddUpToTheRaysADeviceCounts) {
         auto mega = makePipeline("mega", &test::device());
         mega->render(scene, o);
         const RayCounts& r = mega->stats().rays;
-        const long long device = (long long)(r[RT_RAY_PRIMARY] + r[RT_RAY_REFLECTION] +
-                                             r[RT_RAY_REFRACTION]);
+        const long long device =
+            (long long)(r[RT_RAY_PRIMARY] + r[RT_RAY_REFLECTION] + r[RT_RAY_REFRACTION]);
         EXPECT_GT(r[RT_RAY_REFLECTION], 0u);
         EXPECT_EQ(cpu, device);
         EXPECT_GT(cpu, (long long)pixels.size() * 4) << "no secondary rays to count";

@@ -1,6 +1,8 @@
 // Procedural materials (issue 15): the noise and patterns of core/procedural.cpp against values
 // derived here from their definitions, the loader's new keys, and the divergence scene rendered
 // by every pipeline against the megakernel and the double-precision CPU reference.
+#include "core/procedural.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -9,18 +11,16 @@
 #include <fstream>
 #include <random>
 
-
 #include "core/error.h"
 #include "core/kernel_resources.h"
 #include "core/pipeline.h"
-#include "core/procedural.h"
 #include "core/reference.h"
 #include "core/scene_loader.h"
 #include "image/compare.h"
 #include "image/image_io.h"
 #include "pipelines/registry.h"
-#include "test_device.h"
 #include "scratch_dir.h"
+#include "test_device.h"
 
 namespace rt {
 namespace {
@@ -29,9 +29,9 @@ using glm::dvec3;
 
 // The 16 gradient directions the definition picks by hash & 15 (Perlin 2002's cube edges, with
 // four repeated), written out by hand.
-const dvec3 kGrad[16] = {{1, 1, 0},  {-1, 1, 0}, {1, -1, 0}, {-1, -1, 0}, {1, 0, 1},  {-1, 0, 1},
-                         {1, 0, -1}, {-1, 0, -1}, {0, 1, 1}, {0, -1, 1},  {0, 1, -1}, {0, -1, -1},
-                         {1, 1, 0},  {0, -1, 1}, {-1, 1, 0}, {0, -1, -1}};
+const dvec3 kGrad[16] = {{1, 1, 0},  {-1, 1, 0},  {1, -1, 0}, {-1, -1, 0}, {1, 0, 1},  {-1, 0, 1},
+                         {1, 0, -1}, {-1, 0, -1}, {0, 1, 1},  {0, -1, 1},  {0, 1, -1}, {0, -1, -1},
+                         {1, 1, 0},  {0, -1, 1},  {-1, 1, 0}, {0, -1, -1}};
 
 TEST(Procedural, GradientIsTheDotWithTheTabledDirection) {
     const dvec3 d(0.3, -0.7, 0.45);
@@ -136,7 +136,8 @@ Scene loadText(const std::string& materials) {
 }
 
 TEST(ProceduralScene, LoaderReadsThePatternKeys) {
-    Scene s = loadText(R"("m": {"pattern": "wood", "octaves": 7, "scale": 2.5, "diffuse2": [0.1, 0.2, 0.3]})");
+    Scene s = loadText(
+        R"("m": {"pattern": "wood", "octaves": 7, "scale": 2.5, "diffuse2": [0.1, 0.2, 0.3]})");
     ASSERT_EQ(s.materials.size(), 1u);
     EXPECT_EQ(s.materials[0].pattern, RT_PATTERN_WOOD);
     EXPECT_EQ(s.materials[0].octaves, 7);
@@ -147,11 +148,11 @@ TEST(ProceduralScene, LoaderReadsThePatternKeys) {
 }
 
 TEST(ProceduralScene, LoaderRejectsBadPatternKeysInOneLine) {
-    for (const char* bad : {R"("m": {"pattern": "plaid"})", R"("m": {"pattern": 3})",
-                            R"("m": {"pattern": "wood", "octaves": 65})",
-                            R"("m": {"pattern": "wood", "octaves": 1.5})",
-                            R"("m": {"pattern": "wood", "scale": 0})",
-                            R"("m": {"pattern": "bump", "bump": -1})"}) {
+    for (const char* bad :
+         {R"("m": {"pattern": "plaid"})", R"("m": {"pattern": 3})",
+          R"("m": {"pattern": "wood", "octaves": 65})",
+          R"("m": {"pattern": "wood", "octaves": 1.5})", R"("m": {"pattern": "wood", "scale": 0})",
+          R"("m": {"pattern": "bump", "bump": -1})"}) {
         try {
             loadText(bad);
             ADD_FAILURE() << "accepted " << bad;
@@ -201,7 +202,8 @@ TEST(ProceduralScene, MegakernelMatchesTheCpuReference) {
     Scene deep = loadScene("scenes/divergence/divergence-o64-m16.json", readImage);
     RenderOptions o64 = tiny(deep, 1);
     auto mega64 = makePipeline("mega", &test::device());
-    ImageDiff d64 = compareImages(mega64->render(deep, o64), renderReference(deep, o64), 2.0 / 255.0);
+    ImageDiff d64 =
+        compareImages(mega64->render(deep, o64), renderReference(deep, o64), 2.0 / 255.0);
     EXPECT_GE(d64.fractionWithin, 0.999) << "64 octaves: max " << d64.maxAbs * 255 << "/255";
     Scene scene = divergence();
     for (int bounces : {0, 3}) {
@@ -229,9 +231,9 @@ TEST(ProceduralScene, EveryPipelineGivesTheMegakernelsImage) {
     EXPECT_LE(compareImages(weighted, queue->render(scene, o), 1e-5, false).maxAbs, 1e-5);
     EXPECT_LE(compareImages(tree, weighted, 1e-5, false).maxAbs, 1e-5);
     const FrameStats& s = queue->stats();
-    EXPECT_TRUE(std::any_of(s.kernelMs.begin(), s.kernelMs.end(),
-                            [](const auto& k) { return k.first == "shade procedural"; }))
-        << "procedural rays get their own launch";
+    EXPECT_TRUE(std::any_of(s.kernelMs.begin(), s.kernelMs.end(), [](const auto& k) {
+        return k.first == "shade procedural";
+    })) << "procedural rays get their own launch";
     EXPECT_FALSE(mega->stats().kernelResources.empty()) << "private bytes at least";
 }
 

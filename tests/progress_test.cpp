@@ -79,7 +79,8 @@ double maxDifference(const Image& a, const Image& b, int rowBegin, int rowEnd) {
 
 TEST(RowWindows, ThePiecesOfAFrameMakeTheWholeFrame) {
     std::vector<Case> cases = windowCases();
-    ASSERT_FALSE(cases.empty()) << "no registered pipeline renders row windows (the viewer needs one)";
+    ASSERT_FALSE(cases.empty())
+        << "no registered pipeline renders row windows (the viewer needs one)";
     Scene scene = test::load("cornell");  // glass: C = 2, and edges for the adaptive pass
     for (const Case& c : cases) {
         SCOPED_TRACE(label(c));

@@ -45,8 +45,8 @@ TEST_P(QueueLaunchSizing, DeviceSizedLaunchesGiveTheSameBits) {
     QueuePipeline queue(test::device());
     for (int b = 0; b <= 8; ++b)
         for (int aa : {1, 2}) {
-            std::string what = std::string(GetParam()) + " B=" + std::to_string(b) +
-                               " aa=" + std::to_string(aa);
+            std::string what =
+                std::string(GetParam()) + " B=" + std::to_string(b) + " aa=" + std::to_string(aa);
             RenderOptions o = tiny(scene, b, aa);
             setQueueLaunch(o, Launch::Readback);
             Image host = queue.render(scene, o);
@@ -73,7 +73,8 @@ TEST(QueueLaunch, PoolTooSmallForABounceFallsBackToReadbacks) {
     setQueuePool(o, 64);
     QueuePipeline queue(test::device());
     Image host = queue.render(scene, o);
-    ASSERT_GT(queue.queueStats().restartedPaths, 0) << "the pool must be too small to hold a bounce";
+    ASSERT_GT(queue.queueStats().restartedPaths, 0)
+        << "the pool must be too small to hold a bounce";
     setQueueLaunch(o, Launch::Device);
     Image device = queue.render(scene, o);
     EXPECT_TRUE(queue.queueStats().fellBack);
@@ -131,7 +132,7 @@ TEST(QueueLaunch, StagePiecesFitTheCapFromTheMeasuredCostPerItem) {
     EXPECT_EQ(costs.piece("extend", 100000, 0, 64), 100000u) << "no cap: one launch";
     EXPECT_EQ(costs.piece("extend", 100000, 100, 64), StageCosts::kProbeItems) << "probe first";
     EXPECT_EQ(costs.piece("extend", 100, 100, 64), 100u) << "a short queue is its own probe";
-    costs.learn("extend", 1024, 8.0, 100);  // 1/128 ms an item: 10240 fit 80 ms
+    costs.learn("extend", 1024, 8.0, 100);                      // 1/128 ms an item: 10240 fit 80 ms
     EXPECT_EQ(costs.piece("extend", 100000, 100, 64), 10240u);  // 160 whole groups of 64
     EXPECT_EQ(costs.piece("extend", 100000, 100, 384), 9984u);  // 26 whole groups of 384
     EXPECT_EQ(costs.piece("extend", 10000, 100, 384), 10000u) << "fits: not cut to groups";
@@ -195,8 +196,9 @@ TEST(QueueLaunch, DeviceSizingRefusesMaxLaunchMs) {
         queue.render(scene, o);
         FAIL() << "--max-launch-ms learns from read-backs";
     } catch (const Error& e) {
-        EXPECT_NE(std::string(e.what()).find("--queue-launch device does not go with --max-launch-ms"),
-                  std::string::npos)
+        EXPECT_NE(
+            std::string(e.what()).find("--queue-launch device does not go with --max-launch-ms"),
+            std::string::npos)
             << e.what();
     }
 }
@@ -231,7 +233,8 @@ TEST(QueueLaunch, SweepRunsBothSizings) {
     // The PoCL file adds a pool that holds the frame, so device sizing runs one wave per sample.
     bench::SweepConfig cpu = bench::loadSweep(bench::findSweep("queue-launch-cpu"));
     int pooled = 0;
-    for (const bench::Cell& cell : bench::expandCells(cpu, [&](const std::string& name) -> const Scene& {
+    for (const bench::Cell& cell :
+         bench::expandCells(cpu, [&](const std::string& name) -> const Scene& {
              return scenes.try_emplace(name, load(name)).first->second;
          })) {
         EXPECT_EQ(cell.options.width, 640);

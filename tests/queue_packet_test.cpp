@@ -40,9 +40,7 @@ RenderOptions small(const Scene& scene, int width, int height, int bounces) {
     return o;
 }
 
-Scene bunny() {
-    return loadScene(test::sharedFile("models/bunny.obj").string());
-}
+Scene bunny() { return loadScene(test::sharedFile("models/bunny.obj").string()); }
 
 // Renders with packets off, then on, and expects the same bits and the packets reported; on a
 // device that is not a CPU, `on` must be refused instead.

@@ -3,6 +3,8 @@
 // run to run and for any pool size (paths cut for room and started again), device memory that
 // does not grow with the bounce limit, the queues it claims to run, and one clear error per bad
 // option.
+#include "wavefront/queue/queue.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -17,7 +19,6 @@
 #include "megakernel/megakernel.h"
 #include "test_device.h"
 #include "test_scenes.h"
-#include "wavefront/queue/queue.h"
 #include "wavefront/queue/queue_layout.h"
 
 namespace rt {
@@ -140,9 +141,9 @@ TEST(Queue, RunsItsStagesOverClassQueues) {
     const FrameStats& s = queue.stats();
     std::vector<std::string> names;
     for (const auto& [name, ms] : s.kernelMs) names.push_back(name);
-    for (const char* stage : {"generate", "extend", "shadow", "shade miss", "shade diffuse",
-                              "shade mirror", "shade glass", "scan blocks", "accumulate",
-                              "compact", "resolve"})
+    for (const char* stage :
+         {"generate", "extend", "shadow", "shade miss", "shade diffuse", "shade mirror",
+          "shade glass", "scan blocks", "accumulate", "compact", "resolve"})
         EXPECT_NE(std::find(names.begin(), names.end(), stage), names.end()) << stage;
     const QueueStats& q = queue.queueStats();
     ASSERT_EQ(q.queueLengths.size(), 4u);
@@ -195,8 +196,8 @@ TEST(Queue, BenchmarkSweepCoversTheHeadlineAndEveryBounceLimit) {
     for (const bench::Cell& cell : cells) {
         queue += cell.pipeline == "queue";
         wave += cell.pipeline == "wave";
-        weighted += cell.pipeline == "mega" &&
-                    cell.options.layout == RenderOptions::Layout::Weighted;
+        weighted +=
+            cell.pipeline == "mega" && cell.options.layout == RenderOptions::Layout::Weighted;
         EXPECT_EQ(cell.options.width, 1920);
         EXPECT_EQ(cell.options.shadowSamples, 8);
     }

@@ -1,6 +1,8 @@
 // The pipeline registry (issue 13): front ends see pipelines only through it, so it must list the
 // CPU reference first and every pipeline folder once, refuse a second entry under one name, and
 // name every choice when asked for one it lacks.
+#include "pipelines/registry.h"
+
 #include <gtest/gtest.h>
 
 #include <cstring>
@@ -15,7 +17,6 @@
 #include "core/scene_loader.h"
 #include "image/compare.h"
 #include "image/image_io.h"
-#include "pipelines/registry.h"
 #include "test_device.h"
 
 namespace rt {
@@ -89,9 +90,10 @@ TEST(Registry, EveryDevicePipelineRendersTheSameImage) {
 
 // Sweep files take any registered name, and every device pipeline when a group names none.
 TEST(Registry, SweepFilesTakeTheirPipelinesFromTheRegistry) {
-    bench::SweepConfig c = bench::parseSweep("[a]\nscenes = spheres\n[b]\nscenes = spheres\n"
-                                             "pipelines = wave\n",
-                                             "test");
+    bench::SweepConfig c = bench::parseSweep(
+        "[a]\nscenes = spheres\n[b]\nscenes = spheres\n"
+        "pipelines = wave\n",
+        "test");
     EXPECT_EQ(c.groups[0].pipelines, pipelineRegistry().names(true));
     EXPECT_EQ(c.groups[1].pipelines, std::vector<std::string>{"wave"});
     for (const char* bad : {"nope", "cpu"}) {
@@ -115,14 +117,29 @@ TEST(Registry, RefusesAnOptionTwoPipelinesDeclare) {
         p.options = {std::move(o)};
         return p;
     };
-    const PipelineOption mine{.name = "gain", .type = PipelineOption::Type::Integer,
-                              .help = "h", .defaultValue = 1ll, .min = 1, .max = 4,
-                              .sweepKey = "gain", .cellTag = "G", .label = "gain {}"};
+    const PipelineOption mine{.name = "gain",
+                              .type = PipelineOption::Type::Integer,
+                              .help = "h",
+                              .defaultValue = 1ll,
+                              .min = 1,
+                              .max = 4,
+                              .sweepKey = "gain",
+                              .cellTag = "G",
+                              .label = "gain {}"};
     PipelineRegistry r;
     r.add(withOption("a", mine));
-    for (auto change : {+[](PipelineOption& o) { o.sweepKey = "other"; o.cellTag = "X"; },
-                        +[](PipelineOption& o) { o.name = "other"; o.cellTag = "X"; },
-                        +[](PipelineOption& o) { o.name = "other"; o.sweepKey = "other"; }}) {
+    for (auto change : {+[](PipelineOption& o) {
+                            o.sweepKey = "other";
+                            o.cellTag = "X";
+                        },
+                        +[](PipelineOption& o) {
+                            o.name = "other";
+                            o.cellTag = "X";
+                        },
+                        +[](PipelineOption& o) {
+                            o.name = "other";
+                            o.sweepKey = "other";
+                        }}) {
         PipelineOption clash = mine;
         change(clash);
         EXPECT_THROW(r.add(withOption("b", clash)), Error) << clash.name;
@@ -139,12 +156,23 @@ TEST(Registry, RefusesAnOptionTwoPipelinesDeclare) {
 // Values are read back typed, with the declared default when unset, and checked when set, the
 // error naming the flag.
 TEST(Registry, OptionValuesReadBackTypedAndAreChecked) {
-    const PipelineOption count{.name = "count", .type = PipelineOption::Type::Integer,
-                               .help = "h", .defaultValue = 0ll, .min = 1, .max = 9,
-                               .sweepKey = "count", .cellTag = "C", .label = "count {}"};
-    const PipelineOption mode{.name = "mode", .type = PipelineOption::Type::Choice, .help = "h",
-                              .defaultValue = "slow", .choices = {"slow", "fast", "odd"},
-                              .sweepKey = "mode", .cellTag = "M", .label = "{}"};
+    const PipelineOption count{.name = "count",
+                               .type = PipelineOption::Type::Integer,
+                               .help = "h",
+                               .defaultValue = 0ll,
+                               .min = 1,
+                               .max = 9,
+                               .sweepKey = "count",
+                               .cellTag = "C",
+                               .label = "count {}"};
+    const PipelineOption mode{.name = "mode",
+                              .type = PipelineOption::Type::Choice,
+                              .help = "h",
+                              .defaultValue = "slow",
+                              .choices = {"slow", "fast", "odd"},
+                              .sweepKey = "mode",
+                              .cellTag = "M",
+                              .label = "{}"};
     PipelineOptionValues v;
     EXPECT_EQ(count.integer(v), 0);
     EXPECT_EQ(mode.index(v), 0u);
@@ -177,11 +205,11 @@ TEST(Registry, SweepFilesTakeEveryDeclaredOption) {
         const bool number = opt->type == PipelineOption::Type::Integer;
         std::string value = number ? std::to_string(opt->max) : opt->choices.back();
         std::string fallback = number ? "default" : opt->text(opt->defaultValue);
-        bench::SweepConfig c = bench::parseSweep("[a]\nscenes = spheres\npipelines = wave\n" +
-                                                     opt->sweepKey + " = " + value + "\n[b]\n" +
-                                                     "scenes = spheres\npipelines = wave\n" +
-                                                     opt->sweepKey + " = " + fallback + "\n",
-                                                 "t");
+        bench::SweepConfig c =
+            bench::parseSweep("[a]\nscenes = spheres\npipelines = wave\n" + opt->sweepKey + " = " +
+                                  value + "\n[b]\n" + "scenes = spheres\npipelines = wave\n" +
+                                  opt->sweepKey + " = " + fallback + "\n",
+                              "t");
         EXPECT_EQ(opt->text(opt->value(c.groups[0].pipelineOptions)), value) << opt->name;
         EXPECT_TRUE(opt->isDefault(c.groups[1].pipelineOptions)) << opt->name;
         Scene scene = loadScene("scenes/spheres.json", readImage);
@@ -211,7 +239,8 @@ TEST(Registry, RecordedRowsKeepTheirCellKeys) {
         bench::parseSweep(results.at("meta").at("config").get<std::string>(), "queue-launch-cpu");
     std::map<std::string, Scene> scenes;
     std::set<std::string> now;
-    for (const bench::Cell& cell : bench::expandCells(c, [&](const std::string& name) -> const Scene& {
+    for (const bench::Cell& cell :
+         bench::expandCells(c, [&](const std::string& name) -> const Scene& {
              return scenes.try_emplace(name, loadScene("scenes/" + name + ".json", readImage))
                  .first->second;
          }))

@@ -9,8 +9,8 @@
 #include "core/cl_runtime.h"
 #include "core/error.h"
 #include "core/kernel_sources.h"
-#include "test_device.h"
 #include "scratch_dir.h"
+#include "test_device.h"
 
 namespace rt {
 namespace {
@@ -25,21 +25,23 @@ TEST(Runtime, ErrorNames) {
         throwClError(cl::Error(CL_MEM_OBJECT_ALLOCATION_FAILURE, "clCreateBuffer"), "allocating x");
         FAIL();
     } catch (const Error& e) {
-        EXPECT_STREQ(e.what(),
-                     "allocating x: clCreateBuffer failed with CL_MEM_OBJECT_ALLOCATION_FAILURE (-4)");
+        EXPECT_STREQ(
+            e.what(),
+            "allocating x: clCreateBuffer failed with CL_MEM_OBJECT_ALLOCATION_FAILURE (-4)");
     }
 }
 
 // Out-of-memory errors from a launch carry what the frame needed; other errors do not.
 TEST(Runtime, OutOfMemoryErrorsCarryTheHint) {
-    for (cl_int code : {CL_OUT_OF_RESOURCES, CL_OUT_OF_HOST_MEMORY, CL_MEM_OBJECT_ALLOCATION_FAILURE}) {
+    for (cl_int code :
+         {CL_OUT_OF_RESOURCES, CL_OUT_OF_HOST_MEMORY, CL_MEM_OBJECT_ALLOCATION_FAILURE}) {
         try {
             throwClError(cl::Error(code, "clEnqueueNDRangeKernel"), "frame", "lower --bounces");
             FAIL();
         } catch (const Error& e) {
-            EXPECT_EQ(std::string(e.what()), std::string("frame: clEnqueueNDRangeKernel failed with ") +
-                                                 clErrorName(code) + " (" + std::to_string(code) +
-                                                 "); lower --bounces");
+            EXPECT_EQ(std::string(e.what()),
+                      std::string("frame: clEnqueueNDRangeKernel failed with ") +
+                          clErrorName(code) + " (" + std::to_string(code) + "); lower --bounces");
         }
     }
     try {

@@ -1,12 +1,12 @@
 // The soft-shadow sampler (core/sampling.h, issue 19): stratified, jittered per shading point,
 // and free of the bias a fixed pattern has, which a penumbra showed as concentric bands.
+#include "core/sampling.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <functional>
 #include <set>
-
-#include "core/sampling.h"
 
 namespace rt {
 namespace {

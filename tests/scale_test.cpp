@@ -14,8 +14,8 @@
 #include "core/reference.h"
 #include "core/scene_loader.h"
 #include "core/scene_scale.h"
-#include "pipelines/registry.h"
 #include "image/image_io.h"
+#include "pipelines/registry.h"
 #include "test_device.h"
 
 namespace rt {
@@ -27,7 +27,8 @@ int pixelsOff(const Image& a, const Image& b) {
     for (size_t p = 0; p < a.rgb.size() / 3; ++p) {
         bool off = false;
         for (int c = 0; c < 3; ++c) {
-            float x = std::clamp(a.rgb[p * 3 + c], 0.f, 1.f), y = std::clamp(b.rgb[p * 3 + c], 0.f, 1.f);
+            float x = std::clamp(a.rgb[p * 3 + c], 0.f, 1.f),
+                  y = std::clamp(b.rgb[p * 3 + c], 0.f, 1.f);
             off = off || !(std::abs(x - y) <= 2.f / 255.f);
         }
         n += off;
@@ -99,7 +100,8 @@ TEST(Scale, FixedEpsilonChangesSmallScenes) {
     RenderOptions o = smallOptions(scene);
     o.offset = RenderOptions::Offset::Fixed;
     const Image base = renderReference(scene, o);
-    EXPECT_GT(pixelsOff(base, renderReference(scaleScene(scene, 1e-4), o)), o.width * o.height / 100);
+    EXPECT_GT(pixelsOff(base, renderReference(scaleScene(scene, 1e-4), o)),
+              o.width * o.height / 100);
 }
 
 // A grey Blinn-Phong sphere of radius 1e-3 at distance 1e4 straight ahead of the camera, lit

@@ -1,6 +1,5 @@
 // Scene files: every malformed file fails with its exact one-line message, and the standard
 // scenes load with the objects, materials and settings they declare.
-#include "core/accel.h"
 #include "core/scene_loader.h"
 
 #include <gtest/gtest.h>
@@ -11,6 +10,7 @@
 #include <sstream>
 #include <string>
 
+#include "core/accel.h"
 #include "core/error.h"
 #include "image/image_io.h"
 #include "scratch_dir.h"
@@ -291,13 +291,14 @@ TEST(SceneLoader, RenderSectionAndAnglesParse) {
 // Every structure --accel knows is a scene's render.accel too, and an unknown one is named.
 TEST(SceneLoader, RenderAccelNamesEveryStructure) {
     for (const char* name : {"none", "bv", "grid", "bvh", "wide", "cwbvh"}) {
-        fs::path p = writeTemp(std::string(name) + ".json",
-                               std::string(R"({"camera": {"position": [0, 0, 0]}, "render": {"accel": ")") +
-                                   name + "\"}}");
+        fs::path p =
+            writeTemp(std::string(name) + ".json",
+                      std::string(R"({"camera": {"position": [0, 0, 0]}, "render": {"accel": ")") +
+                          name + "\"}}");
         EXPECT_STREQ(accelName(loadScene(p).defaults.accel), name);
     }
-    fs::path bad = writeTemp("octree.json",
-                             R"({"camera": {"position": [0, 0, 0]}, "render": {"accel": "octree"}})");
+    fs::path bad = writeTemp(
+        "octree.json", R"({"camera": {"position": [0, 0, 0]}, "render": {"accel": "octree"}})");
     EXPECT_NE(loadError(bad).find("/render/accel: must be one of none, bv, grid, bvh, wide, cwbvh, "
                                   "got 'octree'"),
               std::string::npos)

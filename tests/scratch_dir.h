@@ -10,8 +10,8 @@
 
 #include <cerrno>
 #include <cstring>
-#include <stdexcept>
 #include <filesystem>
+#include <stdexcept>
 #include <string>
 #include <system_error>
 
@@ -20,9 +20,11 @@ namespace rt::test {
 class ScratchDir {
   public:
     ScratchDir() {
-        std::string pattern = (std::filesystem::path(::testing::TempDir()) / "rtlab_XXXXXX").string();
+        std::string pattern =
+            (std::filesystem::path(::testing::TempDir()) / "rtlab_XXXXXX").string();
         if (!mkdtemp(pattern.data()))
-            throw std::runtime_error(pattern + ": cannot make a scratch folder: " + std::strerror(errno));
+            throw std::runtime_error(pattern +
+                                     ": cannot make a scratch folder: " + std::strerror(errno));
         path_ = pattern;
     }
     ~ScratchDir() {

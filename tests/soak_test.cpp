@@ -3,7 +3,6 @@
 // OpenCL context holds (ClContext::allocatedBytes). 1050 frames (seven periods) per pipeline by
 // default, a few seconds each on PoCL; RTLAB_SOAK_FRAMES asks for more (scripts/soak).
 #include <gtest/gtest.h>
-
 #include <unistd.h>
 
 #include <cstdlib>
@@ -92,7 +91,8 @@ void check(std::string kind, bool rssBound = true) {
     const double mib = 1.0 / (1 << 20);
     ::testing::Test::RecordProperty("frames", r.frames);
     ::testing::Test::RecordProperty("rss_base_mib", std::to_string(r.rssBase * mib));
-    ::testing::Test::RecordProperty("rss_growth_kib", std::to_string((double(r.rssEnd) - double(r.rssBase)) / 1024));
+    ::testing::Test::RecordProperty("rss_growth_kib",
+                                    std::to_string((double(r.rssEnd) - double(r.rssBase)) / 1024));
     ::testing::Test::RecordProperty("device_bytes", std::to_string(r.deviceEnd));
     EXPECT_EQ(r.deviceEnd, r.deviceBase) << kind << ": device bytes grew";
     // 1.5 MiB of allocator noise over 900 measured frames (six periods): this catches a host
@@ -100,8 +100,8 @@ void check(std::string kind, bool rssBound = true) {
     // (66 periods) catch about 23 KiB per reload. Device copies are counted exactly above.
     if (!kAsan && rssBound) {
         EXPECT_LE(double(r.rssEnd), double(r.rssBase) + 1.5 * (1 << 20))
-            << kind << ": resident memory grew from " << r.rssBase * mib << " to "
-            << r.rssEnd * mib << " MiB over " << r.frames << " frames";
+            << kind << ": resident memory grew from " << r.rssBase * mib << " to " << r.rssEnd * mib
+            << " MiB over " << r.frames << " frames";
     }
 }
 

@@ -3,8 +3,6 @@
 // clear line or renders without a NaN pixel; device limits end in a clear error. The cases and
 // their probe kernels are those of rtlab-stress (stress/stress.h, core/cl/probe.cl), linked
 // here so the tool and the test cannot drift apart; the tests use fewer rays.
-#include "stress/stress.h"
-
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -19,8 +17,9 @@
 #include "core/scene_loader.h"
 #include "megakernel/megakernel.h"
 #include "pipelines/registry.h"
-#include "test_device.h"
 #include "scratch_dir.h"
+#include "stress/stress.h"
+#include "test_device.h"
 #include "wavefront/tree/wavefront.h"
 
 namespace rt::stress {
@@ -71,7 +70,8 @@ TEST(Stability, TinySphereFarAwayIsHitByTheRobustTest) {
 // ---- (c) ----
 TEST(Stability, ScaledAndBoundOffsetsHaveNoAcneAtSmallAndLargeScales) {
     for (double s : {1e-3, 1e5})
-        for (RenderOptions::Offset off : {RenderOptions::Offset::Scaled, RenderOptions::Offset::Bound}) {
+        for (RenderOptions::Offset off :
+             {RenderOptions::Offset::Scaled, RenderOptions::Offset::Bound}) {
             AcneResult a = acne(test::device(), s, off, 400, 32);
             std::string at = std::string(" with the ") + offsetName(off) + " offset at scale " +
                              std::to_string(s);
@@ -168,8 +168,10 @@ TEST(Stability, GrazingViewRendersFinite) {
     Scene s = emptyScene("grazing");
     s.materials.push_back(material(0.3f, 1.5f, 0.f));
     const float L = 1e4f;
-    s.triangles.push_back({{-L, 0, -L}, {L, 0, -L}, {L, 0, L}, {0, 1, 0}, {0, 1, 0}, {0, 1, 0}, 1, 0});
-    s.triangles.push_back({{-L, 0, -L}, {L, 0, L}, {-L, 0, L}, {0, 1, 0}, {0, 1, 0}, {0, 1, 0}, 1, 0});
+    s.triangles.push_back(
+        {{-L, 0, -L}, {L, 0, -L}, {L, 0, L}, {0, 1, 0}, {0, 1, 0}, {0, 1, 0}, 1, 0});
+    s.triangles.push_back(
+        {{-L, 0, -L}, {L, 0, L}, {-L, 0, L}, {0, 1, 0}, {0, 1, 0}, {0, 1, 0}, 1, 0});
     s.planes.push_back({{0, 1, 0}, -1e-6f, 0, {0, 0, 0}});
     s.spheres.push_back({{0, 1, 50}, 1.f, 1, {0, 0, 0}});
     s.lights.push_back({{0, 3, 10}, 0.f, {1, 1, 1}, 0.f});
@@ -356,8 +358,10 @@ TEST(Stability, RayTreeAboveMaxAllocIsTiledOrRefusedBeforeAllocation) {
             EXPECT_GE(rows, 1) << "B=" << bounces;
             EXPECT_LE(size_t(rows) * rowBytes, maxAlloc) << "B=" << bounces;
         } else {
-            EXPECT_THROW(WavefrontPipeline::tileRows(16384, 16384, 2, bounces, maxAlloc, "max"), Error)
-                << "B=" << bounces << ": a " << rowBytes << " B row over a " << maxAlloc << " B limit";
+            EXPECT_THROW(WavefrontPipeline::tileRows(16384, 16384, 2, bounces, maxAlloc, "max"),
+                         Error)
+                << "B=" << bounces << ": a " << rowBytes << " B row over a " << maxAlloc
+                << " B limit";
         }
     }
     EXPECT_GE(fitting, 1) << "OpenCL guarantees at least 128 MiB per allocation: B=1 rows fit";
@@ -414,8 +418,8 @@ TEST(Stability, AllocationFailureOnResizeRecovers) {
         Image first = p->render(scene, o);
         const size_t image = 32 * 24 * 12, smaller = 16 * 12 * 12;
         // Mega: the new image buffer fits, its centre buffer does not. Wave: the tree fails.
-        size_t limit = k == "mega" ? cl.allocatedBytes() - 2 * image + smaller
-                                               : cl.allocatedBytes();
+        size_t limit =
+            k == "mega" ? cl.allocatedBytes() - 2 * image + smaller : cl.allocatedBytes();
         setenv("RTLAB_FAIL_ALLOC_AFTER", std::to_string(limit).c_str(), 1);
         k == "mega" ? size(16, 12) : size(40, 30);
         EXPECT_THROW(p->render(scene, o), Error) << k;

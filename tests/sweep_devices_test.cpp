@@ -20,8 +20,10 @@ namespace {
 // skips depend on an earlier failure (the private tree at B = 12).
 const char* kSweep =
     "repeats = 1\nwarmup = 0\ncount-rays = yes\n"
-    "[bounces]\nscenes = spheres cornell\npipelines = mega wave queue\nsizes = 24x16\nbounces = 1 2\n"
-    "[accuracy]\nscenes = spheres\npipelines = mega wave\nsizes = 20x12\nbounces = 2\nimages = yes\n"
+    "[bounces]\nscenes = spheres cornell\npipelines = mega wave queue\nsizes = 24x16\nbounces = 1 "
+    "2\n"
+    "[accuracy]\nscenes = spheres\npipelines = mega wave\nsizes = 20x12\nbounces = 2\nimages = "
+    "yes\n"
     "[limits]\nscenes = spheres\npipelines = mega wave\nsizes = 8x6 16x9\nbounces = 11..13\n"
     "stop-after-failure = yes\n";
 
@@ -38,10 +40,11 @@ SweepRun runSweep(const std::string& devices, bench::Shard shard = {}) {
     o.devices = devices;
     o.shard = shard;
     SweepRun r;
-    r.summary = bench::runSweep(config, o, nullptr, [&](const nlohmann::json& row, const Image* image) {
-        r.rows.push_back(row);
-        if (image) r.images.push_back(image->rgb);
-    });
+    r.summary =
+        bench::runSweep(config, o, nullptr, [&](const nlohmann::json& row, const Image* image) {
+            r.rows.push_back(row);
+            if (image) r.images.push_back(image->rgb);
+        });
     return r;
 }
 
@@ -107,9 +110,9 @@ TEST(SweepDevices, StopAfterFailureBatchesOfASceneAreOneUnit) {
     bench::SweepConfig config = bench::parseSweep(kSweep, "devices-test");
     Scene spheres = loadScene(std::string(RTLAB_SOURCE_DIR) + "/scenes/spheres.json");
     Scene cornell = loadScene(std::string(RTLAB_SOURCE_DIR) + "/scenes/cornell.json");
-    std::vector<bench::Cell> cells = bench::expandCells(config, [&](const std::string& n) -> const Scene& {
-        return n == "cornell" ? cornell : spheres;
-    });
+    std::vector<bench::Cell> cells = bench::expandCells(
+        config,
+        [&](const std::string& n) -> const Scene& { return n == "cornell" ? cornell : spheres; });
     std::vector<bench::WorkUnit> units = bench::workUnits(cells);
     // bounces: 2 scenes x 2 limits, one batch each (three pipelines interleaved); accuracy: one;
     // limits: 2 sizes x 3 bounce limits, one batch each, all one unit.
@@ -153,7 +156,8 @@ TEST(SweepDevices, DeviceListsAreResolvedOrRefusedByName) {
     EXPECT_EQ(two[1].index, d.index);
     // all: every GPU, else every device.
     std::vector<DeviceInfo> all = bench::selectDevices("all"), listed = listDevices();
-    size_t gpus = std::count_if(listed.begin(), listed.end(), [](const DeviceInfo& x) { return x.isGpu(); });
+    size_t gpus =
+        std::count_if(listed.begin(), listed.end(), [](const DeviceInfo& x) { return x.isGpu(); });
     EXPECT_EQ(all.size(), gpus ? gpus : listed.size());
     for (auto [spec, named] : std::vector<std::pair<std::string, std::string>>{
              {"0,9999", "9999: no such device index"},
@@ -175,7 +179,8 @@ TEST(SweepDevices, DeviceListsAreResolvedOrRefusedByName) {
 TEST(SweepRows, TimingExtrasComeFromTheTimedFrames) {
     bench::SweepConfig config = bench::parseSweep(
         "repeats = 3\nwarmup = 1\ncount-rays = yes\n[q]\nscenes = cornell\npipelines = queue\n"
-        "sizes = 64x36\nbounces = 4\n", "extras-test");
+        "sizes = 64x36\nbounces = 4\n",
+        "extras-test");
     bench::SweepRunOptions o;
     o.device = std::to_string(test::device().device().index);
     std::vector<nlohmann::json> rows;

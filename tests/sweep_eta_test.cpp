@@ -1,11 +1,11 @@
 // The sweep's time-left estimate (bench/sweep_eta.h), fed a made-up sequence of measured cells:
 // what one kind of cell cost elsewhere prices it on the next scene or size, and a program's build
 // is charged to the first cell of that program only.
+#include "bench/sweep_eta.h"
+
 #include <gtest/gtest.h>
 
 #include <string>
-
-#include "bench/sweep_eta.h"
 
 namespace rt {
 namespace {

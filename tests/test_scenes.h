@@ -11,7 +11,8 @@
 namespace rt::test {
 
 // The standard scenes of scenes/, which the equivalence and acceleration tests each cover.
-inline constexpr const char* kScenes[] = {"empty", "spheres", "shadows", "cornell", "mesh", "envmap"};
+inline constexpr const char* kScenes[] = {"empty",   "spheres", "shadows",
+                                          "cornell", "mesh",    "envmap"};
 
 // A standard scene by name (tests run from the source root).
 inline Scene load(const std::string& name) {

@@ -1,11 +1,12 @@
 // What one ray costs in each BVH, counted on the host (bench/trace_visits.cpp, issue 18): the node
 // visits, triangle tests and bytes that the trace-peer results name as the bound, checked on rays
 // whose work is known from the tree's shape.
+#include "bench/trace_visits.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 
-#include "bench/trace_visits.h"
 #include "test_scenes.h"
 
 namespace rt {
@@ -56,8 +57,9 @@ TEST(TraversalCost, ARayThroughOneTriangleTestsItOnce) {
 // enters both leaves, misses the nearer one and pops the farther one, which loads nothing: its
 // (first, count) came in its stack entry.
 TEST(TraversalCost, APoppedNodeLoadsNothing) {
-    AccelData d = buildAccel(triangles({flat(-1, -1, 1, -1, 0, 1, 0), flat(-3, -3, 3, -3, 0, 3, -5)}),
-                             RenderOptions::Accel::Wide);
+    AccelData d =
+        buildAccel(triangles({flat(-1, -1, 1, -1, 0, 1, 0), flat(-3, -3, 3, -3, 0, 3, -5)}),
+                   RenderOptions::Accel::Wide);
     ASSERT_EQ(d.bvh.size(), 3u);  // a root over two leaves
     std::vector<BatchRay> beside = {down(0.9f, 0.9f)};
     for (bool anyHit : {false, true}) {
@@ -79,14 +81,16 @@ TEST(TraversalCost, APoppedNodeLoadsNothing) {
 // The compressed 8-wide BVH: one node holds both leaves; a closest-hit ray beside the small
 // triangle tests both (80 B of node, 48 B per leaf entry).
 TEST(TraversalCost, CwbvhCountsNodesAndLeafEntries) {
-    AccelData d = buildAccel(triangles({flat(-1, -1, 1, -1, 0, 1, 0), flat(-3, -3, 3, -3, 0, 3, -5)}),
-                             RenderOptions::Accel::Cwbvh);
+    AccelData d =
+        buildAccel(triangles({flat(-1, -1, 1, -1, 0, 1, 0), flat(-3, -3, 3, -3, 0, 3, -5)}),
+                   RenderOptions::Accel::Cwbvh);
     ASSERT_EQ(d.cwbvh.size(), 1u);
     TraversalCost c = cwbvhTraversalCost(d, {down(0.9f, 0.9f)}, false);
     EXPECT_EQ(c.nodes, 1.0);
     EXPECT_EQ(c.triangles, 2.0);
     EXPECT_EQ(c.bytes, 80.0 + 2 * 48.0);
-    TraversalCost miss = cwbvhTraversalCost(d, {{0.f, 0.f, 5.f, INFINITY, 1.f, 0.f, 0.f, 0.f}}, false);
+    TraversalCost miss =
+        cwbvhTraversalCost(d, {{0.f, 0.f, 5.f, INFINITY, 1.f, 0.f, 0.f, 0.f}}, false);
     EXPECT_EQ(miss.nodes, 1.0);
     EXPECT_EQ(miss.triangles, 0.0);
     // 300 random triangles: a node visit tests eight slots, so a ray makes fewer visits than in

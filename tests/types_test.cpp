@@ -1,9 +1,10 @@
 // The shared records must have the same layout on the host and on the device.
+#include "core/types.h"
+
 #include <gtest/gtest.h>
 
 #include <cstddef>
 
-#include "core/types.h"
 #include "test_device.h"
 
 namespace rt {
@@ -20,15 +21,22 @@ TEST(Types, DeviceSeesTheSameSizesAndOffsets) {
     cl_uint got[kCount] = {};
     cl.queue().enqueueReadBuffer(out, CL_TRUE, 0, sizeof got, got);
     using namespace dev;
-    const size_t expected[kCount] = {sizeof(Float3),         sizeof(Material),
-                                     sizeof(Sphere),         sizeof(Plane),
-                                     sizeof(Triangle),       sizeof(MeshInstance),
-                                     sizeof(Light),          sizeof(Camera),
-                                     sizeof(RenderSettings), sizeof(Node),
-                                     sizeof(BvhNode),        offsetof(Node, occluded),
+    const size_t expected[kCount] = {sizeof(Float3),
+                                     sizeof(Material),
+                                     sizeof(Sphere),
+                                     sizeof(Plane),
+                                     sizeof(Triangle),
+                                     sizeof(MeshInstance),
+                                     sizeof(Light),
+                                     sizeof(Camera),
+                                     sizeof(RenderSettings),
+                                     sizeof(Node),
+                                     sizeof(BvhNode),
+                                     offsetof(Node, occluded),
                                      offsetof(RenderSettings, camera),
                                      offsetof(MeshInstance, sphereRadius),
-                                     sizeof(Grid),           sizeof(Kdop),
+                                     sizeof(Grid),
+                                     sizeof(Kdop),
                                      offsetof(RenderSettings, grid)};
     for (int i = 0; i < kCount; ++i) EXPECT_EQ(got[i], expected[i]) << "probe entry " << i;
 }

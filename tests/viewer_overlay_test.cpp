@@ -2,11 +2,11 @@
 // the split view's panel, with every kernel of a wavefront listed, stays inside the window and
 // within its share of it at `rtlab view`'s default scale and at --scale 1, and still says
 // everything where there is room for it.
+#include "apps/viewer_overlay.h"
+
 #include <gtest/gtest.h>
 
 #include <string>
-
-#include "apps/viewer_overlay.h"
 
 namespace rt::view {
 namespace {
@@ -27,7 +27,7 @@ FrameOut splitFrame() {
     mega.stats.kernelMs = {{"render", 41.5}};
     PipelineFrame queue{"queue", {}, {}};
     queue.stats.deviceMs = 97.3;
-    queue.stats.kernelMs = {{"generate", 1.5},      {"trace", 40.25},  {"shade_diffuse", 20.5},
+    queue.stats.kernelMs = {{"generate", 1.5},       {"trace", 40.25}, {"shade_diffuse", 20.5},
                             {"shade_specular", 9.0}, {"shadow", 18.0}, {"compact", 4.0},
                             {"accumulate", 4.0}};
     queue.stats.raysCounted = true;

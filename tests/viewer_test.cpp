@@ -1,7 +1,11 @@
 // rtlab-view under Xvfb (Mesa's software OpenGL): the split view shows exactly what
 // `rtlab render` writes for each pipeline, a failed reload keeps the old scene, and a missing
 // display or a bad scene ends in one line and a non-zero exit instead of a crash.
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <array>
 #include <cerrno>
@@ -13,12 +17,8 @@
 #include <fstream>
 #include <functional>
 #include <string>
-#include <fcntl.h>
-#include <sys/stat.h>
-#include <sys/wait.h>
 #include <thread>
 #include <utility>
-#include <unistd.h>
 
 #include "image/compare.h"
 #include "image/image_io.h"
@@ -78,7 +78,8 @@ std::string privateDir(const std::string& name) { return rt::test::scratchPath(n
 // at its next open, whatever the speed of the device; gives up after two minutes (reader died).
 bool feedFifo(const std::string& fifo, const std::string& text) {
     for (int attempt = 0; attempt < 12000; ++attempt) {
-        int fd = open(fifo.c_str(), O_WRONLY | O_NONBLOCK);  // fails with ENXIO until a reader opens
+        int fd =
+            open(fifo.c_str(), O_WRONLY | O_NONBLOCK);  // fails with ENXIO until a reader opens
         if (fd >= 0) {
             fcntl(fd, F_SETFL, 0);
             bool ok = write(fd, text.data(), text.size()) == ssize_t(text.size());
@@ -103,25 +104,29 @@ rt::Image columns(const rt::Image& image, int x0, int x1) {
 // One 8-bit sRGB step, in linear units, where the steps are widest (at white): compareImages
 // works on linear values, and the pipelines agree to one PNG quantisation step.
 double oneSrgbStep() {
-    auto decode = [](double s) { return s <= 0.04045 ? s / 12.92 : std::pow((s + 0.055) / 1.055, 2.4); };
+    auto decode = [](double s) {
+        return s <= 0.04045 ? s / 12.92 : std::pow((s + 0.055) / 1.055, 2.4);
+    };
     return decode(1.0) - decode(254.0 / 255.0) + 1e-6;
 }
 
 std::string renderPng(const std::string& scene, const std::string& pipeline) {
-    std::string out = privateDir("render") + fs::path(scene).stem().string() + "_" + pipeline + ".png";
+    std::string out =
+        privateDir("render") + fs::path(scene).stem().string() + "_" + pipeline + ".png";
     Result r = run(kBin + "/rtlab render " + scene + " --pipeline " + pipeline + " -o " + out);
     EXPECT_EQ(r.status, 0) << r.err;
     return out;
 }
 
 void expectSame(const rt::Image& shot, const rt::Image& render, int x0, int x1, const char* side) {
-    rt::ImageDiff d = rt::compareImages(columns(shot, x0, x1), columns(render, x0, x1), oneSrgbStep());
+    rt::ImageDiff d =
+        rt::compareImages(columns(shot, x0, x1), columns(render, x0, x1), oneSrgbStep());
     EXPECT_EQ(d.pixelsOver, 0) << side << ": max difference " << d.maxAbs << " (linear)";
     EXPECT_LE(d.maxAbs, oneSrgbStep()) << side;
 }
 
 class Viewer : public ::testing::Test {
-protected:
+  protected:
     void SetUp() override {
         if (!fs::exists(kBin + "/rtlab-view")) GTEST_SKIP() << "rtlab-view was not built";
         if (!haveXvfb()) GTEST_SKIP() << "xvfb-run is missing (scripts/setup installs it)";
@@ -148,8 +153,9 @@ TEST_F(Viewer, SplitViewHalvesMatchTheirPipelinesRenders) {
 TEST_F(Viewer, SplitPairPicksWhichPipelineIsOnWhichSide) {
     const std::string scene = "scenes/spheres.json";
     std::string shotPath = privateDir("split_pair") + "split.png";
-    Result r = run(kXvfb + kBin + "/rtlab-view " + scene +
-                   " --frames 30 --split wave,mega --no-overlay --scale 1 --screenshot " + shotPath);
+    Result r =
+        run(kXvfb + kBin + "/rtlab-view " + scene +
+            " --frames 30 --split wave,mega --no-overlay --scale 1 --screenshot " + shotPath);
     ASSERT_EQ(r.status, 0) << r.out << r.err;
     EXPECT_NE(r.out.find("wave"), std::string::npos) << r.out;
     rt::Image shot = rt::readImage(shotPath);
@@ -171,9 +177,10 @@ TEST_F(Viewer, SceneErrorOnReloadKeepsTheOldSceneWithOneLine) {
     std::thread good([&] { EXPECT_TRUE(feedFifo(scene, slurp("scenes/spheres.json"))); });
     std::thread broken;
     // The first stdout line comes after the scene was read and closed.
-    Result r = run(kXvfb + kBin + "/rtlab-view " + scene +
-                       " --frames 10 --keys 6:R --no-overlay --scale 1 --screenshot " + shotPath,
-                   [&] { broken = std::thread([&] { EXPECT_TRUE(feedFifo(scene, "{\"spheres\": [\n")); }); });
+    Result r = run(
+        kXvfb + kBin + "/rtlab-view " + scene +
+            " --frames 10 --keys 6:R --no-overlay --scale 1 --screenshot " + shotPath,
+        [&] { broken = std::thread([&] { EXPECT_TRUE(feedFifo(scene, "{\"spheres\": [\n")); }); });
     good.join();
     if (broken.joinable()) broken.join();
     ASSERT_EQ(r.status, 0) << r.out << r.err;
@@ -217,7 +224,8 @@ TEST_F(Viewer, SlowFrameComesInPiecesAndAKeyAtAPieceRestartsIt) {
     std::string shotPath = privateDir("pieces") + "shot.png";
     Result r = run(kXvfb + kBin + "/rtlab-view " + scene +
                    " --bounces 2 --piece-rows 16 --frames 1 --keys 1.3:+ --no-overlay --scale 1"
-                   " --screenshot " + shotPath);
+                   " --screenshot " +
+                   shotPath);
     ASSERT_EQ(r.status, 0) << r.out << r.err;
     EXPECT_NE(r.out.find("the last in 15 pieces, 1 restarted"), std::string::npos) << r.out;
     std::string expected = privateDir("pieces") + "b3.png";
@@ -233,9 +241,9 @@ TEST_F(Viewer, SplitViewOfMegaAndWaveComesInPieces) {
     // same as its pipeline's whole frame.
     const std::string scene = "scenes/spheres.json";
     std::string shotPath = privateDir("split_pieces") + "shot.png";
-    Result r = run(kXvfb + kBin + "/rtlab-view " + scene +
-                   " --split --piece-rows 16 --frames 1 --no-overlay --scale 1 --screenshot " +
-                   shotPath);
+    Result r =
+        run(kXvfb + kBin + "/rtlab-view " + scene +
+            " --split --piece-rows 16 --frames 1 --no-overlay --scale 1 --screenshot " + shotPath);
     ASSERT_EQ(r.status, 0) << r.out << r.err;
     EXPECT_NE(r.out.find("the last in 15 pieces, 0 restarted"), std::string::npos) << r.out;
     rt::Image shot = rt::readImage(shotPath);

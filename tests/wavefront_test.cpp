@@ -1,6 +1,8 @@
 // Wavefront pipeline (issue 4): the same image as the megakernel, bit for bit, on every standard
 // scene at bounce limits 0..8, with and without soft shadows and anti-aliasing; row tiling under a
 // memory budget; the error when not even one row fits.
+#include "wavefront/tree/wavefront.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -14,7 +16,6 @@
 #include "megakernel/megakernel.h"
 #include "test_device.h"
 #include "test_scenes.h"
-#include "wavefront/tree/wavefront.h"
 
 namespace rt {
 namespace {
@@ -45,8 +46,8 @@ TEST_P(WaveVsMega, SameImageAtEveryBounceLimit) {
                 Image m = mega.render(scene, o), w = wave.render(scene, o);
                 for (float v : m.rgb) ASSERT_TRUE(std::isfinite(v)) << GetParam() << " B=" << b;
                 ImageDiff d = compareImages(m, w, 1e-5, false);
-                EXPECT_LE(d.maxAbs, 1e-5) << GetParam() << " B=" << b << " aa=" << aa
-                                          << " soft=" << soft;
+                EXPECT_LE(d.maxAbs, 1e-5)
+                    << GetParam() << " B=" << b << " aa=" << aa << " soft=" << soft;
                 EXPECT_EQ(std::memcmp(m.rgb.data(), w.rgb.data(), m.rgb.size() * 4), 0)
                     << GetParam() << " B=" << b << " aa=" << aa << " soft=" << soft
                     << ": not bit-identical (max diff " << d.maxAbs << ")";
@@ -128,8 +129,8 @@ TEST(Wavefront, BudgetBelowOneRowNamesABounceLimitThatFits) {
     RenderOptions o = scene.defaults;
     o.width = 40;
     o.height = 30;
-    o.bounces = 6;                // N = 127: 40 x (127 x 48 + 4 x 4) = 244,480 B per row
-    o.memoryBudget = 20'000;      // B = 2 fits (N = 7: 13,600 B a row), B = 3 does not (28,960)
+    o.bounces = 6;            // N = 127: 40 x (127 x 48 + 4 x 4) = 244,480 B per row
+    o.memoryBudget = 20'000;  // B = 2 fits (N = 7: 13,600 B a row), B = 3 does not (28,960)
     WavefrontPipeline wave(test::device());
     try {
         wave.render(scene, o);
@@ -225,8 +226,10 @@ TEST(Wavefront, ResetClearsEveryFlag) {
 TEST(Wavefront, BenchmarkSweepHoldsTheIssuesFrame) {
     bench::SweepConfig c = bench::loadSweep(bench::findSweep("tree-wave"));
     Scene cornell = load("cornell"), spheres = load("spheres");
-    std::vector<bench::Cell> cells = bench::expandCells(
-        c, [&](const std::string& name) -> const Scene& { return name == "cornell" ? cornell : spheres; });
+    std::vector<bench::Cell> cells =
+        bench::expandCells(c, [&](const std::string& name) -> const Scene& {
+            return name == "cornell" ? cornell : spheres;
+        });
     ASSERT_EQ(cells.size(), 4u);
     int wave = 0;
     for (const bench::Cell& cell : cells) {

@@ -30,7 +30,6 @@ using Accel = RenderOptions::Accel;
 using test::kScenes;
 using test::load;
 
-
 // The layouts under test, and each one's checker.
 constexpr Accel kWide[] = {Accel::Wide, Accel::Cwbvh};
 
@@ -128,8 +127,8 @@ TEST(Cwbvh, CheckerRejectsBrokenTrees) {
 TEST(Cwbvh, ChildrenSitInTheSlotOfTheirCorner) {
     Scene s = test::soup(0, 0, 8);
     for (int k = 0; k < 8; ++k)
-        s.spheres.push_back({{k & 1 ? 5.f : -5.f, k & 2 ? 5.f : -5.f, k & 4 ? 5.f : -5.f}, 1.f, 0,
-                             {0, 0, 0}});
+        s.spheres.push_back(
+            {{k & 1 ? 5.f : -5.f, k & 2 ? 5.f : -5.f, k & 4 ? 5.f : -5.f}, 1.f, 0, {0, 0, 0}});
     finalizeScene(s);
     AccelData d = buildAccel(s, Accel::Cwbvh);
     ASSERT_EQ(checkCwbvh(d), "");
@@ -165,7 +164,8 @@ TEST(WideBvh, ParsedAndNamedInTheDefines) {
     EXPECT_EQ(parseAccel("cwbvh"), Accel::Cwbvh);
     EXPECT_STREQ(accelName(Accel::Cwbvh), "cwbvh");
     EXPECT_THROW(parseAccel("bvh8"), Error);
-    for (auto [a, define] : {std::pair{Accel::Wide, "RT_ACCEL_WIDE"}, {Accel::Cwbvh, "RT_ACCEL_CWBVH"}}) {
+    for (auto [a, define] :
+         {std::pair{Accel::Wide, "RT_ACCEL_WIDE"}, {Accel::Cwbvh, "RT_ACCEL_CWBVH"}}) {
         RenderOptions o;
         o.accel = a;
         auto d = featureDefines(load("mesh"), o);
@@ -232,7 +232,8 @@ INSTANTIATE_TEST_SUITE_P(Pipelines, WideImages,
                          ::testing::Combine(::testing::ValuesIn(pipelineRegistry().names(true)),
                                             ::testing::ValuesIn(kWide)),
                          [](const auto& info) {
-                             return std::get<0>(info.param) + "_" + accelName(std::get<1>(info.param));
+                             return std::get<0>(info.param) + "_" +
+                                    accelName(std::get<1>(info.param));
                          });
 
 // The small stress scenes (4,096 spheres, 20,000 triangles) into a folder of this test's own.

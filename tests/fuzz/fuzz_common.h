@@ -28,9 +28,11 @@ namespace rt::fuzz {
 
 inline const std::filesystem::path& workDir() {
     static const std::filesystem::path dir = [] {
-        // mkdtemp, not the process id: containers reuse ids, and an earlier run's folder may remain.
-        // scripts/fuzz points TMPDIR at a folder of build-fuzz/ that it empties before each run.
-        std::string pattern = (std::filesystem::temp_directory_path() / "rtlab-fuzz-XXXXXX").string();
+        // mkdtemp, not the process id: containers reuse ids, and an earlier run's folder may
+        // remain. scripts/fuzz points TMPDIR at a folder of build-fuzz/ that it empties before each
+        // run.
+        std::string pattern =
+            (std::filesystem::temp_directory_path() / "rtlab-fuzz-XXXXXX").string();
         if (!mkdtemp(pattern.data())) {
             std::perror(pattern.c_str());
             std::abort();
@@ -70,8 +72,8 @@ inline void loadAndBuild(const std::filesystem::path& path) {
     try {
         Scene scene = loadScene(path, fakeImage);
         if (scene.spheres.size() + scene.triangles.size() <= 4096)
-            for (RenderOptions::Accel a : {RenderOptions::Accel::Bv, RenderOptions::Accel::Grid,
-                                           RenderOptions::Accel::Bvh})
+            for (RenderOptions::Accel a :
+                 {RenderOptions::Accel::Bv, RenderOptions::Accel::Grid, RenderOptions::Accel::Bvh})
                 buildAccel(scene, a);
     } catch (const Error& e) {
         if (std::string(e.what()).find('\n') != std::string::npos) {

@@ -7,6 +7,8 @@
 //    last bound)), and every kernel reads its real length from the counters (Queue_Length).
 // Either way the stage kernels within a bounce are launched over the queue's upper bound and read
 // their exact length from the device, so a bounce costs at most one host round trip.
+#include "wavefront/queue/queue.h"
+
 #include <algorithm>
 #include <array>
 #include <cctype>
@@ -17,9 +19,8 @@
 #include <tuple>
 
 #include "core/error.h"
-#include "core/pipeline_registry.h"
 #include "core/kernel_resources.h"
-#include "wavefront/queue/queue.h"
+#include "core/pipeline_registry.h"
 #include "wavefront/queue/queue_layout.h"
 #include "wavefront/queue/queue_split.h"
 
@@ -61,10 +62,14 @@ std::array<bool, RT_Q_CLASSES> sceneClasses(const Scene& scene) {
     std::array<bool, RT_Q_CLASSES> c{};
     c[RT_Q_MISS] = true;
     for (const dev::Material& m : scene.materials) {
-        if (m.opacity < 1.0f) c[RT_Q_GLASS] = true;
-        else if (m.reflectance > 0.0f) c[RT_Q_MIRROR] = true;
-        else if (m.pattern != RT_PATTERN_NONE) c[RT_Q_PROCEDURAL] = true;
-        else c[RT_Q_DIFFUSE] = true;
+        if (m.opacity < 1.0f)
+            c[RT_Q_GLASS] = true;
+        else if (m.reflectance > 0.0f)
+            c[RT_Q_MIRROR] = true;
+        else if (m.pattern != RT_PATTERN_NONE)
+            c[RT_Q_PROCEDURAL] = true;
+        else
+            c[RT_Q_DIFFUSE] = true;
     }
     return c;
 }
@@ -82,14 +87,21 @@ struct QueueLaunch {
 // One frame's launches, named for --stats: kernels, their local sizes, the events to time, and
 // (--max-launch-ms) each launch split into pieces that fit the cap (wavefront/queue/queue_split.h).
 class QueueFrame {
-public:
+  public:
     // targetMs: --max-launch-ms (0: one launch per stage); fakeItemMs > 0 (tests only) prices
     // every launch at its items times that instead of its profiling event.
     QueueFrame(ClContext& cl, cl::Program& program, const DeviceScene& scene, int group,
                QueueKernels& kernels, StageCosts& costs, double targetMs, double fakeItemMs,
                bool packets)
-        : cl_(cl), program_(program), scene_(scene), group_(group), kernels_(kernels.kernels),
-          locals_(kernels.locals), costs_(costs), targetMs_(targetMs), fakeItemMs_(fakeItemMs),
+        : cl_(cl),
+          program_(program),
+          scene_(scene),
+          group_(group),
+          kernels_(kernels.kernels),
+          locals_(kernels.locals),
+          costs_(costs),
+          targetMs_(targetMs),
+          fakeItemMs_(fakeItemMs),
           packets_(packets) {}
 
     // The extend and shadow kernels of this frame: per ray, or per packet of rays.
@@ -189,11 +201,12 @@ public:
     std::vector<QueueLaunch>& launches() { return launches_; }
     const DeviceScene& scene() const { return scene_; }
 
-private:
+  private:
     // Items [offset, offset + items) of the queue: work-items from offset / lanes on.
     void enqueue(const std::string& name, size_t offset, size_t items, int countWord) {
         size_t local = locals_.at(name), per = lanes(name);
-        size_t workItems = (items + per - 1) / per, global = (workItems + local - 1) / local * local;
+        size_t workItems = (items + per - 1) / per,
+               global = (workItems + local - 1) / local * local;
         cl::Event e;
         cl_.queue().enqueueNDRangeKernel(kernels_.at(name), cl::NDRange(offset / per),
                                          cl::NDRange(global), cl::NDRange(local), nullptr, &e);
@@ -219,16 +232,20 @@ const char* const kShadeKernels[RT_Q_CLASSES] = {"Queue_ShadeMiss", "Queue_Shade
 
 // The bounces of one AA sample: which pixels are still to start, and the pool's live rays.
 class QueuePass {
-public:
+  public:
     // learned: the admission limit an earlier frame of the same workload ended with, else 0.
     QueuePass(ClContext& cl, QueueFrame& f, const QueueBuffers& b, const RenderOptions& o,
               QueueStats& stats, size_t learned)
-        : cl_(cl), f_(f), b_(b), o_(o), stats_(stats),
+        : cl_(cl),
+          f_(f),
+          b_(b),
+          o_(o),
+          stats_(stats),
           onDevice_(queueLaunch(o) == QueueLaunchMode::Device),
           // --max-launch-ms: start with a probe and learn what a ray costs (see adaptLimit).
           limit_(o.maxLaunchMs <= 0 ? b.pool
-                 : learned         ? std::min(b.pool, learned)
-                                   : std::min(b.pool, kProbeRays)) {}
+                 : learned          ? std::min(b.pool, learned)
+                                    : std::min(b.pool, kProbeRays)) {}
     size_t limit() const { return limit_; }
 
     // classes: which shade kernels the scene can need (a class without a material never runs).
@@ -251,7 +268,7 @@ public:
     size_t firstPixel() const { return size_t(o_.rowBegin) * size_t(o_.width); }
     size_t endPixel() const { return size_t(o_.lastRow()) * size_t(o_.width); }
 
-private:
+  private:
     // Arguments that stay the same through the pass (the settings carry the sample index).
     void bindKernels(const dev::RenderSettings& s) {
         const int a = DeviceScene::kFirstKernelArg;
@@ -373,8 +390,10 @@ private:
             f_.learn(len);
         }
         auto queueLaunch = [&](const char* kernel, int word) {
-            if (split) f_.launch(kernel, size_t(len[word]));
-            else f_.launch(kernel, n, onDevice_ ? -1 : word);
+            if (split)
+                f_.launch(kernel, size_t(len[word]));
+            else
+                f_.launch(kernel, n, onDevice_ ? -1 : word);
         };
         if (lights_ > 0) queueLaunch(f_.shadowKernel(), RT_Q_SHADOW);
         for (int c = 0; c < RT_Q_CLASSES; ++c)
@@ -513,9 +532,10 @@ Image QueuePipeline::render(const Scene& scene, const RenderOptions& o) {
                     FailureKind::InvalidOption);
     const bool onDevice = queueLaunch(o) == QueueLaunchMode::Device;
     if (onDevice && o.maxLaunchMs > 0)
-        throw Error("--queue-launch device does not go with --max-launch-ms: its admission is "
-                    "learned from each bounce's time, which needs --queue-launch readback",
-                    FailureKind::InvalidOption);
+        throw Error(
+            "--queue-launch device does not go with --max-launch-ms: its admission is "
+            "learned from each bounce's time, which needs --queue-launch readback",
+            FailureKind::InvalidOption);
     stats_ = {};
     queue_ = {};
     const int C = scene.branching();
@@ -576,7 +596,7 @@ Image QueuePipeline::render(const Scene& scene, const RenderOptions& o) {
         QueuePass pass(cl_, frame, buf_, o, queue_, learnedLimit_);
         // Progress in pixels started x AA samples, over the row window.
         const size_t first = pass.firstPixel(), window = pass.endPixel() - first;
-        const long long total = (long long)(window) * o.aa * o.aa;
+        const long long total = (long long)(window)*o.aa * o.aa;
         for (int s = 0; s < o.aa * o.aa; ++s) {
             settings.sampleIndex = s;
             pass.run(settings, sceneClasses(scene), [&](size_t started) {
@@ -593,7 +613,8 @@ Image QueuePipeline::render(const Scene& scene, const RenderOptions& o) {
         cl_.queue().enqueueReadBuffer(buf_.counters, CL_TRUE, 0, words.size() * 4, words.data());
         for (int d = 0; d <= o.bounces; ++d) {
             std::array<long long, RT_Q_CLASSES> row{};
-            for (int c = 0; c < RT_Q_CLASSES; ++c) row[c] = words[RT_Q_HISTOGRAM + d * RT_Q_CLASSES + c];
+            for (int c = 0; c < RT_Q_CLASSES; ++c)
+                row[c] = words[RT_Q_HISTOGRAM + d * RT_Q_CLASSES + c];
             queue_.queueLengths.push_back(row);
         }
         if (o.countRays) {
@@ -606,7 +627,8 @@ Image QueuePipeline::render(const Scene& scene, const RenderOptions& o) {
             stats_.raysCounted = true;
         }
         if (o.maxLaunchMs > 0) frame.learn(nullptr);  // the last bounce's and resolve's
-        for (const QueueLaunch& l : frame.launches()) stats_.addKernel(stageName(l.kernel), frame.ms(l));
+        for (const QueueLaunch& l : frame.launches())
+            stats_.addKernel(stageName(l.kernel), frame.ms(l));
         stats_.launches = int(frame.launches().size());
         std::tie(queue_.spanMs, queue_.idleMs) = spanAndIdleMs(frame.launches());
         queue_.fellBack = words[RT_Q_OVERFLOW] != 0;
@@ -621,8 +643,9 @@ Image QueuePipeline::render(const Scene& scene, const RenderOptions& o) {
         Image image = render(scene, again);
         queue_.fellBack = true;
         stats_.extras["queue_launch"] = "device, fell back to readback";
-        stats_.hostMs = std::chrono::duration<double, std::milli>(
-                            std::chrono::steady_clock::now() - t0).count();
+        stats_.hostMs =
+            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
+                .count();
         return image;
     }
     stats_.addBuffer("pool", queue_.poolBytes);
@@ -658,8 +681,7 @@ bool QueuePipeline::usesPackets(const DeviceInfo& device, const Scene& scene,
     if (mode == QueuePacketMode::Off) return false;
     std::string why = packetRefusal(device, scene, o);
     if (mode == QueuePacketMode::On) {
-        if (!why.empty())
-            throw Error("--queue-packets on: " + why, FailureKind::InvalidOption);
+        if (!why.empty()) throw Error("--queue-packets on: " + why, FailureKind::InvalidOption);
         return true;
     }
     // auto: spheres sit in the BVH's leaves too, but a packet tests them ray by ray; only
@@ -671,8 +693,9 @@ void registerQueueWavefront(PipelineRegistry& registry) {
     PipelineInfo p;
     p.name = "queue";
     p.title = "wavefront (queues of live rays)";
-    p.description = "a pool of live rays in SoA buffers; generate, extend, shadow and per-material "
-                    "shade kernels over compacted queues (--pool N)";
+    p.description =
+        "a pool of live rays in SoA buffers; generate, extend, shadow and per-material "
+        "shade kernels over compacted queues (--pool N)";
     p.supports = {.layouts = false, .adaptiveAa = false, .tiling = false, .rowWindow = true};
     p.options = queueOptions();
     // Device-sized launches learn no admission limit (that takes a read-back per bounce): the

@@ -66,7 +66,7 @@ struct QueueStats {
 };
 
 class QueuePipeline : public Pipeline {
-public:
+  public:
     explicit QueuePipeline(ClContext& cl) : cl_(cl) {}
     ~QueuePipeline() override;
     const char* name() const override { return "queue"; }
@@ -98,7 +98,7 @@ public:
     // that --max-launch-ms splits the stages the same way on any device (0: real timings).
     void setFakeItemMsForTest(double ms) { fakeItemMs_ = ms; }
 
-private:
+  private:
     void prepareBuffers(size_t pool, int branching, size_t pixels);
     void prepareRayTally(size_t bytes);
     void releaseBuffers();

@@ -12,15 +12,15 @@ namespace rt {
 
 namespace {
 constexpr size_t kRayFieldBytes = 3 * 12 + 2 * 4;  // origin, dir, weight; pixel, meta
-constexpr size_t kMaxPool = size_t(1) << 26;      // keeps every index of C * pool in an int
+constexpr size_t kMaxPool = size_t(1) << 26;       // keeps every index of C * pool in an int
 }  // namespace
 
 size_t QueuePipeline::bytesPerRay(int branching) {
     return kRayFieldBytes * size_t(1 + branching)  // the queue and its C staging slots
-           + sizeof(dev::Node)                      // extend's hit record, read by shade
-           + 12                                     // contribution
-           + 4 * 4                                  // children, offsets, block sums, retry
-           + 4 * (RT_Q_CLASSES + 1);                // class queues and shadow queue
+           + sizeof(dev::Node)                     // extend's hit record, read by shade
+           + 12                                    // contribution
+           + 4 * 4                                 // children, offsets, block sums, retry
+           + 4 * (RT_Q_CLASSES + 1);               // class queues and shadow queue
 }
 
 int QueuePipeline::groupSize(const DeviceInfo& device) {
@@ -36,13 +36,14 @@ size_t QueuePipeline::poolSize(const DeviceInfo& device, int branching, int boun
     for (int b = 0; b < bounces; ++b) widest *= size_t(branching);
     if (const size_t asked = queuePool(o)) {
         if (asked > kMaxPool)
-            throw Error("--pool " + std::to_string(asked) + ": must be in 1.." +
-                        std::to_string(kMaxPool), FailureKind::InvalidOption);
+            throw Error(
+                "--pool " + std::to_string(asked) + ": must be in 1.." + std::to_string(kMaxPool),
+                FailureKind::InvalidOption);
         if (asked < widest)
             throw Error("--pool " + std::to_string(asked) + ": one path of this scene (C = " +
-                        std::to_string(branching) + ") can hold " + std::to_string(widest) +
-                        " rays at once at --bounces " + std::to_string(bounces) +
-                        "; use --pool " + std::to_string(widest) + " or more",
+                            std::to_string(branching) + ") can hold " + std::to_string(widest) +
+                            " rays at once at --bounces " + std::to_string(bounces) +
+                            "; use --pool " + std::to_string(widest) + " or more",
                         FailureKind::InvalidOption);
         return asked;
     }

@@ -5,15 +5,15 @@
 #define RTLAB_QUEUE_LAYOUT_H
 
 // Shading classes: one queue and one shade kernel each, so that a launch runs one code path.
-#define RT_Q_MISS 0     // escaped: environment only
-#define RT_Q_DIFFUSE 1  // opaque, reflectance 0: local Blinn-Phong term, no child
-#define RT_Q_MIRROR 2   // opaque, reflectance > 0: local term and a reflection child
-#define RT_Q_GLASS 3    // opacity < 1: Fresnel, reflection and refraction children
+#define RT_Q_MISS 0        // escaped: environment only
+#define RT_Q_DIFFUSE 1     // opaque, reflectance 0: local Blinn-Phong term, no child
+#define RT_Q_MIRROR 2      // opaque, reflectance > 0: local term and a reflection child
+#define RT_Q_GLASS 3       // opacity < 1: Fresnel, reflection and refraction children
 #define RT_Q_PROCEDURAL 4  // like diffuse, with a procedural pattern (issue 15): the costly one
 #define RT_Q_CLASSES 5
 
 // Words of the counter buffer. The first RT_Q_PER_ITERATION are cleared before every extend.
-#define RT_Q_COUNT 0                            // RT_Q_CLASSES class-queue lengths
+#define RT_Q_COUNT 0                             // RT_Q_CLASSES class-queue lengths
 #define RT_Q_SHADOW (RT_Q_COUNT + RT_Q_CLASSES)  // hit rays queued for the shadow stage
 #define RT_Q_CHILDREN (RT_Q_SHADOW + 1)          // children the shade stage spawned in all
 #define RT_Q_CUT (RT_Q_CHILDREN + 1)             // rays before the first path cut for room

@@ -11,9 +11,10 @@ const PipelineOption& launchOption() {
     static const PipelineOption o{
         .name = "queue-launch",
         .type = PipelineOption::Type::Choice,
-        .help = "Queue pipeline: how launches are sized: readback (the host reads each "
-                "bounce's counts) or device (all bounces enqueued at once, counts read on the "
-                "device) [readback]",
+        .help =
+            "Queue pipeline: how launches are sized: readback (the host reads each "
+            "bounce's counts) or device (all bounces enqueued at once, counts read on the "
+            "device) [readback]",
         .defaultValue = "readback",
         .choices = {"readback", "device"},  // QueueLaunchMode's order
         .sweepKey = "queue-launch",
@@ -27,8 +28,9 @@ const PipelineOption& poolOption() {
     static const PipelineOption o{
         .name = "pool",
         .type = PipelineOption::Type::Integer,
-        .help = "Queue pipeline: ray slots in the pool, 1..67108864 (memory does not grow with "
-                "--bounces) [from the device: 2M on GPUs, 64K on CPUs]",
+        .help =
+            "Queue pipeline: ray slots in the pool, 1..67108864 (memory does not grow with "
+            "--bounces) [from the device: 2M on GPUs, 64K on CPUs]",
         .defaultValue = 0ll,  // chosen from the device
         .min = 1,
         .max = kMaxPool,
@@ -43,9 +45,10 @@ const PipelineOption& packetsOption() {
     static const PipelineOption o{
         .name = "queue-packets",
         .type = PipelineOption::Type::Choice,
-        .help = "Queue pipeline: trace the extend and shadow queues 16 rays per work-item "
-                "through the wide BVH: auto (on a CPU device with --accel wide), on or off "
-                "[auto]",
+        .help =
+            "Queue pipeline: trace the extend and shadow queues 16 rays per work-item "
+            "through the wide BVH: auto (on a CPU device with --accel wide), on or off "
+            "[auto]",
         .defaultValue = "auto",
         .choices = {"auto", "on", "off"},  // QueuePacketMode's order
         .sweepKey = "queue-packets",
@@ -57,7 +60,9 @@ const PipelineOption& packetsOption() {
 
 }  // namespace
 
-std::vector<PipelineOption> queueOptions() { return {launchOption(), poolOption(), packetsOption()}; }
+std::vector<PipelineOption> queueOptions() {
+    return {launchOption(), poolOption(), packetsOption()};
+}
 
 QueueLaunchMode queueLaunch(const RenderOptions& o) {
     return QueueLaunchMode(launchOption().index(o.pipelineOptions));

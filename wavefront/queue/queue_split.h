@@ -16,7 +16,7 @@
 namespace rt {
 
 class StageCosts {
-public:
+  public:
     // The items of the next piece of `kernel` with `left` items to go, in whole steps (the
     // kernel's work-group size, so that pieces stay aligned to groups), at least one step.
     // targetMs <= 0: no cap, all of them.
@@ -60,9 +60,9 @@ public:
     static constexpr double kHeadroom = 0.8;    // aim below the cap: bounces differ in cost
     static constexpr double kTellingShare = 0.1, kMaxSlack = 4.0, kSlackDecay = 0.9;
 
-private:
+  private:
     std::map<std::string, double> stages_;  // ms per item, by kernel
-    double slow_ = 1.0, fast_ = 1.0;  // the highest and lowest recent ratio, decaying to 1
+    double slow_ = 1.0, fast_ = 1.0;        // the highest and lowest recent ratio, decaying to 1
 };
 
 }  // namespace rt

@@ -6,8 +6,8 @@
 #include <limits>
 
 #include "core/error.h"
-#include "core/pipeline_registry.h"
 #include "core/kernel_resources.h"
+#include "core/pipeline_registry.h"
 
 namespace rt {
 
@@ -25,13 +25,12 @@ int WavefrontPipeline::tileRows(int width, int height, int branching, int bounce
         int fits = bounces;
         while (fits >= 0 && rowBytes(fits) > budget) --fits;
         // Named by what limits it (the budget), not by --bounces, which the user may not have set.
-        std::string msg = "one row of the wavefront ray tree at bounce limit " + std::to_string(bounces) + " (" +
-                          std::to_string(width) + " pixels x (" +
+        std::string msg = "one row of the wavefront ray tree at bounce limit " +
+                          std::to_string(bounces) + " (" + std::to_string(width) + " pixels x (" +
                           std::to_string(nodes) + " nodes x " + std::to_string(sizeof(dev::Node)) +
                           " B + " + std::to_string(RT_TRACED_WORDS(nodes) * sizeof(cl_uint)) +
                           " B of traced flags) = " + std::to_string(row) + " B) exceeds " +
-                          budgetName + " (" +
-                          std::to_string(budget) + " B); ";
+                          budgetName + " (" + std::to_string(budget) + " B); ";
         msg += fits >= 0 ? "the highest bounce limit that fits is " + std::to_string(fits)
                          : "not even bounce limit 0 fits";
         throw Error(msg, FailureKind::TreeRow);
@@ -45,8 +44,9 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
     // The report's wavefront renders every AA sample of every pixel in fixed passes over the tree;
     // it has no centre-then-edges pass, so adaptive anti-aliasing is refused rather than ignored.
     if (o.adaptiveAa)
-        throw Error("--adaptive: the wavefront pipeline has no adaptive anti-aliasing (the "
-                    "megakernel and cpu pipelines do); drop the flag or use --pipeline mega");
+        throw Error(
+            "--adaptive: the wavefront pipeline has no adaptive anti-aliasing (the "
+            "megakernel and cpu pipelines do); drop the flag or use --pipeline mega");
     stats_ = {};
     const int C = scene.branching();
     const long long treeNodes = treeNodeCount(C, o.bounces);
@@ -92,8 +92,8 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
     // larger tree of the same frame rather than reallocating for every piece, but never one
     // larger than the whole frame's tile (the budget).
     const size_t pixelSize = pixelBytes(C, o.bounces);
-    const bool keep = treeWidth_ == o.width && treePixelBytes_ == pixelSize &&
-                      treeRows_ >= rows && treeRows_ <= frameRows;  // a whole frame: == rows
+    const bool keep = treeWidth_ == o.width && treePixelBytes_ == pixelSize && treeRows_ >= rows &&
+                      treeRows_ <= frameRows;  // a whole frame: == rows
     const int capacityRows = keep ? treeRows_ : rows;
     const size_t pixels = size_t(o.width) * capacityRows;
     const size_t treeBytes = pixels * size_t(treeNodes) * sizeof(dev::Node);
@@ -163,7 +163,8 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
         std::string key = std::to_string(o.width) + "x" + std::to_string(o.height);
         for (const std::string& d : featureDefines(scene, o)) key += " " + d;
         key += " aa" + std::to_string(o.aa);
-        // A row window has a profile of its own: the planner's is by row from the first one rendered.
+        // A row window has a profile of its own: the planner's is by row from the first one
+        // rendered.
         if (first != 0 || end != o.height)
             key += " rows " + std::to_string(first) + "-" + std::to_string(end);
         // A row costlier than --max-launch-ms alone is launched in pieces of columns, in steps
@@ -248,10 +249,12 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
             if (!o.adaptiveAa && slots > 0)
                 stats_.extras["tree_used"] =
                     double(stats_.rays[RT_RAY_PRIMARY] + stats_.rays[RT_RAY_REFLECTION] +
-                           stats_.rays[RT_RAY_REFRACTION]) / slots;
+                           stats_.rays[RT_RAY_REFRACTION]) /
+                    slots;
         }
         static const char* names[3] = {"trace", "image", "reset"};
-        for (size_t i = 0; i < events.size(); ++i) stats_.addKernel(names[i % 3], eventMs(events[i]));
+        for (size_t i = 0; i < events.size(); ++i)
+            stats_.addKernel(names[i % 3], eventMs(events[i]));
     } catch (const cl::Error& e) {
         throwClError(e, "wavefront frame on " + dev.name, memoryHint());
     }

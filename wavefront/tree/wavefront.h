@@ -1,6 +1,6 @@
-// rtlab — host driver of the wavefront pipeline (wavefront/tree/wavefront.cl): trace, image and reset
-// kernels around a global ray tree of W x rows x N slots (node payloads, and the traced flags in
-// a buffer of their own), in row tiles when it must, over a row window when asked (the viewer's
+// rtlab — host driver of the wavefront pipeline (wavefront/tree/wavefront.cl): trace, image and
+// reset kernels around a global ray tree of W x rows x N slots (node payloads, and the traced flags
+// in a buffer of their own), in row tiles when it must, over a row window when asked (the viewer's
 // pieces of a slow frame), reporting progress by rows x AA passes.
 #pragma once
 
@@ -14,7 +14,7 @@
 namespace rt {
 
 class WavefrontPipeline : public Pipeline {
-public:
+  public:
     explicit WavefrontPipeline(ClContext& cl) : cl_(cl) {}
     ~WavefrontPipeline() override {  // keep the device-memory tally true
         cl_.release(treeBytes_ + flagBytes_ + imageBytes_);
@@ -30,7 +30,8 @@ public:
     // naming the bounce limit that would fit when not even one row does.
     static int tileRows(int width, int height, int branching, int bounces, size_t budget,
                         const std::string& budgetName);
-    // Row tiles a frame of `height` rows needs at `rows` rows per tile: the one place it is counted.
+    // Row tiles a frame of `height` rows needs at `rows` rows per tile: the one place it is
+    // counted.
     static int tileCount(int height, int rows) { return (height + rows - 1) / rows; }
 
     // For tests. poisonPayloads fills every node payload of the last frame's tree with quiet NaNs,
@@ -40,7 +41,7 @@ public:
     void poisonPayloads();
     std::vector<uint32_t> tracedFlags();
 
-private:
+  private:
     ClContext& cl_;
     std::unique_ptr<DeviceScene> scene_;
     cl::Buffer tree_, traced_, image_;  // node payloads, traced flags, the image
