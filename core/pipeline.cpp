@@ -106,6 +106,10 @@ void checkPrivateTree(int branching, int bounces, const std::string& who, bool s
     throw Error(msg, FailureKind::PrivateTree);
 }
 
+std::string treeNodesDefine(const Scene& scene, int bounces) {
+    return "RT_TREE_NODES=" + std::to_string(treeNodeCount(scene.branching(), bounces));
+}
+
 std::vector<std::string> featureDefines(const Scene& scene, const RenderOptions& o) {
     std::vector<std::string> d;
     if (!scene.spheres.empty()) d.push_back("RT_HAS_SPHERES");
@@ -115,8 +119,6 @@ std::vector<std::string> featureDefines(const Scene& scene, const RenderOptions&
     if (scene.hasProcedural()) d.push_back("RT_HAS_PROCEDURAL");
     int c = scene.branching();
     d.push_back("RT_BRANCH=" + std::to_string(c));
-    d.push_back("RT_MAX_BOUNCES=" + std::to_string(o.bounces));
-    d.push_back("RT_TREE_NODES=" + std::to_string(treeNodeCount(c, o.bounces)));
     if (o.countRays) d.push_back("RT_COUNT_RAYS");
     if (o.robustSphere) d.push_back("RT_ROBUST_SPHERE");
     if (o.watertight) d.push_back("RT_WATERTIGHT");

@@ -86,8 +86,15 @@ class Pipeline {
     Progress progress_;
 };
 
-// -D defines for a scene and its options: object kinds present, C, B, N, accuracy switches.
+// -D defines for a scene and its options: object kinds present, C, the accuracy switches and the
+// acceleration structure. The bounce limit is not among them: kernels read it from the settings
+// at run time, so one program serves every B. A program that sizes a private array by B adds
+// that size itself (treeNodesDefine, the megakernel's stack).
 std::vector<std::string> featureDefines(const Scene& scene, const RenderOptions& options);
+
+// RT_TREE_NODES=N, the size of a whole ray tree of `bounces` levels, for programs that keep one
+// in private memory per work-item (the megakernel's tree layout, the shading probe).
+std::string treeNodesDefine(const Scene& scene, int bounces);
 
 // The kernel-argument record for a scene, its options and the frame.
 dev::RenderSettings makeSettings(const Scene& scene, const RenderOptions& options);

@@ -1,11 +1,12 @@
 // rtlab — the monolithic kernel (report 3.2.4): one work-item takes its pixel from the primary ray
 // to the final colour. OpenCL C has no recursion, so the ray tree lives in private memory, in one
 // of two layouts chosen at build time:
-//   RT_LAYOUT_TREE      the report's design: all N nodes in heap order, traced top-down and
-//                       combined bottom-up with the same functions as the wavefront image kernel;
-//   RT_LAYOUT_WEIGHTED  a depth-first stack of at most B*(C-1)+1 pending rays, each carrying the
-//                       weight its parent gives it, added straight into the pixel
-//                       (core/cl/pathstate.cl, shared with the queue wavefront).
+//   RT_LAYOUT_TREE      the report's design: all N = RT_TREE_NODES nodes in heap order, traced
+//                       top-down and combined bottom-up with the same functions as the wavefront
+//                       image kernel;
+//   RT_LAYOUT_WEIGHTED  a depth-first stack of at most RT_STACK_SIZE = B*(C-1)+1 pending rays,
+//                       each carrying the weight its parent gives it, added straight into the
+//                       pixel (core/cl/pathstate.cl, shared with the queue wavefront).
 #include "pathstate.cl"  // Pending and the forward-weight step (weighted layout)
 
 #ifdef RT_LAYOUT_TREE
@@ -30,7 +31,6 @@ inline float3 Megakernel_Sample(const SceneData* sc, int x, int y, int sample) {
     return RayTree_Combine(sc, nodes, colors);
 }
 #else
-#define RT_STACK_SIZE (RT_MAX_BOUNCES * (RT_BRANCH - 1) + 1)
 
 inline float3 Megakernel_Sample(const SceneData* sc, int x, int y, int sample) {
     Pending stack[RT_STACK_SIZE];

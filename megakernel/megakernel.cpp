@@ -11,7 +11,16 @@ namespace rt {
 
 std::vector<std::string> MegakernelPipeline::defines(const Scene& scene, const RenderOptions& o) {
     std::vector<std::string> d = featureDefines(scene, o);
-    d.push_back(o.layout == RenderOptions::Layout::Tree ? "RT_LAYOUT_TREE" : "RT_LAYOUT_WEIGHTED");
+    // The private arrays are sized by B: the whole tree, or the stack of pending rays (one
+    // pending sibling per level, so B * (C - 1) + 1 entries; a scene without refraction needs
+    // one entry whatever B is, and shares its program across bounce limits).
+    if (o.layout == RenderOptions::Layout::Tree) {
+        d.push_back("RT_LAYOUT_TREE");
+        d.push_back(treeNodesDefine(scene, o.bounces));
+    } else {
+        d.push_back("RT_LAYOUT_WEIGHTED");
+        d.push_back("RT_STACK_SIZE=" + std::to_string(o.bounces * (scene.branching() - 1) + 1));
+    }
     return d;
 }
 
@@ -69,6 +78,7 @@ Image MegakernelPipeline::render(const Scene& scene, const RenderOptions& o) {
     Image out(o.width, o.height);
     std::string key = std::to_string(o.width) + "x" + std::to_string(o.height);
     for (const std::string& d : defines(scene, o)) key += " " + d;
+    key += " b" + std::to_string(o.bounces);  // one program may serve several B; costs differ
     // A row window has a profile of its own: the planner's is by row from the first one rendered.
     const int first = o.rowBegin, last = o.lastRow();
     if (first != 0 || last != o.height)

@@ -115,11 +115,19 @@ std::vector<T> output(ClContext& cl, const cl::Buffer& b, size_t n) {
     return v;
 }
 
+// The probe program for a scene: its feature defines and the size of a whole ray tree, which
+// Probe_Shade keeps in private memory.
+std::vector<std::string> probeDefines(const Scene& scene, const RenderOptions& o) {
+    std::vector<std::string> d = featureDefines(scene, o);
+    d.push_back(treeNodesDefine(scene, o.bounces));
+    return d;
+}
+
 // A probe kernel bound to a scene's device copy; set its own arguments from kFirstKernelArg.
 struct SceneProbe {
     SceneProbe(ClContext& cl, const Scene& scene, const RenderOptions& o, const char* kernel)
         : device(cl, scene, o.accel),
-          program(cl.program("probe.cl", featureDefines(scene, o))),
+          program(cl.program("probe.cl", probeDefines(scene, o))),
           k(program, kernel) {
         device.setArgs(k, makeSettings(scene, o));
     }
@@ -296,7 +304,7 @@ ReintersectResult reintersect(ClContext& cl, RenderOptions::Offset offset, doubl
     addMeshSphere(scene, dvec3(0, 0, 4), 1, 4, 8);
     RenderOptions o;
     o.offset = offset;
-    cl::Program program = cl.program("probe.cl", featureDefines(scene, o));
+    cl::Program program = cl.program("probe.cl", probeDefines(scene, o));
     std::mt19937 rng(11);
     std::uniform_real_distribution<double> e(lo, hi), s(-1, 1), u(0, 1);
     auto coord = [&] { return mixed ? std::pow(10.0, e(rng)) : s(rng) * std::pow(10.0, lo); };
@@ -346,7 +354,7 @@ CriticalResult criticalAngle(ClContext& cl) {
     Scene scene = emptyScene("critical");
     scene.spheres.push_back({{0, 0, 4}, 1.f, 0, {0, 0, 0}});
     RenderOptions o;
-    cl::Program program = cl.program("probe.cl", featureDefines(scene, o));
+    cl::Program program = cl.program("probe.cl", probeDefines(scene, o));
     std::vector<float> in;
     std::vector<double> iors = {1.0001, 1.1, 1.333, 1.5, 1.7, 2.42, 4.0};
     for (double ior : iors)

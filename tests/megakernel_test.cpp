@@ -254,6 +254,33 @@ TEST(FeatureDefines, FollowTheScene) {
     EXPECT_NE(std::find(ds.begin(), ds.end(), "RT_BRANCH=1"), ds.end());
 }
 
+// The bounce limit reaches a program's defines only where a private array is sized by it: the
+// megakernel's whole tree, and its stack of pending rays when the scene refracts (C = 2; at C = 1
+// the stack holds one ray whatever B is).
+TEST(FeatureDefines, BounceLimitOnlySizesPrivateArrays) {
+    Scene spheres = load("spheres");  // refracts: C = 2
+    Scene shadows = load("shadows");  // C = 1
+    auto withBounces = [](const Scene& s, RenderOptions::Layout layout, int b) {
+        RenderOptions o = s.defaults;
+        o.layout = layout;
+        o.bounces = b;
+        return o;
+    };
+    using L = RenderOptions::Layout;
+    EXPECT_EQ(featureDefines(spheres, withBounces(spheres, L::Tree, 2)),
+              featureDefines(spheres, withBounces(spheres, L::Tree, 6)));
+    EXPECT_NE(MegakernelPipeline::defines(spheres, withBounces(spheres, L::Tree, 2)),
+              MegakernelPipeline::defines(spheres, withBounces(spheres, L::Tree, 6)));
+    EXPECT_NE(MegakernelPipeline::defines(spheres, withBounces(spheres, L::Weighted, 2)),
+              MegakernelPipeline::defines(spheres, withBounces(spheres, L::Weighted, 6)));
+    EXPECT_EQ(MegakernelPipeline::defines(shadows, withBounces(shadows, L::Weighted, 2)),
+              MegakernelPipeline::defines(shadows, withBounces(shadows, L::Weighted, 6)));
+    auto tree = MegakernelPipeline::defines(spheres, withBounces(spheres, L::Tree, 3));
+    EXPECT_NE(std::find(tree.begin(), tree.end(), "RT_TREE_NODES=15"), tree.end());
+    auto weighted = MegakernelPipeline::defines(spheres, withBounces(spheres, L::Weighted, 3));
+    EXPECT_NE(std::find(weighted.begin(), weighted.end(), "RT_STACK_SIZE=4"), weighted.end());
+}
+
 // The spheres-only program contains no triangle intersection: a probe kernel that calls it does
 // not even compile with that scene's defines, and compiles with the mesh scene's.
 TEST(FeatureDefines, SpheresOnlyProgramHasNoTriangleCode) {

@@ -26,6 +26,25 @@ using test::load;
 // The global tree's size, as the pipeline reports it among its extras.
 size_t treeBytes(const FrameStats& s) { return s.extras.value("tree_bytes", size_t(0)); }
 
+// The bounce limit travels in the settings: a second limit renders with the program the first
+// one built (from the context's memory), and still matches the megakernel's image.
+TEST(Wavefront, OneProgramForEveryBounceLimit) {
+    Scene scene = load("spheres");
+    WavefrontPipeline wave(test::device());
+    MegakernelPipeline mega(test::device());
+    RenderOptions o = scene.defaults;
+    o.width = 48;
+    o.height = 32;
+    o.bounces = 2;
+    wave.render(scene, o);
+    o.bounces = 5;
+    Image a = wave.render(scene, o);
+    EXPECT_EQ(wave.stats().program, "memory");
+    Image b = mega.render(scene, o);
+    ASSERT_EQ(a.rgb.size(), b.rgb.size());
+    EXPECT_EQ(std::memcmp(a.rgb.data(), b.rgb.data(), a.rgb.size() * 4), 0);
+}
+
 // Both pipelines call the same device functions (core/cl/raytree.cl) with FP_CONTRACT OFF and sum
 // AA samples in the same order, so the target is bit-identical; the acceptance bound is 1e-5.
 class WaveVsMega : public ::testing::TestWithParam<const char*> {};

@@ -202,6 +202,7 @@ kernel void Probe_Refract(global const float* in, global float* out) {
     o[4] = Shade_Fresnel(-dot(d, n), a[7], a[8]);
 }
 
+#ifdef RT_TREE_NODES
 // The colour of a whole ray tree (tree layout, as Megakernel_Sample) from a given primary ray
 // per work-item (6 floats): what a pixel would hold if its camera ray were this one.
 kernel void Probe_Shade(RT_SCENE_PARAMS, global const float* rays, global float* rgb) {
@@ -226,4 +227,5 @@ kernel void Probe_Shade(RT_SCENE_PARAMS, global const float* rays, global float*
     }
     vstore3(RayTree_Combine(&sc, nodes, colors), i, rgb);
 }
+#endif  // RT_TREE_NODES
 #endif  // RT_BRANCH

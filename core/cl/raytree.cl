@@ -2,7 +2,9 @@
 // build and combine trees with these functions and nothing else, which is what makes their
 // images bit-identical (the tree wavefront's image kernel visits only traced slots, but shades
 // each with RayTree_NodeColor on the same inputs RayTree_Combine gives it). Node i at depth k has children i*C + 1 + slot (slot 0 reflection,
-// slot 1 refraction); C = RT_BRANCH, N = RT_TREE_NODES.
+// slot 1 refraction); C = RT_BRANCH. A tree of B levels below the root has N nodes
+// (RayTree_NodeCount); programs that keep a whole tree in private memory know N at build time
+// as RT_TREE_NODES.
 #ifndef RTLAB_CL_RAYTREE
 #define RTLAB_CL_RAYTREE
 #include "camera.cl"
@@ -13,6 +15,15 @@ inline int RayTree_Depth(int i) {
     return i;
 #else
     return 31 - (int)clz((uint)(i + 1));
+#endif
+}
+
+// N: the slots of a tree whose deepest node has depth `bounces` (treeNodeCount on the host).
+inline int RayTree_NodeCount(int bounces) {
+#if RT_BRANCH == 1
+    return bounces + 1;
+#else
+    return (2 << bounces) - 1;
 #endif
 }
 
@@ -207,6 +218,7 @@ inline float3 RayTree_NodeColor(const SceneData* sc, const Node* node, bool hasR
     return (1.0f - F) * transmission + F * refl;
 }
 
+#ifdef RT_TREE_NODES
 // Combines a private copy of a pixel's tree from the deepest node up; colours[0] is the pixel.
 inline float3 RayTree_Combine(const SceneData* sc, const Node* nodes, float3* colors) {
     for (int i = RT_TREE_NODES - 1; i >= 0; --i) {
@@ -224,6 +236,7 @@ inline float3 RayTree_Combine(const SceneData* sc, const Node* nodes, float3* co
     }
     return colors[0];
 }
+#endif  // RT_TREE_NODES
 
 // Pixel (x, y)'s primary ray for the AA sample `sample` of the n x n grid.
 inline Ray RayTree_PrimaryRay(const SceneData* sc, int x, int y, int sample) {

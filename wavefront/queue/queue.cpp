@@ -38,16 +38,12 @@ std::string stageName(const std::string& kernel) {
     return out;
 }
 
-// The scene's feature defines, but one program for every bounce limit: B travels in the
-// settings, and the histogram is sized for the most bounces there can be (RT_Q_MAX_DEPTH), so
-// changing B (the viewer's +/-, a sweep over B) builds nothing. No tree is kept: N is 1.
+// The scene's feature defines and the queue's own: one program for every bounce limit, since B
+// travels in the settings and the histogram is sized for the most bounces there can be
+// (RT_Q_MAX_DEPTH), so changing B (the viewer's +/-, a sweep over B) builds nothing.
 std::vector<std::string> programDefines(const Scene& scene, const RenderOptions& o, int group,
                                         bool packets, int dropLane) {
-    std::vector<std::string> d;
-    for (const std::string& x : featureDefines(scene, o))
-        if (x.rfind("RT_MAX_BOUNCES=", 0) != 0 && x.rfind("RT_TREE_NODES=", 0) != 0) d.push_back(x);
-    d.push_back("RT_MAX_BOUNCES=" + std::to_string(RT_Q_MAX_DEPTH));
-    d.push_back("RT_TREE_NODES=1");
+    std::vector<std::string> d = featureDefines(scene, o);
     d.push_back("RT_QUEUE_GROUP=" + std::to_string(group));
     if (packets) {
         d.push_back("RT_QUEUE_PACKETS");

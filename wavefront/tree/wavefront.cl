@@ -53,7 +53,8 @@ kernel void Wavefront_Trace(RT_SCENE_PARAMS, global Node* tree, global uint* tra
     int parentSlot = -1;
     bool levelTraced = true;
     int levelEnd = 1;  // first slot of the next level
-    for (int i = 1; i < RT_TREE_NODES; ++i) {
+    const int nodes = RayTree_NodeCount(settings.bounces);
+    for (int i = 1; i < nodes; ++i) {
         if (i == levelEnd) {
             if (!levelTraced) break;
             levelTraced = false;
@@ -74,15 +75,13 @@ kernel void Wavefront_Trace(RT_SCENE_PARAMS, global Node* tree, global uint* tra
             bits = parentWord;
         }
         if (!((bits >> (p & 31)) & 1u)) {
-#if RT_TREE_NODES > 16383
             // A deep tree (B >= 14 at C = 2): when no parent from p to the end of its word was
             // traced, skip to the first child of the next word's parents (or the level's end),
-            // so that a level costs one step per word of parents rather than one per slot. On
-            // an H200 (spheres 640x360) this took 15-22% off the frame at B = 16 and cut the
-            // longest launch at B = 15 and 16 (120 -> 99 ms, 196 -> 151 ms), but added 2-13%
-            // at B = 8..12, where the test costs more than the slots it skips.
-            if ((bits >> (p & 31)) == 0u) i = min((((p >> 5) + 1) << 5) * RT_BRANCH + 1, levelEnd) - 1;
-#endif
+            // so that a level costs one step per word of parents rather than one per slot. In
+            // shallower trees the test costs more than the slots it skips, so it is left out
+            // there; `nodes` is the same for every work-item, so the branch does not diverge.
+            if (nodes > 16383 && (bits >> (p & 31)) == 0u)
+                i = min((((p >> 5) + 1) << 5) * RT_BRANCH + 1, levelEnd) - 1;
             continue;
         }
         if (p != parentSlot) {
@@ -115,7 +114,10 @@ typedef struct WaveFrame {
 // result is bit-identical to it. Untraced slots cost one bit test; their payloads are not read.
 inline float3 Wavefront_Combine(const SceneData* sc, global const Node* tree,
                                 global const uint* traced, WaveTree t) {
-    WaveFrame stack[RT_MAX_BOUNCES + 1];  // one frame per depth 0..B
+    // One frame per depth 0..B, sized for the largest B so that one program serves every bounce
+    // limit; a walk touches only the first B + 1.
+    WaveFrame stack[RT_MAX_BOUNCE_LIMIT + 1];
+    const int nodes = RayTree_NodeCount(sc->settings.bounces);
     const float3 zero = (float3)(0.0f, 0.0f, 0.0f);
     int top = 0;
     stack[0].refl = stack[0].refr = zero;
@@ -124,7 +126,7 @@ inline float3 Wavefront_Combine(const SceneData* sc, global const Node* tree,
         WaveFrame* f = &stack[top];
         if (f->next < RT_BRANCH) {
             int child = f->slot * RT_BRANCH + 1 + f->next++;
-            if (child < RT_TREE_NODES && Wavefront_IsTraced(traced, t, child)) {
+            if (child < nodes && Wavefront_IsTraced(traced, t, child)) {
                 WaveFrame* c = &stack[++top];
                 c->refl = c->refr = zero;
                 c->slot = child;

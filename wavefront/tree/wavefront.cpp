@@ -162,7 +162,7 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
         bool haveLast = false;
         std::string key = std::to_string(o.width) + "x" + std::to_string(o.height);
         for (const std::string& d : featureDefines(scene, o)) key += " " + d;
-        key += " aa" + std::to_string(o.aa);
+        key += " b" + std::to_string(o.bounces) + " aa" + std::to_string(o.aa);
         // A row window has a profile of its own: the planner's is by row from the first one
         // rendered.
         if (first != 0 || end != o.height)
