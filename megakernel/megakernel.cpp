@@ -9,17 +9,23 @@
 
 namespace rt {
 
+// The weighted layout's stack: depth-first, one pending sibling per level, so B * (C - 1) + 1
+// entries.
+static int weightedStackEntries(int branching, int bounces) {
+    return bounces * (branching - 1) + 1;
+}
+
 std::vector<std::string> MegakernelPipeline::defines(const Scene& scene, const RenderOptions& o) {
     std::vector<std::string> d = featureDefines(scene, o);
-    // The private arrays are sized by B: the whole tree, or the stack of pending rays (one
-    // pending sibling per level, so B * (C - 1) + 1 entries; a scene without refraction needs
-    // one entry whatever B is, and shares its program across bounce limits).
+    // The private arrays are sized by B: the whole tree, or the stack of pending rays (a scene
+    // without refraction needs one entry whatever B is, and shares its program across B).
     if (o.layout == RenderOptions::Layout::Tree) {
         d.push_back("RT_LAYOUT_TREE");
         d.push_back(treeNodesDefine(scene, o.bounces));
     } else {
         d.push_back("RT_LAYOUT_WEIGHTED");
-        d.push_back("RT_STACK_SIZE=" + std::to_string(o.bounces * (scene.branching() - 1) + 1));
+        d.push_back("RT_STACK_SIZE=" +
+                    std::to_string(weightedStackEntries(scene.branching(), o.bounces)));
     }
     return d;
 }
@@ -34,7 +40,7 @@ Image MegakernelPipeline::render(const Scene& scene, const RenderOptions& o) {
         stats_.privateBytes = treePrivateBytes(branching, o.bounces);
     } else {
         // Pending entries: a ray (2 x float3), a weight (float3) and a depth, 64 bytes.
-        stats_.privateBytes = size_t(o.bounces * (branching - 1) + 1) * 64;
+        stats_.privateBytes = size_t(weightedStackEntries(branching, o.bounces)) * 64;
     }
 
     // The counting frame on NVIDIA also counts the warps' busy lanes (inline PTX); should the
