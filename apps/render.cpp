@@ -41,7 +41,7 @@ std::string mib(double bytes) {
     return buf;
 }
 
-// Which acceleration structure ran (issue 5); its size and build time when the pipeline
+// Which acceleration structure ran; its size and build time when the pipeline
 // reported them (DeviceScene::accelStats).
 void printAccel(std::FILE* out, const AccelStats& a, RenderOptions::Accel chosen) {
     if (a.name.empty()) {

@@ -92,7 +92,7 @@ void writeCsv(const nlohmann::json& rows, const fs::path& path) {
         "max_launch_ms", "frames", "image_max_diff", "image_nonfinite",
         // Added with the pipeline registry; then one column per buffer and per extra.
         "pipeline_title",
-        // Added with issue 17: fixed, scaled or bound.
+        // Added with the choice of secondary-ray offset: fixed, scaled or bound.
         "offset"};
     const char* counts[6] = {"objects", "spheres", "planes", "triangles", "meshes", "lights"};
     std::ofstream f(path);

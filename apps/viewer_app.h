@@ -43,9 +43,9 @@ struct AppConfig {
 std::vector<ScriptedKey> parseKeyScript(const std::string& script);
 
 // Brute force: --accel none tests every ray against every triangle, and bv every ray that
-// enters a mesh's bounds against all of that mesh's triangles (nearly the same for one big mesh:
-// the 69,630-triangle bunny at 320x240 took 65 s a frame under none on 2-core PoCL (issue 19),
-// and 174 s of device time under bv on the same 2 cores shared with other work).
+// enters a mesh's bounds against all of that mesh's triangles (nearly the same for one big mesh,
+// whose bounds most rays enter: either way a frame of the bunny takes far too long for a window
+// on a CPU device).
 bool isBruteForce(RenderOptions::Accel accel);
 // Ray-triangle tests a brute-force frame makes at the least: triangles x pixels x AA samples x
 // (1 + bounce limit), one ray per bounce (shadow rays and glass's second ray come on top). Past

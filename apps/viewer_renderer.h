@@ -4,7 +4,7 @@
 //
 // Frames are rendered in pieces of rows (RenderOptions' row window), each sized to take about
 // kPieceMs from what the last piece cost: a fast frame is one piece, a slow one (a big mesh with
-// --accel none: a minute on PoCL) shows row by row, and a new request from the window abandons
+// --accel none on a CPU device) shows row by row, and a new request from the window abandons
 // it between two pieces and starts over. Pipelines without row windows render a frame whole.
 //
 // Buffers: each Pipeline keeps its device buffers while the scene address and the frame size stay

@@ -1,4 +1,4 @@
-// rtlab — Embree 3 as a peer of rtlab's traversal (issue 18; see embree_peer.h). Rays go
+// rtlab — Embree 3 as a peer of rtlab's traversal (see embree_peer.h). Rays go
 // through the stream API (rtcIntersect1M / rtcOccluded1M, coherent context) in chunks that
 // the threads take from a shared counter, so that every core works until the batch is done.
 #include "bench/embree_peer.h"

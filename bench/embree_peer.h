@@ -1,4 +1,4 @@
-// rtlab — Embree 3 as a peer of rtlab's traversal (issue 18): the triangles of a scene in one
+// rtlab — Embree 3 as a peer of rtlab's traversal: the triangles of a scene in one
 // Embree scene, and batches of given rays traced through it on every CPU thread. Compiled only
 // when CMake finds Embree; without it bench/embree_none.cpp stands in and available() is false.
 #pragma once

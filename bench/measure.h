@@ -34,7 +34,7 @@ struct Measurement {
     std::vector<std::pair<std::string, size_t>> buffers;  // FrameStats::buffers
     size_t privateBytes = 0;
     int tiles = 1, launches = 0;
-    std::map<std::string, double> kernelResources;  // FrameStats::kernelResources (issue 15)
+    std::map<std::string, double> kernelResources;  // FrameStats::kernelResources
     double longestLaunchMs = 0;  // the longest single kernel launch of any timed frame
     RayCounts rays{};            // by RT_RAY_* type
     bool raysCounted = false;

@@ -1,4 +1,4 @@
-// rtlab — batches of given rays through rtlab's scene queries on an OpenCL device (issue 18):
+// rtlab — batches of given rays through rtlab's scene queries on an OpenCL device:
 // the kernels of core/cl/trace_rays.cl bound to one --accel structure, one ray per work-item
 // (Rays_Closest / Rays_Occluded, the pipelines' Scene_Intersect and Scene_Occluded) or, on the
 // wide BVH, a packet of 8 or 16 rays per work-item (Rays_ClosestPacket / Rays_OccludedPacket,

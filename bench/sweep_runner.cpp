@@ -500,9 +500,9 @@ SweepSummary runSweep(const SweepConfig& config, const SweepRunOptions& options,
                     }
                     auto t0 = std::chrono::steady_clock::now();
                     // A limits batch gets a context of its own: drivers keep memory per context
-                    // (NVIDIA reserves private memory for the largest kernel it ran), and on the
-                    // H100 that made a wavefront cell fail after the megakernel's B=11 cells, yet
-                    // run in a new process.
+                    // (NVIDIA reserves private memory for the largest kernel it ran), so a
+                    // wavefront cell after the megakernel's deepest cells could fail where it
+                    // runs in a new process.
                     std::shared_ptr<ClContext> ctx =
                         c.stopAfterFailure
                             ? std::make_shared<ClContext>(cl->device(), options.sources)

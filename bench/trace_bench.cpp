@@ -1,4 +1,4 @@
-// rtlab-trace-bench — Embree as a peer inside the benchmark (issue 18). Traces exactly the rays
+// rtlab-trace-bench — Embree as a peer inside the benchmark. Traces exactly the rays
 // of a scene's camera (one primary ray per pixel centre, then one shadow ray per primary hit
 // towards each light) through Embree on every CPU thread and through rtlab's structures on the
 // OpenCL CPU device (PoCL), on the same cores, interleaved round by round, and reports rays/s

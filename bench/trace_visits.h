@@ -1,4 +1,4 @@
-// rtlab — the work one ray does in the binary and the wide BVHs (issue 18), counted on the host:
+// rtlab — the work one ray does in the binary and the wide BVHs, counted on the host:
 // node visits, triangles tested and bytes fetched per ray, in the traversal order of
 // core/cl/accel.cl (Bvh_Query), core/cl/accel_wide.cl and core/cl/accel_cwbvh.cl; and per packet of
 // rays in that of core/cl/accel_wide_packet.cl, with the share of its rays each node and triangle

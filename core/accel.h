@@ -1,12 +1,12 @@
-// rtlab — acceleration structures (report 2.2 and 3.6, issue 5), built on the host and traversed
+// rtlab — acceleration structures (report 2.2 and 3.6), built on the host and traversed
 // by core/cl/accel.cl in both pipelines:
 //   none  preliminary checks only: the sphere "behind the ray" test and a bounding sphere per mesh
 //   bv    plus a 7-slab bounding volume per mesh (Kay-Kajiya), tested before its triangles
 //   grid  uniform grid over every sphere and triangle, 3D-DDA traversal
 //   bvh   binned-SAH BVH over every sphere and triangle, built with every core
-//   wide  the same BVH collapsed into 4-wide nodes with quantised child boxes (issue 18)
+//   wide  the same BVH collapsed into 4-wide nodes with quantised child boxes
 //   cwbvh the same BVH collapsed into compressed 8-wide nodes, children in ray-octant order
-//         and each node's leaf primitives side by side (issue 18; for GPUs)
+//         and each node's leaf primitives side by side (for GPUs)
 // Planes are infinite and always tested one by one.
 #pragma once
 

@@ -1,4 +1,4 @@
-// rtlab — the BVH of --accel bvh (issue 5): one tree over every sphere and triangle, built on
+// rtlab — the BVH of --accel bvh: one tree over every sphere and triangle, built on
 // the host with a binned surface area heuristic (Wald 2007) and flattened for the device
 // (core/cl/accel.cl). Subtrees above kParallelTask primitives are built on their own thread and
 // the top levels bin in parallel, so the build uses every core; the result does not depend on

@@ -1,4 +1,4 @@
-// rtlab — the compressed 8-wide BVH of --accel cwbvh (issue 18; Ylitie, Karras and Laine 2017),
+// rtlab — the compressed 8-wide BVH of --accel cwbvh (Ylitie, Karras and Laine 2017),
 // for GPUs: the binary binned-SAH tree of core/accel_bvh.cpp collapsed into nodes of up to eight
 // children (the inner child of largest area opened first, as in core/accel_wide.cpp), each
 // child's box quantised to 8 bits per bound, each child placed in the slot of the node's corner

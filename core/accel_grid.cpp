@@ -1,4 +1,4 @@
-// rtlab — the uniform grid of --accel grid (issue 5): every sphere and triangle is listed in each
+// rtlab — the uniform grid of --accel grid: every sphere and triangle is listed in each
 // cell its padded box overlaps (triangles only where their plane crosses the cell), and
 // core/cl/accel.cl walks the cells along the ray by 3D-DDA (Amanatides and Woo 1987; Xiao et
 // al. 2012). The resolution follows the primitive count: about kDensity cells per primitive,

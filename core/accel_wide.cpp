@@ -1,4 +1,4 @@
-// rtlab — the 4-wide BVH of --accel wide (issue 18): the binary binned-SAH tree of
+// rtlab — the 4-wide BVH of --accel wide: the binary binned-SAH tree of
 // core/accel_bvh.cpp collapsed into nodes of up to four children, each child box quantised to
 // 8 bits per bound relative to its parent (the node layout of Ylitie, Karras and Laine 2017,
 // with the greedy collapse of Wald et al. 2008 instead of their cost-optimal one: the inner

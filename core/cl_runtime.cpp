@@ -258,14 +258,14 @@ cl::Program ClContext::program(const std::string& mainFile,
                                const std::vector<std::string>& defines) {
     std::string options = "-cl-std=CL1.2";
     // OpenCL lets float division and sqrt be 2.5-3 ulp; NVIDIA's compiler then picks different
-    // approximations in different kernels, and the pipelines' images drift apart
-    // (measured on an H200: up to 2.3e-4). Correct rounding makes them bit-identical again at no
-    // measurable cost.
+    // approximations in different kernels, and the pipelines' images drift apart where they
+    // must agree bit for bit. Correct rounding makes them bit-identical again at no measurable
+    // cost.
     if (device_.correctlyRoundedDivSqrt) options += " -cl-fp32-correctly-rounded-divide-sqrt";
     for (const std::string& d : defines) options += " -D" + d;
     // Kernels pick the cheaper form of a few operations per kind of device (core/cl/accel.cl).
     if (device_.type == "CPU") options += " -DRT_DEVICE_CPU";
-    // Registers and spills per kernel in the build log (core/kernel_resources.h, issue 15).
+    // Registers and spills per kernel in the build log (core/kernel_resources.h).
     if (device_.vendor.find("NVIDIA") != std::string::npos) options += " -cl-nv-verbose";
     // Extra compiler options for experiments (e.g. -cl-fast-relaxed-math); part of the cache key.
     if (const char* extra = std::getenv("RTLAB_CL_OPTIONS"); extra && *extra)
@@ -403,7 +403,7 @@ cl::Buffer ClContext::allocate(size_t bytes, cl_mem_flags flags, const std::stri
                         "'s global memory is left",
                     FailureKind::OutOfMemory);
     try {
-        // Fault injection (issue 8, tests/stability_test.cpp): RTLAB_FAIL_ALLOC_AFTER=n fails
+        // Fault injection (tests/stability_test.cpp): RTLAB_FAIL_ALLOC_AFTER=n fails
         // every allocation that would take this context past n bytes, as a driver would.
         if (const char* limit = std::getenv("RTLAB_FAIL_ALLOC_AFTER"))
             if (*limit && allocated_ + bytes > std::strtoull(limit, nullptr, 10))

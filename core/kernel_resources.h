@@ -1,5 +1,5 @@
-// rtlab — what a built program's kernels cost the device per work-item (issue 15, "why,
-// measured"): registers and spill bytes from NVIDIA's build log (programs are built with
+// rtlab — what a built program's kernels cost the device per work-item (the crossover README's
+// "Why, measured"): registers and spill bytes from NVIDIA's build log (programs are built with
 // -cl-nv-verbose on NVIDIA, core/cl_runtime.cpp), and private memory from
 // CL_KERNEL_PRIVATE_MEM_SIZE everywhere (on PoCL the per-work-item stack the kernel needs).
 #pragma once

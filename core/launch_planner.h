@@ -11,13 +11,13 @@
 //  - a launch measures only the sum over its rows, so the rows of one launch (a segment) are
 //    taken whole or, when the segment alone is over the target, cut; a part is priced at
 //    kCutMargin times its rows' even share (never above the whole), because a segment's cost
-//    need not be spread evenly (on the PoCL limits sweep, spheres at B = 15, a 12-row segment
-//    of 390 ms held a 2-row part of 138 ms where an even share said 66);
+//    need not be spread evenly (a few rows of glass among sky can hold most of it, and an even
+//    share then prices a part that holds them far too low);
 //  - a row costlier than the target alone is split into column tiles (when the caller can
 //    launch part of a row; the megakernel can, the tree wavefront keeps whole rows); the pieces
 //    of such a row are kept as its column profile, and the next frame cuts the row from them, as
-//    rows are cut from segments (that row's cost sat in 512 of its 640 columns: priced evenly,
-//    the 512 columns were predicted at 68 ms and took 86 every frame);
+//    rows are cut from segments (a row's cost may sit in some of its columns: priced evenly,
+//    a piece over them is predicted too cheap, and overruns, every frame);
 //  - the budget shrinks by how far recent launches strayed from their predictions, either way
 //    (timing noise of a shared machine), and relaxes again as launches keep to them;
 //  - rows not seen yet are priced at the costliest row seen so far, and a tile over them grows
@@ -226,8 +226,8 @@ class LaunchPlanner {
     }
 
     // How far launches over measured rows stray from their predictions: on a shared machine
-    // the same rows take 1.5x and more from one frame to the next (the PoCL limits sweep at a
-    // load of 9 on 2 cores). The profile keeps what rows cost the last time, slow or not, so a
+    // the same rows can take far longer from one frame to the next (a CPU device whose cores
+    // other work also loads). The profile keeps what rows cost the last time, slow or not, so a
     // slow launch is seen as one over its prediction or, once its rows were measured slow, as
     // a fast launch under it: the slack is the spread between the highest and the lowest
     // recent ratio of actual to predicted. The budget is divided by it; both ends decay back

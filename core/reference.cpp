@@ -396,7 +396,7 @@ class Tracer {
     }
 
     // Section 5: Blinn-Phong with shadowed lights.
-    // Procedural materials (issue 15) change D and the shading normal only; shadow rays keep s.n.
+    // Procedural materials change D and the shading normal only; shadow rays keep s.n.
     dvec3 base(const Surface& s, dvec3 d, const dev::Material& m, dvec3 origin,
                uint32_t key) const {
         dvec3 colour = toD(m.ambient), diffuse = toD(m.diffuse), n = s.n;

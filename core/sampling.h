@@ -6,8 +6,8 @@
 // the golden angle spreads the points around the disk. The jitter u and the rotation come from
 // an integer hash of what every pipeline and the CPU reference know exactly: the pixel, the AA
 // sample, the ray's depth, the light and k. Hit positions are not used: they differ between the
-// float pipelines and the double reference. With one fixed pattern for every pixel (before
-// issue 19) a penumbra showed about six concentric bands at 16 samples; jittered per pixel, the
+// float pipelines and the double reference. With one fixed pattern for every pixel a penumbra
+// shows concentric bands (every pixel misses the same parts of the light); jittered per pixel, the
 // same error is spread as fine noise that averages out.
 //
 // Only integer work and the exact conversion to [0, 1) live here; each side maps the result

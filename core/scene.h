@@ -23,11 +23,11 @@ struct RenderOptions {
     bool adaptiveAa = false;  // supersample only pixels on edges (report section 2.1.2)
     float shadowStrength = 1.0f;
 
-    // Accuracy switches (issue 3). Defaults are the robust methods.
+    // Accuracy switches. Defaults are the robust methods.
     bool robustSphere = true;  // false: report Algorithm 2 (plain quadratic)
     bool watertight = true;    // false: report Algorithm 3 (Moller-Trumbore)
     // Secondary-ray origins (core/SHADING.md section 3): a fixed 1e-4, 1e-4 max(1, |p|), or a
-    // bound on the hit point's rounding error (issue 17, the default).
+    // bound on the hit point's rounding error (the default).
     enum class Offset { Fixed, Scaled, Bound };
     Offset offset = Offset::Bound;
 
@@ -36,7 +36,7 @@ struct RenderOptions {
     Layout layout = Layout::Tree;  // private rays: the full ray tree, or a weighted stack
     size_t memoryBudget = 0;       // bytes a global ray tree may use (0 = device max)
     enum class Accel { None, Bv, Grid, Bvh, Wide, Cwbvh };
-    Accel accel = Accel::Bv;  // how rays find triangles (issue 5)
+    Accel accel = Accel::Bv;  // how rays find triangles
     bool countRays = false;   // count rays by type on the device (slower; benchmarks)
     // Split frames into row tiles so no launch runs past this (display watchdogs); 0 = off.
     double maxLaunchMs = 0;

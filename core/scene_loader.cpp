@@ -30,8 +30,9 @@ namespace rt {
 namespace {
 
 namespace fs = std::filesystem;
-// Not ordered_json: its inserts are linear, so 65,535 materials took seconds. The parser
-// records the material names in file order instead.
+// Not ordered_json: its inserts are linear, so an object of many keys (a scene may name up to
+// RT_MAX_MATERIALS materials) parses in quadratic time. The parser records the material names in
+// file order instead.
 using Json = nlohmann::json;
 
 constexpr std::size_t kMaxSpheres = 1'000'000;
@@ -412,7 +413,7 @@ class Loader {
         }
     }
 
-    // Issue 15's procedural keys (scenes/README.md, "Procedural materials").
+    // The procedural material keys (scenes/README.md, "Procedural materials").
     static void procedural(const Node& m, dev::Material& mat) {
         static const char* const names[] = {"none", "checker", "marble", "wood", "granite", "bump"};
         mat.pattern = m.opt("pattern", RT_PATTERN_NONE, [](const Node& p) {

@@ -1,4 +1,4 @@
-// rtlab — a scene and its copy scaled about the origin (issue 17): every length is multiplied by
+// rtlab — a scene and its copy scaled about the origin: every length is multiplied by
 // s (positions, radii, plane offsets, vertices, lights, the camera), directions and colours are
 // kept, so that in exact arithmetic the scaled copy renders the same image. The scale-invariance
 // tests and the stability report's scale sweep render both and count the pixels that differ.

@@ -62,7 +62,7 @@ typedef struct Material {
     float reflectance;  // r in [0,1]: mirror weight for opaque materials
     float opacity;      // o in [0,1]: 1 = opaque, < 1 spawns a refraction ray
     float ior;          // refractive index of the inside of the object
-    // Procedural diffuse colour (issue 15, core/cl/procedural.cl); pattern 0 leaves D as it is.
+    // Procedural diffuse colour (core/cl/procedural.cl); pattern 0 leaves D as it is.
     int32_t pattern;     // RT_PATTERN_*
     int32_t octaves;     // noise octaves (fBm, turbulence): the cost knob, 0..RT_MAX_OCTAVES
     float patternScale;  // noise lattice cells (checker squares) per unit length
@@ -106,7 +106,7 @@ typedef struct Triangle {
 typedef struct MeshInstance {
     int32_t firstTriangle;
     int32_t triangleCount;
-    int32_t bvhRoot;  // unused, -1: the BVH (issue 5) is one tree over every primitive
+    int32_t bvhRoot;  // unused, -1: the BVH is one tree over every primitive
     int32_t pad0;
     Float3 boundsLo;
     Float3 boundsHi;
@@ -132,7 +132,7 @@ typedef struct Camera {
     float pad[2];
 } Camera;
 
-// Uniform grid over the spheres and triangles (issue 5, --accel grid): nx * ny * nz cells of
+// Uniform grid over the spheres and triangles (--accel grid): nx * ny * nz cells of
 // cellSize over [lo, hi], x fastest. Zero cells when the scene has no sphere or triangle.
 typedef struct Grid {
     Float3 lo;
@@ -200,7 +200,7 @@ typedef struct Node {
     uint8_t occluded[RT_MAX_LIGHTS];
 } Node;
 
-// BVH node (issue 5). Inner node when count == 0: its children are nodes first and first + 1.
+// BVH node. Inner node when count == 0: its children are nodes first and first + 1.
 // Leaf of triangles [first, first + count) when count > 0, of spheres [first, first - count)
 // when count < 0 (leaves hold one kind; the builder orders both arrays leaf by leaf).
 typedef struct BvhNode {
@@ -210,7 +210,7 @@ typedef struct BvhNode {
     int32_t count;
 } BvhNode;
 
-// 4-wide BVH node (issue 18, --accel wide; Ylitie, Karras and Laine 2017): the node's box is
+// 4-wide BVH node (--accel wide; Ylitie, Karras and Laine 2017): the node's box is
 // origin + [0, 255] * step per axis, step = 2^(exponent - 127) (a float's exponent bits, so the
 // device decodes it with a shift). Child k's box is origin + [lo, hi] * step, rounded outward on
 // the host, so it always contains the child's exact box. Child k is
@@ -228,7 +228,7 @@ typedef struct WideNode {
     uint16_t count[4];
 } WideNode;
 
-// Compressed 8-wide BVH node (issue 18, --accel cwbvh; the layout of Ylitie, Karras and Laine
+// Compressed 8-wide BVH node (--accel cwbvh; the layout of Ylitie, Karras and Laine
 // 2017), 80 bytes: five 16-byte loads give the boxes of eight children. Boxes are quantised as in
 // WideNode. Slot k's child lies towards corner k of the node (bit a of k set: the + side of axis
 // a), so a ray whose direction has the sign bits o (bit a: towards -a) visits the slots in the

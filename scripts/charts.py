@@ -12,7 +12,7 @@ Writes, next to the JSON unless --out says otherwise, each chart whose group the
                            Pareto front marked ([accuracy], scored cells only)
   limits.png               how far each pipeline goes (charts_limits.py, [limits])
   crossover.png            time over the best megakernel against material cost, a panel per
-                           number of materials (charts_crossover.py, [crossover], issue 15)
+                           number of materials (charts_crossover.py, [crossover])
 A chart whose group the sweep lacks is not written (and one already in the folder, from another
 sweep of the same device, is left alone). The pipelines, their titles, colours and layouts come
 from the rows (sweep_rows.py). Every chart's footer names the device, driver, commit and timing.

@@ -1,4 +1,4 @@
-"""crossover.png: where does the wavefront win? (issue 15, bench/sweeps/crossover), drawn by
+"""crossover.png: where does the wavefront win? (bench/sweeps/crossover), drawn by
 charts.py; the numbers behind it for the generated README (readme_crossover.py).
 
 The sweep's scenes are divergence-o<K>-m<M> (scripts/make-divergence.py): K noise octaves in

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""rtlab — writes the divergence scenes of issue 15 (scenes/README.md, "divergence").
+"""rtlab — writes the divergence scenes (scenes/README.md, "divergence").
 
 A 8 x 4 grid of spheres and upright quads (two triangles each) over a ground plane, the objects
 taking materials in an interleaved order so that neighbouring pixels, and the reflection and

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Writes the stress scenes of issue 5 (acceleration structures), each 1280x720 with mirrors and glass:
+"""Writes the stress scenes of the acceleration structures, each 1280x720 with mirrors and glass:
 
   many-spheres.json   a field of 320 x 320 = 102,400 spheres (diffuse, mirror and glass) on a
                       ground plane, with a large mirror and a large glass sphere in front

@@ -1,12 +1,12 @@
 #!/usr/bin/python3
-"""One-off migration of committed sweep rows (issue 13): adds the `failure` field, and
+"""One-off migration of committed sweep rows: adds the `failure` field, and
 `pipeline_title` for the two pipelines that existed before rows carried it.
 
 Usage: python3 scripts/migrate-rows.py results/*/*.json
 
-Rows written before issue 13 say how a cell failed only in English error text; the charts and
-the generated READMEs now read the `failure` field alone, so this script derives it once from the
-text: "" when the cell ran, else one of private_tree, tree_row, out_of_memory, opencl,
+Rows written before the field existed say how a cell failed only in English error text; the
+charts and the generated READMEs now read the `failure` field alone, so this script derives it
+once from the text: "" when the cell ran, else one of private_tree, tree_row, out_of_memory, opencl,
 invalid_option, skipped, other. The CSV beside each JSON gets the same column. Edits are textual
 (a line per row) so that numbers keep the digits the sweep wrote. Running it twice changes nothing.
 """

@@ -1,4 +1,4 @@
-"""The generated README's Crossover section (issue 15, bench/sweeps/crossover): per pipeline its
+"""The generated README's Crossover section (bench/sweeps/crossover): per pipeline its
 time over the best megakernel against material cost and material count, where it first wins,
 and why, measured: the kernels' registers and spills (NVIDIA build log) or private bytes per
 work-item, and each wavefront stage's share of device time. Used by results-readme.py.

@@ -1,4 +1,4 @@
-"""Each frame against its memory floor (issue 16), for the generated result READMEs.
+"""Each frame against its memory floor, for the generated result READMEs.
 
 The floor of a frame is the global-memory traffic its pipeline's design cannot avoid, divided by
 the copy bandwidth rtlab-roofline measured on the same device (roofline.json beside the sweep):

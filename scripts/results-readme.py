@@ -363,7 +363,7 @@ def main():
     sweeps = [(p, d) for p, d in sweeps if p != os.path.abspath(args.json)]
     sweeps.insert(0, (os.path.abspath(args.json), given))
     limits = [(p, d) for p, d in sweeps if in_group(d["rows"], "limits")]
-    # Crossover sweeps (issue 15) get their own section, like limits, after the main tables.
+    # Crossover sweeps get their own section, like limits, after the main tables.
     cross = [(p, d) for p, d in sweeps if in_group(d["rows"], "crossover")]
     others = [(p, d) for p, d in sweeps
               if any(set(r.get("groups", [])) - {"limits", "crossover"} for r in d["rows"])]

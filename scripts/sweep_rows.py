@@ -26,8 +26,9 @@ FAILURES_SHORT = {"private_tree": "private tree > limit", "tree_row": "tree row 
                   "out_of_memory": "out of memory", "opencl": "OpenCL error",
                   "invalid_option": "invalid option", "skipped": "not run",
                   "timeout": "timed out", "other": "error"}
-# Rows written before issue 14 do not record their tree's bytes per pixel; their tree had one
-# 48-byte node (flags inside) per slot and nothing else. Newer rows carry tree_pixel_bytes.
+# Rows written before the tree wavefront kept its traced flags apart do not record their tree's
+# bytes per pixel; their tree had one 48-byte node (flags inside) per slot and nothing else.
+# Newer rows carry tree_pixel_bytes.
 LEGACY_NODE_BYTES = 48
 
 

@@ -1,4 +1,4 @@
-// rtlab-stress — the numerical stress suite of issue 8, run through the device code of both
+// rtlab-stress — the numerical stress suite, run through the device code of both
 // pipelines (probe kernels at the end of core/cl/probe.cl) on any OpenCL device, and written as
 // results/<device-slug>/stability.md (stress_main.cpp). The cases are a library (stress.h) that
 // rtlab-stress and tests/stability_test.cpp both link, so the tool and the test cannot drift
@@ -14,7 +14,7 @@
 //   (e) nested dielectrics against the CPU reference;
 //   (f) NaN and Inf rays through every acceleration structure;
 //   (g) scale sweep: pixels that change when a standard scene is scaled by 1e-4..1e5, per offset
-//       method and pipeline, and a sphere of radius 1e-3 at distance 1e4 (issue 17).
+//       method and pipeline, and a sphere of radius 1e-3 at distance 1e4.
 #include "stress/stress.h"
 
 #include <algorithm>

@@ -1,4 +1,4 @@
-// rtlab-stress — the numerical stress cases of issue 8 (stress.cpp), shared by the rtlab-stress
+// rtlab-stress — the numerical stress cases (stress.cpp), shared by the rtlab-stress
 // report (stress_main.cpp) and tests/stability_test.cpp, which asserts the robust methods'
 // figures on the same functions with fewer rays. Each case counts failures of the plain method
 // (the report's algorithm) and of the robust one; the letters are those of stress.cpp's header.

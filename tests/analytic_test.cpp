@@ -1,4 +1,4 @@
-// Hand-derived analytic cases (issue 17): the centre pixel of tiny scenes whose colour follows in
+// Hand-derived analytic cases: the centre pixel of tiny scenes whose colour follows in
 // closed form from core/SHADING.md — a lit sphere (Blinn-Phong), a mirror, Fresnel at normal
 // incidence, total internal reflection and a shadowed point. The expected values are computed
 // here from the formulas, never rendered by the code under test, and every case must hold in

@@ -1,4 +1,4 @@
-// The assimp-testmodels sweeps (issue 8): every OBJ file under /usr/share/assimp/models, and every
+// The assimp-testmodels sweeps: every OBJ file under /usr/share/assimp/models, and every
 // glTF 2.0 (.gltf, .glb) and PLY file under its glTF2/ and PLY/ folders (Debian's
 // assimp-testmodels, scripts/setup installs it), valid or broken, either renders as a bare-model
 // scene on the CPU reference and the megakernel without a non-finite pixel, or is rejected with

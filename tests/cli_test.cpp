@@ -433,7 +433,7 @@ TEST(Cli, HelpExplainsEveryRenderFlag) {
 
 // Shards of a sweep measured by rtlab-bench (as on the machines of an array job) merge through
 // `rtlab sweep --import` into one set in the sweep's cell order, kept frames scored on the rows
-// they belong to; one shard alone is imported as an incomplete set (issue 16).
+// they belong to; one shard alone is imported as an incomplete set.
 TEST(Cli, ShardsImportIntoOneSetInCellOrder) {
     std::string bench = std::string(RTLAB_BIN_DIR) + "/rtlab-bench";
     if (!std::filesystem::exists(bench)) GTEST_SKIP() << "rtlab-bench not built";

@@ -1,4 +1,4 @@
-// Time-bounded launches (issue 8): frames split into row tiles so that no launch runs past
+// Time-bounded launches: frames split into row tiles so that no launch runs past
 // --max-launch-ms give the same image as one launch per frame.
 #include <gtest/gtest.h>
 
@@ -166,8 +166,8 @@ std::vector<double> longestPerFrame(const std::vector<std::vector<PlannedLaunch>
 // What the PoCL limits sweep showed (spheres, 640x360, B = 11..16): the glass rows' cost sits
 // in a few of them, and in a few columns of those. The first frame overruns on rows it has not
 // seen, and the segment it measured is over the cap; cut at its rows' even share it put most of
-// its cost in one launch again (138 ms under a 100 ms cap at B = 15), and a costly row cut into
-// columns at an even share overran every frame (86 ms predicted at 68). A segment that ran over
+// its cost in one launch again, over the cap, and a costly row cut into columns at an even
+// share overran every frame, its costly columns priced too low. A segment that ran over
 // the cap is cut at twice its share, and a row launched in column pieces keeps them as its
 // column profile: the second frame still overruns here (one row holds 150 of a 230 ms segment
 // of 64 rows), less than before (218 ms); from the third on no launch is over the cap, where

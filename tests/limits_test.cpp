@@ -1,4 +1,4 @@
-// The limits sweep (issue 8, bench/sweeps/limits): its file parses into what the charts expect,
+// The limits sweep (bench/sweeps/limits): its file parses into what the charts expect,
 // stop-after-failure skips exactly the settings no smaller than one that failed, rows say how
 // each cell ended, and the two bugs it found stay fixed (a PoCL stack overflow in the wavefront
 // image kernel at bounce limits 10 and 11, and NaN/1e14 pixels from unnormalized child rays).
@@ -173,7 +173,7 @@ TEST(LimitsSweep, RowsRecordHowEachCellEnded) {
     EXPECT_FALSE(rows[k].contains("device_ms"));
     EXPECT_EQ(rows[k]["failure"], "skipped");
     // The wavefront's image kernel walks the traced slots rather than copying the tree to private
-    // memory (issue 14), so only its global tree bounds it: it goes on past B = 12, in row tiles
+    // memory, so only its global tree bounds it: it goes on past B = 12, in row tiles
     // where the device's largest allocation is smaller than the tree (B = 13: 453 MB).
     for (const char* w : {"wave 32x18 b12", "wave 32x18 b13"}) {
         EXPECT_EQ(rows[w]["end"].get<std::string>().rfind("ran", 0), 0u)
@@ -247,8 +247,8 @@ TEST(LimitsSweep, FailureKindsAreSetWhereThrown) {
 }
 
 // Bounce limit 11 on spheres: every pixel finite and in range. Before the device normalized its
-// child rays, rounding grew through refraction chains in the glass spheres (5 pixels of this
-// frame above 10, some NaN). The wavefront part also needs PoCL's worker threads to have room
+// child rays, rounding grew through refraction chains in the glass spheres (pixels of this frame
+// far out of range, some NaN). The wavefront part also needs PoCL's worker threads to have room
 // for 64 work-items' 256 KiB private trees (it crashed with SIGSEGV at bounce limits 10 and 11).
 TEST(LimitsSweep, DeepBounceLimitsGiveSaneImages) {
     ClContext& cl = test::device();
@@ -275,7 +275,7 @@ TEST(LimitsSweep, DeepBounceLimitsGiveSaneImages) {
 
 // The watchdog point: rows differ in cost by 200x here (80 cheap rows of sky, then 20 rows of
 // glass at 20 ms each). Planning from one average cost per row gave a 400 ms launch every frame
-// (the limits sweep saw 992 ms against a 100 ms target); with the per-row profile the first frame
+// (the limits sweep saw launches many times the target); with the per-row profile the first frame
 // overshoots while it learns and from the third on every launch stays under the target.
 TEST(LimitsSweep, LaunchPlannerLearnsCostlyRows) {
     auto cost = [](int row) { return row < 80 ? 0.1 : 20.0; };

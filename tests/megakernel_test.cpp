@@ -1,4 +1,4 @@
-// Megakernel (issue 3): accuracy against the double-precision CPU reference on every standard
+// Megakernel: accuracy against the double-precision CPU reference on every standard
 // scene, single rays through the device intersection code, and the per-scene feature defines.
 #include "megakernel/megakernel.h"
 
@@ -33,7 +33,7 @@ RenderOptions small(const Scene& scene, int bounces) {
     return o;
 }
 
-// The accuracy bar of issue 3: >= 99.9% of pixels within 2/255, mean absolute error <= 0.5/255,
+// The accuracy bar: >= 99.9% of pixels within 2/255, mean absolute error <= 0.5/255,
 // on linear values clamped to [0, 1]. At 80x60 one pixel is 0.02% of the image, so 99.9% allows
 // four outliers: pixels whose ray grazes an edge, where float and double pick different objects.
 class MegaVsCpu : public ::testing::TestWithParam<std::tuple<const char*, int>> {};

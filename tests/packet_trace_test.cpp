@@ -1,4 +1,4 @@
-// Packet traversal of the wide BVH (core/cl/accel_wide_packet.cl, issue 18): packets of 8 and
+// Packet traversal of the wide BVH (core/cl/accel_wide_packet.cl): packets of 8 and
 // 16 rays per work-item must give every ray the same result as the single-ray kernels
 // (Rays_Closest / Rays_Occluded over Wide_Query): the same closest t, bit for bit, and the same
 // occlusion, with the watertight triangle test and with Moller-Trumbore, for coherent camera

@@ -1,4 +1,4 @@
-// Procedural materials (issue 15): the noise and patterns of core/procedural.cpp against values
+// Procedural materials: the noise and patterns of core/procedural.cpp against values
 // derived here from their definitions, the loader's new keys, and the divergence scene rendered
 // by every pipeline against the megakernel and the double-precision CPU reference.
 #include "core/procedural.h"

@@ -1,4 +1,4 @@
-// Progress and row windows (issue 19): `rtlab render` draws its progress bar from
+// Progress and row windows: `rtlab render` draws its progress bar from
 // Pipeline::setProgress, and the viewer renders a slow frame in pieces of rows
 // (RenderOptions::rowBegin/rowEnd). The progress must only grow and end at its total, and the
 // pieces of a frame must put together the frame rendered whole.

@@ -1,9 +1,9 @@
-// Queue wavefront launch sizing (issue 14, --queue-launch): launches sized on the device (every
+// Queue wavefront launch sizing (--queue-launch): launches sized on the device (every
 // bounce enqueued at once, each kernel reading its real length from the counters) give the same
 // bits as launches sized by a read-back per bounce, on every standard scene, at B 0..8 and with
 // anti-aliasing; a pool too small for a bounce falls back to read-backs with the same bits; the
 // frame reports its idle time and its read-backs; bad values are refused in one line; under
-// --max-launch-ms a stage launch over more items than fit the cap goes in pieces (issue 19).
+// --max-launch-ms a stage launch over more items than fit the cap goes in pieces.
 #include <gtest/gtest.h>
 
 #include <cstring>

@@ -1,4 +1,4 @@
-// The queue wavefront's packet stages (issue 18, --queue-packets): on a CPU device with --accel
+// The queue wavefront's packet stages (--queue-packets): on a CPU device with --accel
 // wide, extend and shadow trace 16 queue entries per work-item (wavefront/queue/queue_packet.cl)
 // and must give the image of the single-ray stages bit for bit: on the bunny (triangles and a
 // ground plane), the knot (mirror-like gold, two lights), the Cornell box (spheres in the BVH's

@@ -1,4 +1,4 @@
-// Queue wavefront (issue 14): the image of the megakernel's weighted layout on every standard
+// Queue wavefront: the image of the megakernel's weighted layout on every standard
 // scene (within 1e-5; bit-identical where each path is a single chain, C = 1), the same bits from
 // run to run and for any pool size (paths cut for room and started again), device memory that
 // does not grow with the bounce limit, the queues it claims to run, and one clear error per bad
@@ -185,7 +185,7 @@ TEST(Queue, RejectsAdaptiveAntiAliasing) {
     }
 }
 
-// bench/sweeps/queue, the issue's benchmark: the headline against both megakernel layouts and the
+// bench/sweeps/queue, the queue's benchmark: the headline against both megakernel layouts and the
 // tree wavefront, and the queue along the bounce limit to 16.
 TEST(Queue, BenchmarkSweepCoversTheHeadlineAndEveryBounceLimit) {
     bench::SweepConfig c = bench::loadSweep(bench::findSweep("queue"));

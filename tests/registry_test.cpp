@@ -1,4 +1,4 @@
-// The pipeline registry (issue 13): front ends see pipelines only through it, so it must list the
+// The pipeline registry: front ends see pipelines only through it, so it must list the
 // CPU reference first and every pipeline folder once, refuse a second entry under one name, and
 // name every choice when asked for one it lacks.
 #include "pipelines/registry.h"
@@ -68,7 +68,7 @@ TEST(Registry, RefusesADuplicateName) {
 
 // What lets a new pipeline in without a test of its own: every device pipeline renders the same
 // image as the first one registered (they share the stage code in core/cl): within 1e-5 per
-// channel, the bar issue 14 set for a pipeline that adds a path's contributions in another order
+// channel, the bar for a pipeline that adds a path's contributions in another order
 // (the queue sums bounce by bounce, the megakernel depth first; float addition is not
 // associative, so glass scenes differ in the last bit).
 TEST(Registry, EveryDevicePipelineRendersTheSameImage) {

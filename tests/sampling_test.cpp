@@ -1,4 +1,4 @@
-// The soft-shadow sampler (core/sampling.h, issue 19): stratified, jittered per shading point,
+// The soft-shadow sampler (core/sampling.h): stratified, jittered per shading point,
 // and free of the bias a fixed pattern has, which a penumbra showed as concentric bands.
 #include "core/sampling.h"
 
@@ -81,7 +81,7 @@ double worstBias(const std::function<DiskSample(uint32_t, int)>& sample, int pix
 
 TEST(ShadowSampler, PenumbraHasNoBandsAtSixteenSamples) {
     auto jittered = [](uint32_t key, int k) { return shadowDiskSample(key, 0, k, 16); };
-    auto fixedSpiral = [](uint32_t, int k) {  // before issue 19: one pattern for every pixel
+    auto fixedSpiral = [](uint32_t, int k) {  // the old sampler: one pattern for every pixel
         return DiskSample{std::sqrt((k + 0.5) / 16), 2.399963229728653 * k};
     };
     double fixedBias = worstBias(fixedSpiral, 64), jitteredBias = worstBias(jittered, 4096);

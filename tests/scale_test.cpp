@@ -1,4 +1,4 @@
-// Accuracy at every scale (issue 17): every standard scene and its copies scaled by each power of
+// Accuracy at every scale: every standard scene and its copies scaled by each power of
 // ten from 1e-4 to 1e5 give the same image in every pipeline with the bound offset (at most 0.1%
 // of pixels beyond 2/255 of the unscaled render), which the fixed epsilon does not; and a sphere
 // of radius 1e-3 at distance 1e4 is shaded on the device as the double reference shades it.

@@ -1,4 +1,4 @@
-// Stability (issue 8): the numerical stress suite asserts the robust methods' figures and records
+// Stability: the numerical stress suite asserts the robust methods' figures and records
 // the plain methods' (RecordProperty, in the gtest XML); garbage geometry is rejected with one
 // clear line or renders without a NaN pixel; device limits end in a clear error. The cases and
 // their probe kernels are those of rtlab-stress (stress/stress.h, core/cl/probe.cl), linked
@@ -35,7 +35,7 @@ const dvec3 kFar(148376, 1234, -223423);  // Embree's watertightness position
 
 // ---- (a) ----
 TEST(Stability, ClosedMeshFarFromTheOriginDoesNotLeak) {
-    // 32 x 64 segments and 20,000 random rays keep this under a minute on PoCL; with so few
+    // 32 x 64 segments and 20,000 random rays keep this short on a CPU device; with so few
     // rays one miss already breaks the bar (5e-5), so it is "no miss" here. rtlab-stress runs
     // 200,000 rays at 64 x 128.
     for (dvec3 c : {dvec3(0), kFar}) {
@@ -346,8 +346,8 @@ TEST(Stability, RayTreeAboveMaxAllocIsTiledOrRefusedBeforeAllocation) {
     // At the device's real limit, the widest frame the CLI allows (16384 pixels a row) is tiled
     // under it at every bounce limit whose single row fits, and refused before allocation at
     // every one whose row does not. Which bounce limits fall on which side depends on the
-    // device's max allocation (2 GiB on some PoCL builds, 35 GiB on an H200), so both sides are
-    // derived from it rather than assumed.
+    // device's max allocation (a few GiB on some PoCL builds, tens on a large GPU), so both sides
+    // are derived from it rather than assumed.
     const size_t maxAlloc = test::device().device().maxAlloc;
     int fitting = 0;
     for (int bounces = 1; bounces <= 11; ++bounces) {

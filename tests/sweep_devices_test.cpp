@@ -1,4 +1,4 @@
-// Sweeps spread over devices and machines (issue 16): two contexts on the one test device give
+// Sweeps spread over devices and machines: two contexts on the one test device give
 // the rows of a one-context run (same cells, same frames, in order), shards split the work units
 // without overlap or gap and merge back into that order, a scene's stop-after-failure batches
 // stay one unit, and bad --shard and --devices specs are refused by name.
@@ -67,7 +67,8 @@ TEST(SweepDevices, TwoContextsOnOneDeviceGiveTheOneContextRows) {
     SweepRun two = runSweep(index + "," + index);
     // 12 + 2 + 12 cells; at B = 12 the megakernel's tree layout fails at 8x6 (rtlab's private-tree
     // cap, the same on every device), so its 16x9 B >= 12 and 8x6 B = 13 are recorded as skipped.
-    // The tree wavefront keeps no private tree since issue 14 and runs every cell.
+    // The tree wavefront keeps no private tree (its image kernel walks the global one) and runs
+    // every cell.
     ASSERT_EQ(one.rows.size(), 26u);
     ASSERT_EQ(two.rows.size(), one.rows.size());
     EXPECT_EQ(two.summary.measured, one.summary.measured);

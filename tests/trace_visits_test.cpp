@@ -1,4 +1,4 @@
-// What one ray costs in each BVH, counted on the host (bench/trace_visits.cpp, issue 18): the node
+// What one ray costs in each BVH, counted on the host (bench/trace_visits.cpp): the node
 // visits, triangle tests and bytes that the trace-peer results name as the bound, checked on rays
 // whose work is known from the tree's shape.
 #include "bench/trace_visits.h"

@@ -236,7 +236,7 @@ TEST_F(Viewer, SlowFrameComesInPiecesAndAKeyAtAPieceRestartsIt) {
 }
 
 TEST_F(Viewer, SplitViewOfMegaAndWaveComesInPieces) {
-    // Both default halves render row windows (the tree wavefront too, issue 19), so a slow split
+    // Both default halves render row windows (the tree wavefront too), so a slow split
     // frame comes in pieces like a single pipeline's: 16 rows of 240, 15 pieces, each half the
     // same as its pipeline's whole frame.
     const std::string scene = "scenes/spheres.json";

@@ -1,4 +1,4 @@
-// Wavefront pipeline (issue 4): the same image as the megakernel, bit for bit, on every standard
+// Wavefront pipeline: the same image as the megakernel, bit for bit, on every standard
 // scene at bounce limits 0..8, with and without soft shadows and anti-aliasing; row tiling under a
 // memory budget; the error when not even one row fits.
 #include "wavefront/tree/wavefront.h"
@@ -120,7 +120,7 @@ TEST(Wavefront, TiledFrameEqualsUntiled) {
     EXPECT_EQ(std::memcmp(whole.rgb.data(), tiled.rgb.data(), whole.rgb.size() * 4), 0);
 }
 
-// A row that alone takes longer than --max-launch-ms is launched in pieces of columns (issue 19):
+// A row that alone takes longer than --max-launch-ms is launched in pieces of columns:
 // with a cap no launch can meet, every row after the first probe goes in work-group-wide pieces,
 // with 2x2 AA (the image kernel adds samples, so a column traced twice would show), and the
 // frame keeps its bits. Three column steps of a CPU device's work-group (64) and a ragged end.
@@ -191,7 +191,7 @@ TEST(Wavefront, StatsReportKernelsAndTreeBytes) {
 
 // The image kernel reads a node's payload only where trace set its bit this pass, and reset
 // clears every bit between passes. Payloads of the last frame are filled with NaNs that also read
-// as "traced" nodes (the layout before issue 14 kept the flag inside them): if the image kernel
+// as "traced" nodes (an earlier layout kept the flag inside them): if the image kernel
 // read any unreached slot, or a bit survived from the last pass or sample, NaNs or stale nodes
 // would reach the image, which must instead stay bit-identical to the megakernel's.
 TEST(Wavefront, UnreachedPayloadsAreNeverRead) {
@@ -239,7 +239,7 @@ TEST(Wavefront, ResetClearsEveryFlag) {
     }
 }
 
-// bench/sweeps/tree-wave, the measurement of issue 14's last part: the issue's frame (cornell
+// bench/sweeps/tree-wave, the measurement of the tree layout: the headline frame (cornell
 // 1920x1080, B = 8, 8 shadow samples) and the README's (spheres 1280x720, B = 8), tree wavefront
 // and megakernel each, with the ray counts that give the share of slots used.
 TEST(Wavefront, BenchmarkSweepHoldsTheIssuesFrame) {

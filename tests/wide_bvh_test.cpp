@@ -1,4 +1,4 @@
-// The wide BVHs of issue 18, --accel wide (4-wide) and --accel cwbvh (compressed 8-wide): the
+// The wide BVHs, --accel wide (4-wide) and --accel cwbvh (compressed 8-wide): the
 // collapsed trees' invariants on the host (checkWide, checkCwbvh: every primitive in one leaf,
 // every decoded box on its path holding it, the device stack never overflowing), and images that
 // match --accel none with every pipeline.

@@ -1,4 +1,4 @@
-// rtlab — acceleration structures on the device (issue 5; built by core/accel*.cpp). Each query
+// rtlab — acceleration structures on the device (built by core/accel*.cpp). Each query
 // takes the current hit and only accepts 0 < t < hit->t; with anyHit it returns at the first
 // primitive it accepts (shadow rays), otherwise it finds the closest. Included by scene.cl after
 // SceneData and Hit; RT_ACCEL_BV, RT_ACCEL_GRID, RT_ACCEL_BVH, RT_ACCEL_WIDE (accel_wide.cl) or
@@ -15,10 +15,10 @@ inline float3 Ray_InvDir(float3 d) {
 
 // Minimum and maximum for the slab tests, in each device's cheapest form. On a CPU a plain
 // compare-and-select is one instruction where fmin/fmax add a NaN fix-up; on a GPU fmin/fmax
-// is the one instruction, and compare-and-select two (measured on an H200: the binary BVH's
-// rays/s fell by 22% with compare-and-select). The slab distances are NaN only for a ray with
-// a NaN component, which no primitive test accepts either (Ray_InvDir keeps 1/d finite), so
-// both forms give the same hits. RT_DEVICE_CPU comes from the host (core/cl_runtime.cpp).
+// is the one instruction, and compare-and-select two. A box test is mostly minima and maxima,
+// so the wrong form shows directly in every structure's rays/s. The slab distances are NaN only
+// for a ray with a NaN component, which no primitive test accepts either (Ray_InvDir keeps 1/d
+// finite), so both forms give the same hits. RT_DEVICE_CPU comes from core/cl_runtime.cpp.
 #ifdef RT_DEVICE_CPU
 inline float Min_Fast(float a, float b) { return a < b ? a : b; }
 inline float Max_Fast(float a, float b) { return a > b ? a : b; }
@@ -33,9 +33,9 @@ inline float3 Max3_Fast(float3 a, float3 b) { return fmax(a, b); }
 
 // Distance at which the ray enters the box, if it does so before tMax; INFINITY otherwise.
 // Each slab distance is one fused multiply-add, lo * invDir - origin * invDir, the product of
-// origin and inverse direction hoisted out of the traversal loop by the compiler: 2% more
-// primary and 6% more shadow rays/s on an H200, the same on PoCL (where mad() instead of fma()
-// halved the rays/s). The boxes are padded on the host (core/accel.cpp kPad) far beyond the
+// origin and inverse direction hoisted out of the traversal loop by the compiler: one operation
+// per slab instead of two in every box test, on GPUs and PoCL alike (fma(), not mad(): PoCL's
+// mad() is far slower). The boxes are padded on the host (core/accel.cpp kPad) far beyond the
 // rounding in which this differs from (lo - origin) * invDir, so the hits are the same.
 inline float Aabb_Enter(Ray ray, float3 invDir, float3 lo, float3 hi, float tMax) {
     float3 originInv = ray.origin * invDir;
@@ -74,8 +74,8 @@ inline bool Hit_TriangleWith(float3 v0, float3 v1, float3 v2, int i, Ray ray, Hi
 
 // The vertices fill a Triangle's first 36 bytes. On a GPU three 16-byte loads fetch them (the
 // buffer and its 80-byte records are 16-byte aligned), where the compiler fetches the 4-byte-
-// aligned Float3s word by word: on an H200 0.8-1.2% more primary and 2.4% more shadow rays/s.
-// On PoCL the word loads are faster (the Cornell box's frames 2-3% shorter).
+// aligned Float3s word by word; fewer, wider loads pay on every triangle test, shadow rays most.
+// On PoCL the word loads are faster, hence the CPU branch.
 inline bool Hit_Triangle(const SceneData* sc, int i, Ray ray, Hit* hit) {
 #ifdef RT_DEVICE_CPU
     global const Triangle* tri = sc->triangles + i;

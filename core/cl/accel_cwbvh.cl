@@ -1,4 +1,4 @@
-// rtlab — traversal of the compressed 8-wide BVH of --accel cwbvh (issue 18; built by
+// rtlab — traversal of the compressed 8-wide BVH of --accel cwbvh (built by
 // core/accel_cwbvh.cpp; the scheme of Ylitie, Karras and Laine 2017). One node is five 16-byte
 // loads holding the quantised boxes of eight children, tested together as float8 slabs. The
 // children a ray enters become a group: a mask of slots in the ray's visit order (no sorting:

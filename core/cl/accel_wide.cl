@@ -1,4 +1,4 @@
-// rtlab — traversal of the 4-wide BVH of --accel wide (issue 18; built by core/accel_wide.cpp).
+// rtlab — traversal of the 4-wide BVH of --accel wide (built by core/accel_wide.cpp).
 // One node load gives the quantised boxes of four children, tested together as float4 slabs.
 // Leaf children are intersected at once; inner children the ray enters before the current hit
 // are ordered by entry distance, the nearest visited next and the others deferred on a short

@@ -1,4 +1,4 @@
-// rtlab — packet traversal of the 4-wide BVH (--accel wide) for CPU devices (issue 18).
+// rtlab — packet traversal of the 4-wide BVH (--accel wide) for CPU devices.
 // PoCL runs one work-item per core at a time and cannot vectorize Wide_Query's loop across
 // work-items, so a single ray uses at most four SIMD lanes (the children of a node). Here one
 // work-item traces RT_PACKET consecutive rays (8 or 16; the caller orders them in 8x8 tiles, so

@@ -9,8 +9,8 @@
 #include "types.h"
 
 // A helper that PoCL must inline. Its inliner leaves some large helpers with one caller as calls
-// (a private struct then lives in memory): splitting RayTree_NodeFromHit and the light samples
-// out of their callers made the megakernel 2-4% slower on cornell, shadows and spheres. GPU
+// (a private struct then lives in memory): RayTree_NodeFromHit and the light samples, split out
+// of their callers, slowed the megakernel on every scene until they were forced inline. GPU
 // compilers inline them anyway.
 #ifdef RT_DEVICE_CPU
 #define RT_INLINE __attribute__((always_inline)) inline

@@ -50,7 +50,7 @@ kernel void Probe_TriangleHits(global const float* rays, global const float* tri
 }
 #endif
 
-// ---- stability probes (issue 8: tests/stability_test.cpp, apps/stress.cpp) ----
+// ---- stability probes (tests/stability_test.cpp, apps/stress.cpp) ----
 // Built with a scene's featureDefines (which always define RT_BRANCH) and bound with
 // DeviceScene::setArgs, so the rays go through the real closest-hit query, acceleration
 // structure, shading normal and secondary-ray offset of both pipelines.

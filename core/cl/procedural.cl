@@ -1,4 +1,4 @@
-// rtlab — procedural materials (issue 15): 3D gradient noise, fBm and turbulence, and the
+// rtlab — procedural materials: 3D gradient noise, fBm and turbulence, and the
 // patterns built on them (checker, marble, wood, granite, bump). They exist to give shading a
 // cost knob (Material.octaves) and to give neighbouring rays different code paths, the setting
 // in which Laine, Karras and Aila (2013) found the wavefront ahead of the megakernel.

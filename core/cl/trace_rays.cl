@@ -1,6 +1,6 @@
 // rtlab — batches of given rays through the scene queries of both pipelines (Scene_Intersect,
 // Scene_Occluded, and so the --accel structure), for the Embree peer benchmark
-// (bench/trace_bench.cpp, issue 18). A ray is 8 floats: origin, tMax, direction, unused.
+// (bench/trace_bench.cpp). A ray is 8 floats: origin, tMax, direction, unused.
 // Built with a scene's featureDefines and bound with DeviceScene::setArgs. With RT_ACCEL_WIDE
 // and triangles alone, the packet kernels trace RT_PACKET rays per work-item (CPU devices).
 #include "scene.cl"

@@ -139,7 +139,7 @@ class RowsTest(unittest.TestCase):
         r = row("wave", "wavefront", "tree", "s", 8, 1280, 720, tree_nodes=511,
                 tree_bytes=1280 * 676 * 511 * 48, memory_tiles=2)
         tile, whole, tiles = sweep_rows.tree_sizes(r)
-        self.assertEqual(whole, 1280 * 720 * 511 * 48)  # a row from before issue 14
+        self.assertEqual(whole, 1280 * 720 * 511 * 48)  # a row from before tree_pixel_bytes
         self.assertEqual((tile < whole, tiles), (True, 2))
         # Newer rows say what a pixel's tree takes (payloads and traced flags).
         r["extras"] = {"tree_pixel_bytes": 511 * 48 + 64}

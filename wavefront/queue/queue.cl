@@ -1,4 +1,4 @@
-// rtlab — the queue wavefront (issue 14): paths live in a pool of ray records in global memory,
+// rtlab — the queue wavefront: paths live in a pool of ray records in global memory,
 // structure of arrays, and every stage is a kernel over a compacted queue of them:
 //   generate  -> camera rays into free pool slots (new pixels, or pixels cut for room)
 //   extend    -> closest hit of every queued ray; sorts rays into one queue per shading class

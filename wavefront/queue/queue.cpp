@@ -481,9 +481,9 @@ class QueuePass {
         limit_ = std::clamp(grown, std::min(b_.pool, kProbeRays / 4), b_.pool);
     }
 
-    // The first bounce of a workload: small, since one ray can cost a lot (the bunny without an
-    // acceleration structure: ~70 us per ray on PoCL, so 4096 rays were ~300 ms); it grows
-    // twofold per bounce from there. The floor keeps a slow bounce from starving the pool.
+    // The first bounce of a workload: small, since one ray can cost a lot (a big mesh without an
+    // acceleration structure tests every triangle, so a few thousand rays make a long launch);
+    // it grows twofold per bounce from there. The floor keeps a slow bounce from starving the pool.
     static constexpr size_t kProbeRays = 256;
     ClContext& cl_;
     QueueFrame& f_;

@@ -1,4 +1,4 @@
-// rtlab — host driver of the queue wavefront (wavefront/queue/queue.cl, issue 14): a pool of ray
+// rtlab — host driver of the queue wavefront (wavefront/queue/queue.cl): a pool of ray
 // records sized by --pool, not by pixels x tree nodes, refilled with camera rays as paths end;
 // each bounce runs extend, shadow, one shade kernel per material class, a prefix-sum compaction
 // and the per-pixel sums. See wavefront/queue/README.md for the design and its measurements.

@@ -9,7 +9,7 @@
 #define RT_Q_DIFFUSE 1     // opaque, reflectance 0: local Blinn-Phong term, no child
 #define RT_Q_MIRROR 2      // opaque, reflectance > 0: local term and a reflection child
 #define RT_Q_GLASS 3       // opacity < 1: Fresnel, reflection and refraction children
-#define RT_Q_PROCEDURAL 4  // like diffuse, with a procedural pattern (issue 15): the costly one
+#define RT_Q_PROCEDURAL 4  // like diffuse, with a procedural pattern: the costly one
 #define RT_Q_CLASSES 5
 
 // Words of the counter buffer. The first RT_Q_PER_ITERATION are cleared before every extend.

@@ -1,4 +1,4 @@
-// rtlab — the queue wavefront's extend and shadow stages with ray packets (issue 18; included
+// rtlab — the queue wavefront's extend and shadow stages with ray packets (included
 // by queue.cl under RT_QUEUE_PACKETS: CPU devices, --accel wide, no spheres outside the BVH).
 // Both stages trace a compacted queue, so RT_PACKET consecutive entries make a packet: one
 // work-item loads them, traces them together with Wide_QueryPacket (core/cl/accel_wide_packet.cl,

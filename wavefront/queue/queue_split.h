@@ -1,8 +1,8 @@
-// rtlab — --max-launch-ms for the queue wavefront's stage launches (issue 19). The admission
+// rtlab — --max-launch-ms for the queue wavefront's stage launches. The admission
 // limit (QueuePass::adaptLimit) bounds how many new paths enter the pool, not the children of
 // the paths already in it: a bounce whose rays branch (glass) runs its stages over up to C times
-// the rays the last bounce had, and on loaded PoCL one such launch took 117 ms under a 100 ms
-// cap. So every stage launch whose items times the cost of one item is over the cap goes in
+// the rays the last bounce had, so one such launch can run well past the cap on a slow or loaded
+// device. So every stage launch whose items times the cost of one item is over the cap goes in
 // pieces over sub-ranges of its queue (a global work offset), sized from what one item of that
 // stage cost in the launches measured before (profiling events), as the admission limit is.
 // The kernels write each result at the ray's own index, so the pieces change no pixel.
@@ -38,9 +38,9 @@ class StageCosts {
     // that had no item teach nothing.
     //
     // How far the new cost per item strays from the last one, either way, is the slack that
-    // divides the budget, as core/launch_planner.h does with rows: on 2 shared PoCL cores the
-    // same stage over the same rays takes up to twice as long from one bounce to the next, and
-    // a deeper bounce's rays cost more. Only launches long enough to matter for the cap
+    // divides the budget, as core/launch_planner.h does with rows: on a CPU device that other
+    // work shares, the same stage over the same rays can take much longer from one bounce to the
+    // next, and a deeper bounce's rays cost more. Only launches long enough to matter for the cap
     // (kTellingShare of it) count: a short one's time is mostly launch overhead.
     void learn(const std::string& kernel, size_t items, double ms, double targetMs) {
         if (items == 0) return;

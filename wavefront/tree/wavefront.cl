@@ -2,7 +2,7 @@
 // of W x rows x N slots. Shadow rays are cast in trace and stored as occlusion counts in the node
 // (4 bytes), so image does no ray casting: it only shades and mixes.
 //
-// The tree is stored so that each kernel touches only what it needs (issue 14):
+// The tree is stored so that each kernel touches only what it needs:
 //   payloads  one Node (48 B) per slot, slot-major: slot i of the tile's P pixels is contiguous,
 //             tree[i * P + pixel], so a work-group's same-slot reads and writes coalesce;
 //   flags     one "traced" bit per slot, RT_TRACED_WORDS(N) words per pixel, also word-major,
