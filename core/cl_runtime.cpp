@@ -6,11 +6,13 @@
 #include <algorithm>
 #include <cctype>
 #include <chrono>
+#include <condition_variable>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <mutex>
+#include <optional>
 #include <sstream>
 #include <thread>
 
@@ -169,6 +171,12 @@ std::vector<DeviceInfo> listDevices() {
             info.maxWorkGroup = d.getInfo<CL_DEVICE_MAX_WORK_GROUP_SIZE>();
             info.correctlyRoundedDivSqrt = (d.getInfo<CL_DEVICE_SINGLE_FP_CONFIG>() &
                                             CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT) != 0;
+            // PoCL caches every build by source and options ($POCL_CACHE_DIR), and compiles a
+            // kernel for each work-group size it is launched with, on the first launch. Asked
+            // for a program binary, it first compiles every kernel of the program once more for
+            // any work-group size, and a program made from that binary is new to its cache, so
+            // its launches compile again: a disk cache of binaries would triple the work.
+            info.cachesBuilds = info.platformName == "Portable Computing Language";
             out.push_back(info);
         }
     }
@@ -240,6 +248,46 @@ ClContext::ClContext(const DeviceInfo& device, KernelSources sources)
     }
 }
 
+namespace {
+
+// Prints "compiling WHAT ..." on stderr once a build has run for half a second: a cold build
+// takes seconds and should not be silent, while a driver's warm cache answers in milliseconds
+// and has nothing to announce.
+class SlowBuildNotice {
+  public:
+    explicit SlowBuildNotice(std::string what)
+        : what_(std::move(what)), thread_([this] {
+              std::unique_lock<std::mutex> hold(lock_);
+              if (!wake_.wait_for(hold, std::chrono::milliseconds(500), [this] { return done_; })) {
+                  std::fprintf(stderr, "compiling %s ...\n", what_.c_str());
+                  std::fflush(stderr);
+                  printed_ = true;
+              }
+          }) {}
+    ~SlowBuildNotice() { finish(); }
+    SlowBuildNotice(const SlowBuildNotice&) = delete;
+    SlowBuildNotice& operator=(const SlowBuildNotice&) = delete;
+    // Ends the wait; true when the notice was printed (so the caller reports the build's time).
+    bool finish() {
+        {
+            std::lock_guard<std::mutex> hold(lock_);
+            done_ = true;
+        }
+        wake_.notify_one();
+        if (thread_.joinable()) thread_.join();
+        return printed_;
+    }
+
+  private:
+    std::string what_;
+    std::mutex lock_;
+    std::condition_variable wake_;
+    bool done_ = false, printed_ = false;
+    std::thread thread_;  // last: it starts once the members above exist
+};
+
+}  // namespace
+
 static uint64_t fnv1a(const std::string& s, uint64_t h = 1469598103934665603ull) {
     for (unsigned char c : s) h = (h ^ c) * 1099511628211ull;
     return h;
@@ -286,9 +334,8 @@ cl::Program ClContext::program(const std::string& mainFile,
     };
     char hash[32];
     std::snprintf(hash, sizeof hash, "%016llx", (unsigned long long)fnv1a(key));
-    std::filesystem::path dir = cacheDir();
+    std::filesystem::path dir = device_.cachesBuilds ? std::filesystem::path() : cacheDir();
     std::filesystem::path file = dir.empty() ? dir : dir / (std::string(hash) + ".bin");
-
     auto buildLog = [&](cl::Program& p) {
         try {
             return p.getBuildInfo<CL_PROGRAM_BUILD_LOG>(device_.device);
@@ -329,14 +376,12 @@ cl::Program ClContext::program(const std::string& mainFile,
             cl.building_.clear();
         }
     } done{*this};
-    if (announce_) {
-        std::fprintf(stderr, "compiling %s ...\n", what.c_str());
-        std::fflush(stderr);
-    }
+    std::optional<SlowBuildNotice> notice;
+    if (announce_) notice.emplace(what);
     try {
         p = cl::Program(context_, source);
         p.build({device_.device}, options.c_str());
-        if (announce_) {
+        if (notice && notice->finish()) {
             size_t kernels = 0;
             try {
                 kernels = p.getInfo<CL_PROGRAM_NUM_KERNELS>();

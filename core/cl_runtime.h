@@ -32,6 +32,9 @@ struct DeviceInfo {
     cl_ulong globalMem = 0, maxAlloc = 0, localMem = 0;
     size_t maxWorkGroup = 0;
     bool correctlyRoundedDivSqrt = false;  // supports -cl-fp32-correctly-rounded-divide-sqrt
+    // The driver keeps its own cache of compiled programs, keyed by source and options (PoCL),
+    // so rtlab keeps none: see ClContext::program.
+    bool cachesBuilds = false;
     bool isGpu() const { return type == "GPU"; }
     std::string label() const;  // "NVIDIA H100 (NVIDIA CUDA, driver 550.54)"
 };
@@ -55,7 +58,9 @@ class ClContext {
 
     // Builds mainFile with the given -D defines. Programs are cached in memory and on disk
     // ($RTLAB_CACHE_DIR, else ~/.cache/rtlab) keyed by device, driver, source text and options,
-    // so a repeat run does not rebuild. On failure throws rt::Error carrying the build log.
+    // so a repeat run does not rebuild; on a device that caches its own builds
+    // (DeviceInfo::cachesBuilds) the driver's cache stands in for the disk. On failure throws
+    // rt::Error carrying the build log.
     cl::Program program(const std::string& mainFile, const std::vector<std::string>& defines);
     // How the last program() call was satisfied: "memory", "disk" or "built".
     const std::string& lastProgramSource() const { return lastSource_; }
@@ -70,8 +75,9 @@ class ClContext {
     // empty. Safe to call from another thread: a watchdog tells a stuck compiler from a stuck
     // device by it.
     std::string building() const;
-    // Source builds print "compiling FILE for DEVICE ..." and their time on stderr (off by
-    // default; front ends turn it on, so that a cold first run is not silent).
+    // Source builds that take longer than half a second print "compiling FILE for DEVICE ..."
+    // and then their time on stderr (off by default; front ends turn it on, so that a cold first
+    // run is not silent and a warm one not noisy).
     static void announceBuilds(bool on) { announce_ = on; }
 
     // Checks size against CL_DEVICE_MAX_MEM_ALLOC_SIZE and the global memory left before
