@@ -69,11 +69,12 @@ TEST_P(QueueVsMega, SameImageAsWeightedMegakernel) {
 
 INSTANTIATE_TEST_SUITE_P(StandardScenes, QueueVsMega, ::testing::ValuesIn(kScenes));
 
-// The glass scene at every bounce limit 0..12: the widest trees, and the one that needs C = 2.
-TEST(Queue, SameImageAtEveryBounceLimitWithGlass) {
+// The glass scene at bounce limits from 0 to 12 (the weighted megakernel is a program per limit
+// when C = 2, so a sample): the widest trees, and the one that needs C = 2.
+TEST(Queue, SameImageAtBounceLimitsFrom0To12WithGlass) {
     Scene scene = load("spheres");
     ASSERT_EQ(scene.branching(), 2);
-    for (int b = 0; b <= 12; ++b) {
+    for (int b : {0, 1, 2, 3, 5, 8, 12}) {
         RenderOptions o = small(scene, b);
         o.width = 16;
         o.height = 12;
