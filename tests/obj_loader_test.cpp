@@ -19,7 +19,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string loadError(const fs::path& path) {
+std::string objLoadError(const fs::path& path) {
     try {
         loadObj(path);
     } catch (const Error& e) {
@@ -58,7 +58,7 @@ class BadObjTest : public ::testing::TestWithParam<BadObj> {};
 
 TEST_P(BadObjTest, FailsWithExactOneLineMessage) {
     const std::string path = std::string("tests/data/bad_obj/") + GetParam().file;
-    const std::string message = loadError(path);
+    const std::string message = objLoadError(path);
     EXPECT_EQ(message, path + ": " + GetParam().message);
     EXPECT_EQ(message.find('\n'), std::string::npos);
 }
@@ -80,9 +80,9 @@ TEST(ObjLoader, EveryBadObjFileIsInTheTable) {
 }
 
 TEST(ObjLoader, MissingFile) {
-    EXPECT_EQ(loadError("tests/data/nope.obj"),
+    EXPECT_EQ(objLoadError("tests/data/nope.obj"),
               "tests/data/nope.obj: cannot open: No such file or directory");
-    EXPECT_EQ(loadError("tests/data"), "tests/data: cannot open: Is a directory");
+    EXPECT_EQ(objLoadError("tests/data"), "tests/data: cannot open: Is a directory");
 }
 
 TEST(ObjLoader, QuadAndPentagonTriangulate) {
@@ -245,19 +245,19 @@ TEST(ObjLoader, AssimpCorpusLoadsOrFailsCleanly) {
             EXPECT_EQ(loadObj(dir / c.file).positions.size() / 3, std::size_t(c.triangles))
                 << c.file;
         } else {
-            std::string message = loadError(dir / c.file);
+            std::string message = objLoadError(dir / c.file);
             EXPECT_EQ(message.rfind((dir / c.file).string() + ": ", 0), 0u) << message;
             EXPECT_EQ(message.find('\n'), std::string::npos) << message;
         }
     }
-    EXPECT_EQ(loadError(dir / "invalid/malformed.obj"),
+    EXPECT_EQ(objLoadError(dir / "invalid/malformed.obj"),
               (dir / "invalid/malformed.obj").string() +
                   ": line 23: vertex index 12 out of range (8 vertices in the file)");
     // Every other file in the corpus loads or fails with one line; none crashes.
     for (const char* sub : {"OBJ", "invalid"})
         for (const auto& entry : fs::directory_iterator(dir / sub))
             if (entry.path().extension() == ".obj") {
-                std::string message = loadError(entry.path());
+                std::string message = objLoadError(entry.path());
                 EXPECT_EQ(message.find('\n'), std::string::npos) << message;
             }
 }

@@ -11,6 +11,7 @@
 #include "bench/sweep_config.h"
 #include "core/error.h"
 #include "test_device.h"
+#include "test_images.h"
 #include "test_scenes.h"
 #include "wavefront/queue/queue.h"
 #include "wavefront/queue/queue_split.h"
@@ -20,12 +21,8 @@ namespace {
 
 using test::kScenes;
 using test::load;
+using test::sameBits;
 using Launch = QueueLaunchMode;
-
-bool sameBits(const Image& a, const Image& b) {
-    return a.rgb.size() == b.rgb.size() &&
-           std::memcmp(a.rgb.data(), b.rgb.data(), a.rgb.size() * sizeof(float)) == 0;
-}
 
 RenderOptions tiny(const Scene& scene, int bounces, int aa) {
     RenderOptions o = scene.defaults;

@@ -16,6 +16,7 @@
 #include "core/error.h"
 #include "core/scene_loader.h"
 #include "test_device.h"
+#include "test_images.h"
 #include "test_scenes.h"
 #include "wavefront/queue/queue.h"
 
@@ -23,11 +24,7 @@ namespace rt {
 namespace {
 
 using Packets = QueuePacketMode;
-
-bool sameBits(const Image& a, const Image& b) {
-    return a.rgb.size() == b.rgb.size() &&
-           std::memcmp(a.rgb.data(), b.rgb.data(), a.rgb.size() * sizeof(float)) == 0;
-}
+using test::sameBits;
 
 bool deviceIsCpu() { return test::device().device().type == "CPU"; }
 

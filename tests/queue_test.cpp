@@ -18,6 +18,7 @@
 #include "image/image_io.h"
 #include "megakernel/megakernel.h"
 #include "test_device.h"
+#include "test_images.h"
 #include "test_scenes.h"
 #include "wavefront/queue/queue_layout.h"
 
@@ -26,6 +27,7 @@ namespace {
 
 using test::kScenes;
 using test::load;
+using test::sameBits;
 
 RenderOptions small(const Scene& scene, int bounces) {
     RenderOptions o = scene.defaults;
@@ -33,11 +35,6 @@ RenderOptions small(const Scene& scene, int bounces) {
     o.height = 18;
     o.bounces = bounces;
     return o;
-}
-
-bool sameBits(const Image& a, const Image& b) {
-    return a.rgb.size() == b.rgb.size() &&
-           std::memcmp(a.rgb.data(), b.rgb.data(), a.rgb.size() * sizeof(float)) == 0;
 }
 
 // Queue and megakernel add a path's terms in a different order (bounce by bounce against depth

@@ -142,7 +142,7 @@ long long expectSameCounts(const Scene& scene, const RenderOptions& base) {
     return restarted;
 }
 
-RenderOptions small(const Scene& scene, int bounces) {
+RenderOptions smallFrame(const Scene& scene, int bounces) {
     RenderOptions o = scene.defaults;
     o.width = 64, o.height = 36, o.bounces = bounces;
     return o;
@@ -152,7 +152,7 @@ RenderOptions small(const Scene& scene, int bounces) {
 // the small pool cuts paths, as the default CPU pool did for the full stress scene at 640x360.
 TEST(RayCounts, EveryDesignCountsTheSameRaysOnATerrainUnderWater) {
     const Scene scene = lake();
-    RenderOptions o = small(scene, 3);
+    RenderOptions o = smallFrame(scene, 3);
     EXPECT_GT(expectSameCounts(scene, o), 0) << "the small pool cut no path";
     o.aa = 2;  // several AA samples: each pixel's paths of every sample
     EXPECT_GT(expectSameCounts(scene, o), 0) << "the small pool cut no path";
@@ -165,7 +165,7 @@ TEST(RayCounts, EveryDesignCountsTheSameRaysOnTheStandardScenes) {
     for (const char* name : {"cornell", "mesh", "spheres"}) {
         SCOPED_TRACE(name);
         const Scene scene = test::load(name);
-        RenderOptions o = small(scene, 3);
+        RenderOptions o = smallFrame(scene, 3);
         o.shadowSamples = 3;
         expectSameCounts(scene, o);
     }
