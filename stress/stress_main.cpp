@@ -126,8 +126,7 @@ void scaleSection(ClContext& cl, bool quick, Report& R) {
     md << "\nA sphere of radius r at distance D straight ahead, lit from the camera, 41 x 31: "
           "the centre pixel's largest channel error against the CPU reference. Its float hit "
           "point lies about one ulp of D from the true one. *robust*: Ray Tracing Gems' test, "
-          "the normal from its quantities, renormalised (core/SHADING.md section 2; before "
-          "issue 17 the robust test's normal was (p - c) / r, 15/255 too dark at D = 1e4); "
+          "the normal from its quantities, renormalised (core/SHADING.md section 2); "
           "*--plain-sphere*: the report's test and normal, for comparison (the quadratic "
           "misses such spheres). Bar: within 1/255 for the robust sphere at D = 1e4.\n\n"
        << "| D | r | pipeline | --plain-sphere | robust | bar |\n| --- | --- | --- | --- | --- | "
@@ -318,7 +317,7 @@ int main(int argc, char** argv) {
         } else {
             std::fprintf(stderr,
                          "usage: rtlab-stress [--device INDEX|NAME|cpu|gpu] [--out DIR] [--quick]\n"
-                         "  Runs the numerical stress suite (issue 8) on one OpenCL device and "
+                         "  Runs the numerical stress suite on one OpenCL device and "
                          "writes DIR/stability.md\n  (default DIR: results/<device-slug>). "
                          "--quick: a tenth of the rays. Exit 2 when a bar fails.\n");
             return a == "--help" || a == "-h" ? 0 : 1;
@@ -338,8 +337,8 @@ int main(int argc, char** argv) {
         std::filesystem::create_directories(out);
         std::ofstream f(std::filesystem::path(out) / "stability.md");
         f << "# Numerical stress suite: " << d.name << "\n\n"
-          << "Written by `rtlab-stress" << (quick ? " --quick" : "") << "` (stress/, "
-          << "issue 8) on " << d.label() << ", commit " << RTLAB_COMMIT << ", " << date << ", in "
+          << "Written by `rtlab-stress" << (quick ? " --quick" : "") << "` (stress/) on "
+          << d.label() << ", commit " << RTLAB_COMMIT << ", " << date << ", in "
           << fmt("%.0f", seconds(t0)) << " s. Counts are *errors / cases (rate)*. "
           << "Each case asserts the robust method's figure (column *bar*; the same checks run "
           << "in tests/stability_test.cpp) and records the plain one's.\n\n"
