@@ -35,24 +35,23 @@ BatchTracer::BatchTracer(ClContext& cl, const Scene& scene, const RenderOptions&
         if (!why.empty()) throw Error("--accels " + label + ": " + why);
     }
     program_ = cl.program("trace_rays.cl", programDefines(scene, options, packet));
-    closest_ = cl::Kernel(program_, packet ? "Rays_ClosestPacket" : "Rays_Closest");
-    occluded_ = cl::Kernel(program_, packet ? "Rays_OccludedPacket" : "Rays_Occluded");
+    closest_ = Kernel(program_, packet ? "Rays_ClosestPacket" : "Rays_Closest");
+    occluded_ = Kernel(program_, packet ? "Rays_OccludedPacket" : "Rays_Occluded");
     device_.setArgs(closest_, makeSettings(scene, options));
     device_.setArgs(occluded_, makeSettings(scene, options));
 }
 
-double BatchTracer::run(cl::Kernel& k, const cl::Buffer& in, const cl::Buffer& out, size_t n,
-                        size_t local) {
-    k.setArg(DeviceScene::kFirstKernelArg, in);
-    k.setArg(DeviceScene::kFirstKernelArg + 1, out);
-    k.setArg(DeviceScene::kFirstKernelArg + 2, cl_int(n));
+double BatchTracer::run(Kernel& k, const cl::Buffer& in, const char* output, const cl::Buffer& out,
+                        size_t n, size_t local) {
+    k.set("rays", in).set(output, out).set("count", cl_int(n));
     auto t0 = std::chrono::steady_clock::now();
     // A packet kernel takes one work-item per packet. A local size must divide the global one:
     // round up; the kernels skip the padding.
     size_t items = packet_ ? (n + size_t(packet_) - 1) / size_t(packet_) : n;
     size_t global = local ? (items + local - 1) / local * local : items;
     cl::Event done;
-    cl_.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(std::max<size_t>(global, 1)),
+    cl_.queue().enqueueNDRangeKernel(k.get(), cl::NullRange,
+                                     cl::NDRange(std::max<size_t>(global, 1)),
                                      local ? cl::NDRange(local) : cl::NullRange, nullptr, &done);
     cl_.queue().finish();
     lastDeviceS_ = 1e-3 * eventMs(done);
@@ -60,12 +59,12 @@ double BatchTracer::run(cl::Kernel& k, const cl::Buffer& in, const cl::Buffer& o
 }
 
 double BatchTracer::closest(const cl::Buffer& rays, const cl::Buffer& t, size_t n, size_t local) {
-    return run(closest_, rays, t, n, local);
+    return run(closest_, rays, "t", t, n, local);
 }
 
 double BatchTracer::occluded(const cl::Buffer& rays, const cl::Buffer& blocked, size_t n,
                              size_t local) {
-    return run(occluded_, rays, blocked, n, local);
+    return run(occluded_, rays, "occluded", blocked, n, local);
 }
 
 std::vector<float> BatchTracer::closest(const std::vector<BatchRay>& rays) {

@@ -38,13 +38,14 @@ class BatchTracer {
     std::vector<int> occluded(const std::vector<BatchRay>& rays);
 
   private:
-    double run(cl::Kernel& kernel, const cl::Buffer& in, const cl::Buffer& out, size_t count,
-               size_t local);
+    // `output` names the kernel's result argument ("t" or "occluded").
+    double run(Kernel& kernel, const cl::Buffer& in, const char* output, const cl::Buffer& out,
+               size_t count, size_t local);
     ClContext& cl_;
     int packet_;
     DeviceScene device_;
     cl::Program program_;
-    cl::Kernel closest_, occluded_;
+    Kernel closest_, occluded_;
     double lastDeviceS_ = 0;
 };
 

@@ -15,6 +15,7 @@
 
 #include "core/cl_runtime.h"
 #include "core/error.h"
+#include "core/kernel.h"
 #include "core/version.h"
 
 using namespace rt;
@@ -88,11 +89,12 @@ Args parse(int argc, char** argv) {
     return a;
 }
 
-double medianMs(cl::CommandQueue& q, cl::Kernel& k, size_t global, int warmup, int repeats) {
+double medianMs(cl::CommandQueue& q, Kernel& k, size_t global, int warmup, int repeats) {
     std::vector<double> ms;
     for (int r = 0; r < warmup + repeats; ++r) {
         cl::Event e;
-        q.enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(global), cl::NullRange, nullptr, &e);
+        q.enqueueNDRangeKernel(k.get(), cl::NullRange, cl::NDRange(global), cl::NullRange, nullptr,
+                               &e);
         e.wait();
         if (r >= warmup) ms.push_back(eventMs(e));
     }
@@ -112,7 +114,8 @@ int main(int argc, char** argv) {
         bytes = std::min<size_t>(bytes, d.maxAlloc);
         const size_t n4 = bytes / 16;
         cl::Program program(cl.context(), kSource);
-        std::string options = "-DROOF_ITERATIONS=" + std::to_string(kFmaIterations);
+        std::string options =
+            "-cl-kernel-arg-info -DROOF_ITERATIONS=" + std::to_string(kFmaIterations);
         try {
             program.build({d.device}, options.c_str());
         } catch (const cl::Error&) {
@@ -125,20 +128,14 @@ int main(int argc, char** argv) {
         cl.queue().enqueueFillBuffer(y, 2.0f, 0, bytes);
         cl.queue().finish();
 
-        cl::Kernel copy(program, "Roof_Copy"), saxpy(program, "Roof_Saxpy"),
-            fma(program, "Roof_Fma");
-        copy.setArg(0, x);
-        copy.setArg(1, y);
-        saxpy.setArg(0, 0.5f);
-        saxpy.setArg(1, x);
-        saxpy.setArg(2, y);
+        Kernel copy(program, "Roof_Copy"), saxpy(program, "Roof_Saxpy"), fma(program, "Roof_Fma");
+        copy.set("in", x).set("out", y);
+        saxpy.set("a", 0.5f).set("x", x).set("y", y);
         const double copyMs = medianMs(cl.queue(), copy, n4, a.warmup, a.repeats);
         const double saxpyMs = medianMs(cl.queue(), saxpy, n4, a.warmup, a.repeats);
         // Enough work-items to fill any device many times over; each writes one float.
         const size_t fmaItems = std::max<size_t>(d.computeUnits, 1) * 8192;
-        fma.setArg(0, 0.999f);
-        fma.setArg(1, 0.001f);
-        fma.setArg(2, x);
+        fma.set("a", 0.999f).set("b", 0.001f).set("out", x);
         const double fmaMs =
             medianMs(cl.queue(), fma, std::min(fmaItems, bytes / 4), a.warmup, a.repeats);
         const double fmaFlops = double(std::min(fmaItems, bytes / 4)) * kFmaIterations * 8 * 4 * 2;

@@ -304,7 +304,8 @@ static std::filesystem::path cacheDir() {
 
 cl::Program ClContext::program(const std::string& mainFile,
                                const std::vector<std::string>& defines) {
-    std::string options = "-cl-std=CL1.2";
+    // Argument names (rt::Kernel sets arguments by name); they change no generated code.
+    std::string options = "-cl-std=CL1.2 -cl-kernel-arg-info";
     // OpenCL lets float division and sqrt be 2.5-3 ulp; NVIDIA's compiler then picks different
     // approximations in different kernels, and the pipelines' images drift apart where they
     // must agree bit for bit. Correct rounding makes them bit-identical again at no measurable

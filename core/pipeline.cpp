@@ -228,21 +228,21 @@ WarpCounts DeviceScene::readWarpCounts(cl::CommandQueue& queue) const {
     return {c[0], c[1]};
 }
 
-void DeviceScene::setArgs(cl::Kernel& k, const dev::RenderSettings& settings) const {
+void DeviceScene::setArgs(Kernel& k, const dev::RenderSettings& settings) const {
     dev::RenderSettings s = settings;
     s.grid = grid_;
-    k.setArg(0, spheres_);
-    k.setArg(1, planes_);
-    k.setArg(2, triangles_);
-    k.setArg(3, meshes_);
-    k.setArg(4, kdops_);
-    k.setArg(5, lights_);
-    k.setArg(6, materials_);
-    k.setArg(7, cubemap_);
-    k.setArg(8, bvh_);
-    k.setArg(9, cells_);
-    k.setArg(10, rayCounts_);
-    k.setArg(11, sizeof s, &s);
+    k.set("spheres", spheres_)
+        .set("planes", planes_)
+        .set("triangles", triangles_)
+        .set("meshes", meshes_)
+        .set("kdops", kdops_)
+        .set("lights", lights_)
+        .set("materials", materials_)
+        .set("cubemap", cubemap_)
+        .set("bvh", bvh_)
+        .set("cells", cells_)
+        .set("rayCounts", rayCounts_)
+        .set("settings", sizeof s, &s);
 }
 
 Launch launch2d(const DeviceInfo& device, int width, int rows) {

@@ -17,6 +17,7 @@
 #include "core/accel.h"
 #include "core/cl_runtime.h"
 #include "core/image.h"
+#include "core/kernel.h"
 #include "core/launch_planner.h"
 #include "core/scene.h"
 
@@ -119,10 +120,9 @@ class DeviceScene {
     ~DeviceScene();
     DeviceScene(const DeviceScene&) = delete;
     DeviceScene& operator=(const DeviceScene&) = delete;
-    // Sets kernel arguments 0..11 (RT_SCENE_PARAMS in core/cl/scene.cl) with the given settings
-    // (their grid field is filled here); the kernel's own arguments start at kFirstKernelArg.
-    void setArgs(cl::Kernel& kernel, const dev::RenderSettings& settings) const;
-    static constexpr int kFirstKernelArg = 12;
+    // Sets the scene arguments (RT_SCENE_PARAMS in core/cl/scene.cl) by name, with the given
+    // settings (their grid field is filled here); the kernel's own arguments are its caller's.
+    void setArgs(Kernel& kernel, const dev::RenderSettings& settings) const;
     // Device ray counters (RenderOptions::countRays): zero them before a frame, read them after.
     void resetRayCounts(cl::CommandQueue& queue) const;
     RayCounts readRayCounts(cl::CommandQueue& queue) const;

@@ -96,15 +96,15 @@ Image MegakernelPipeline::render(const Scene& scene, const RenderOptions& o) {
     const long long total = (last - first) + (adaptive ? centreLast - centreFirst : 0);
     long long done = 0;
     // One pass over rows [from, to) in tiles sized by the planner (whole rows, or columns of one
-    // row when a row alone would run past --max-launch-ms); kernel args after the scene's.
-    auto pass = [&](cl::Kernel& kernel, const char* name, int from, int to) {
+    // row when a row alone would run past --max-launch-ms).
+    auto pass = [&](Kernel& kernel, const char* name, int from, int to) {
         for (int row0 = from; row0 < to;) {
             LaunchTile tile = planner_.next(to - row0);
             settings.rowOffset = row0;
             scene_->setArgs(kernel, settings);
             cl::Event e;
             TileRange range = tileRange(cl_.device(), o.width, tile);
-            cl_.queue().enqueueNDRangeKernel(kernel, range.offset, range.global, range.local,
+            cl_.queue().enqueueNDRangeKernel(kernel.get(), range.offset, range.global, range.local,
                                              nullptr, &e);
             e.wait();
             double ms = eventMs(e);
@@ -120,16 +120,15 @@ Image MegakernelPipeline::render(const Scene& scene, const RenderOptions& o) {
         if (o.countRays) scene_->resetRayCounts(cl_.queue());
         if (adaptive) {
             // Every centre first: an edge test reads the neighbouring rows' centres.
-            cl::Kernel centers(program, "Megakernel_RenderCenters");
-            centers.setArg(DeviceScene::kFirstKernelArg, centers_);
+            Kernel centers(program, "Megakernel_RenderCenters");
+            centers.set("centers", centers_);
             pass(centers, "centers", centreFirst, centreLast);
-            cl::Kernel edges(program, "Megakernel_RenderEdges");
-            edges.setArg(DeviceScene::kFirstKernelArg, centers_);
-            edges.setArg(DeviceScene::kFirstKernelArg + 1, image_);
+            Kernel edges(program, "Megakernel_RenderEdges");
+            edges.set("centers", centers_).set("image", image_);
             pass(edges, "edges", first, last);
         } else {
-            cl::Kernel kernel(program, "Megakernel_Render");
-            kernel.setArg(DeviceScene::kFirstKernelArg, image_);
+            Kernel kernel(program, "Megakernel_Render");
+            kernel.set("image", image_);
             pass(kernel, "megakernel", first, last);
         }
         const size_t rowBytes = size_t(o.width) * 3 * sizeof(float);

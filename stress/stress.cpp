@@ -123,7 +123,7 @@ std::vector<std::string> probeDefines(const Scene& scene, const RenderOptions& o
     return d;
 }
 
-// A probe kernel bound to a scene's device copy; set its own arguments from kFirstKernelArg.
+// A probe kernel bound to a scene's device copy; its own arguments are set by name.
 struct SceneProbe {
     SceneProbe(ClContext& cl, const Scene& scene, const RenderOptions& o, const char* kernel)
         : device(cl, scene, o.accel),
@@ -132,12 +132,12 @@ struct SceneProbe {
         device.setArgs(k, makeSettings(scene, o));
     }
     void run(ClContext& cl, size_t n) {
-        cl.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(n), cl::NullRange);
+        cl.queue().enqueueNDRangeKernel(k.get(), cl::NullRange, cl::NDRange(n), cl::NullRange);
         cl.queue().finish();
     }
     DeviceScene device;
     cl::Program program;
-    cl::Kernel k;
+    Kernel k;
 };
 
 // Closest hits of rays (6 floats each): t (-1 on a miss) and (kind, object).
@@ -148,9 +148,7 @@ void closest(ClContext& cl, const Scene& scene, const RenderOptions& o,
     cl::Buffer in = input(cl, rays);
     cl::Buffer tb(cl.context(), CL_MEM_WRITE_ONLY, n * 4),
         wb(cl.context(), CL_MEM_WRITE_ONLY, n * 8);
-    p.k.setArg(DeviceScene::kFirstKernelArg, in);
-    p.k.setArg(DeviceScene::kFirstKernelArg + 1, tb);
-    p.k.setArg(DeviceScene::kFirstKernelArg + 2, wb);
+    p.k.set("rays", in).set("t", tb).set("what", wb);
     p.run(cl, n);
     *t = output<float>(cl, tb, n);
     if (what) *what = output<cl_int2>(cl, wb, n);
@@ -232,11 +230,10 @@ SphereResult tinySpheres(ClContext& cl, bool robust, double distance, double rad
         dev::Float3 cf = f3(c), df = f3(glm::normalize(c + off * side));
         in.insert(in.end(), {0.f, 0.f, 0.f, df.x, df.y, df.z, cf.x, cf.y, cf.z, float(radius)});
     }
-    cl::Kernel k(program, "Probe_Sphere");
+    Kernel k(program, "Probe_Sphere");
     cl::Buffer ib = input(cl, in), tb(cl.context(), CL_MEM_WRITE_ONLY, rays * 4);
-    k.setArg(0, ib);
-    k.setArg(1, tb);
-    cl.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(rays), cl::NullRange);
+    k.set("in", ib).set("t", tb);
+    cl.queue().enqueueNDRangeKernel(k.get(), cl::NullRange, cl::NDRange(rays), cl::NullRange);
     std::vector<float> t = output<float>(cl, tb, rays);
     SphereResult r;
     for (int i = 0; i < rays; ++i) {
@@ -276,9 +273,7 @@ AcneResult acne(ClContext& cl, double scale, RenderOptions::Offset offset, int p
     }
     SceneProbe probe(cl, scene, o, "Probe_Spawn");
     cl::Buffer in = input(cl, rays), out(cl.context(), CL_MEM_WRITE_ONLY, primary * 8 * 4);
-    probe.k.setArg(DeviceScene::kFirstKernelArg, in);
-    probe.k.setArg(DeviceScene::kFirstKernelArg + 1, cl_int(spawn));
-    probe.k.setArg(DeviceScene::kFirstKernelArg + 2, out);
+    probe.k.set("rays", in).set("spawn", cl_int(spawn)).set("out", out);
     probe.run(cl, primary);
     std::vector<cl_int> c = output<cl_int>(cl, out, size_t(primary) * 8);
     AcneResult r;
@@ -321,15 +316,15 @@ ReintersectResult reintersect(ClContext& cl, RenderOptions::Offset offset, doubl
         origins.insert(origins.end(), {float(org.x), float(org.y), float(org.z)});
         targets.insert(targets.end(), {float(target.x), float(target.y), float(target.z)});
     }
-    cl::Kernel k(program, "Probe_Reintersect");
+    Kernel k(program, "Probe_Reintersect");
     cl::Buffer tb = input(cl, tris), ob = input(cl, origins), gb = input(cl, targets);
     cl::Buffer out(cl.context(), CL_MEM_WRITE_ONLY, triangles * 4);
-    k.setArg(0, tb);
-    k.setArg(1, ob);
-    k.setArg(2, gb);
-    k.setArg(3, cl_int(spawn));
-    k.setArg(4, out);
-    cl.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(triangles), cl::NullRange);
+    k.set("tris", tb)
+        .set("origins", ob)
+        .set("targets", gb)
+        .set("spawn", cl_int(spawn))
+        .set("out", out);
+    cl.queue().enqueueNDRangeKernel(k.get(), cl::NullRange, cl::NDRange(triangles), cl::NullRange);
     std::vector<cl_int> hits = output<cl_int>(cl, out, triangles);
     ReintersectResult r;
     r.triangles = triangles;
@@ -364,11 +359,10 @@ CriticalResult criticalAngle(ClContext& cl) {
             in.insert(in.end(), {d.x, d.y, d.z, 0.f, 1.f, 0.f, float(ior), float(ior), 1.f});
         }
     size_t n = in.size() / 9;
-    cl::Kernel k(program, "Probe_Refract");
+    Kernel k(program, "Probe_Refract");
     cl::Buffer ib = input(cl, in), ob(cl.context(), CL_MEM_WRITE_ONLY, n * 5 * 4);
-    k.setArg(0, ib);
-    k.setArg(1, ob);
-    cl.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(n), cl::NullRange);
+    k.set("in", ib).set("out", ob);
+    cl.queue().enqueueNDRangeKernel(k.get(), cl::NullRange, cl::NDRange(n), cl::NullRange);
     std::vector<float> out = output<float>(cl, ob, n * 5);
     CriticalResult r;
     for (size_t i = 0; i < n; ++i) {
@@ -418,14 +412,11 @@ std::vector<Counts> grazing(ClContext& cl, bool watertight, int perAngle) {
             rays.insert(rays.end(), {of.x, of.y, of.z, df.x, df.y, df.z});
         }
     size_t n = rays.size() / 6;
-    cl::Kernel kern(program, "Probe_TriangleHits");
+    Kernel kern(program, "Probe_TriangleHits");
     cl::Buffer rb = input(cl, rays), tb = input(cl, tri),
                hb(cl.context(), CL_MEM_WRITE_ONLY, n * 4);
-    kern.setArg(0, rb);
-    kern.setArg(1, tb);
-    kern.setArg(2, cl_int(1));
-    kern.setArg(3, hb);
-    cl.queue().enqueueNDRangeKernel(kern, cl::NullRange, cl::NDRange(n), cl::NullRange);
+    kern.set("rays", rb).set("tris", tb).set("count", cl_int(1)).set("hits", hb);
+    cl.queue().enqueueNDRangeKernel(kern.get(), cl::NullRange, cl::NDRange(n), cl::NullRange);
     std::vector<cl_int> hits = output<cl_int>(cl, hb, n);
     std::vector<Counts> r(8);
     for (size_t i = 0; i < n; ++i) {
@@ -536,8 +527,7 @@ NanResult nanRays(ClContext& cl, RenderOptions::Accel accel) {
     }
     SceneProbe shade(cl, scene, o, "Probe_Shade");
     cl::Buffer in = input(cl, rays), out(cl.context(), CL_MEM_WRITE_ONLY, n * 12);
-    shade.k.setArg(DeviceScene::kFirstKernelArg, in);
-    shade.k.setArg(DeviceScene::kFirstKernelArg + 1, out);
+    shade.k.set("rays", in).set("rgb", out);
     shade.run(cl, n);
     std::vector<float> rgb = output<float>(cl, out, n * 3);
     for (size_t i = 0; i < n; ++i)

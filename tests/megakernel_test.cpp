@@ -131,14 +131,13 @@ std::vector<float> runSpheres(bool robust, const std::vector<float>& rays) {
     std::vector<std::string> defs;
     if (robust) defs.push_back("RT_ROBUST_SPHERE");
     cl::Program p = cl.program("probe.cl", defs);
-    cl::Kernel k(p, "Probe_Sphere");
+    Kernel k(p, "Probe_Sphere");
     size_t n = rays.size() / 10;
     cl::Buffer in(cl.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, rays.size() * 4,
                   const_cast<float*>(rays.data()));
     cl::Buffer out(cl.context(), CL_MEM_WRITE_ONLY, n * 4);
-    k.setArg(0, in);
-    k.setArg(1, out);
-    cl.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(n));
+    k.set("in", in).set("t", out);
+    cl.queue().enqueueNDRangeKernel(k.get(), cl::NullRange, cl::NDRange(n));
     std::vector<float> t(n);
     cl.queue().enqueueReadBuffer(out, CL_TRUE, 0, n * 4, t.data());
     return t;
@@ -216,18 +215,15 @@ int countLeaks(bool watertight) {
     std::vector<std::string> defs = {"RT_HAS_TRIANGLES"};
     if (watertight) defs.push_back("RT_WATERTIGHT");
     cl::Program p = cl.program("probe.cl", defs);
-    cl::Kernel k(p, "Probe_TriangleHits");
+    Kernel k(p, "Probe_TriangleHits");
     size_t n = rays.size() / 6;
     cl::Buffer rb(cl.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, rays.size() * 4,
                   rays.data());
     cl::Buffer tb(cl.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, tris.size() * 4,
                   tris.data());
     cl::Buffer hb(cl.context(), CL_MEM_WRITE_ONLY, n * 4);
-    k.setArg(0, rb);
-    k.setArg(1, tb);
-    k.setArg(2, cl_int(tris.size() / 9));
-    k.setArg(3, hb);
-    cl.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(n));
+    k.set("rays", rb).set("tris", tb).set("count", cl_int(tris.size() / 9)).set("hits", hb);
+    cl.queue().enqueueNDRangeKernel(k.get(), cl::NullRange, cl::NDRange(n));
     std::vector<int> hits(n);
     cl.queue().enqueueReadBuffer(hb, CL_TRUE, 0, n * 4, hits.data());
     return int(std::count(hits.begin(), hits.end(), 0));

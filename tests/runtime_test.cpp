@@ -8,6 +8,7 @@
 
 #include "core/cl_runtime.h"
 #include "core/error.h"
+#include "core/kernel.h"
 #include "core/kernel_sources.h"
 #include "scratch_dir.h"
 #include "test_device.h"
@@ -159,6 +160,44 @@ TEST(Runtime, DeviceSelection) {
         unsetenv("RTLAB_DEVICE");
     else
         setenv("RTLAB_DEVICE", restore.c_str(), 1);
+}
+
+// Kernels take their arguments by the names the source gives them, in any order; a name the
+// kernel does not have is an error that says which names it has.
+TEST(Runtime, KernelArgumentsAreSetByName) {
+    ClContext& cl = test::device();
+    cl::Program program = cl.program("probe.cl", {"RT_HAS_TRIANGLES"});
+    Kernel k(program, "Probe_TriangleHits");
+    EXPECT_EQ(k.arguments(), (std::vector<std::string>{"rays", "tris", "count", "hits"}));
+    EXPECT_TRUE(k.has("count"));
+    EXPECT_FALSE(k.has("Count"));
+    try {
+        k.set("triangles", cl_int(0));
+        ADD_FAILURE() << "no error for an argument the kernel does not have";
+    } catch (const Error& e) {
+        EXPECT_STREQ(e.what(),
+                     "Probe_TriangleHits has no argument 'triangles' (it takes rays, tris, "
+                     "count, hits)");
+    }
+    try {
+        Kernel missing(program, "Probe_Nothing");
+        ADD_FAILURE() << "no error for a kernel the program does not have";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("Probe_Nothing"), std::string::npos) << e.what();
+    }
+    // Set out of order, then run: a hit at t = 1 from the one triangle in front of the ray.
+    const std::vector<float> ray = {0.25f, 0.25f, -1, 0, 0, 1};
+    const std::vector<float> tri = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    cl::Buffer rb(cl.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, ray.size() * 4,
+                  const_cast<float*>(ray.data()));
+    cl::Buffer tb(cl.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, tri.size() * 4,
+                  const_cast<float*>(tri.data()));
+    cl::Buffer hb(cl.context(), CL_MEM_WRITE_ONLY, 4);
+    k.set("hits", hb).set("count", cl_int(1)).set("tris", tb).set("rays", rb);
+    cl.queue().enqueueNDRangeKernel(k.get(), cl::NullRange, cl::NDRange(1));
+    cl_int hits = -1;
+    cl.queue().enqueueReadBuffer(hb, CL_TRUE, 0, 4, &hits);
+    EXPECT_EQ(hits, 1);
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 
 #include <cstddef>
 
+#include "core/kernel.h"
 #include "test_device.h"
 
 namespace rt {
@@ -13,11 +14,11 @@ namespace {
 TEST(Types, DeviceSeesTheSameSizesAndOffsets) {
     ClContext& cl = test::device();
     cl::Program program = cl.program("probe.cl", {});
-    cl::Kernel kernel(program, "Probe_Sizes");
+    Kernel kernel(program, "Probe_Sizes");
     constexpr int kCount = 17;
     cl::Buffer out(cl.context(), CL_MEM_WRITE_ONLY, kCount * sizeof(cl_uint));
-    kernel.setArg(0, out);
-    cl.queue().enqueueNDRangeKernel(kernel, cl::NullRange, cl::NDRange(1));
+    kernel.set("out", out);
+    cl.queue().enqueueNDRangeKernel(kernel.get(), cl::NullRange, cl::NDRange(1));
     cl_uint got[kCount] = {};
     cl.queue().enqueueReadBuffer(out, CL_TRUE, 0, sizeof got, got);
     using namespace dev;

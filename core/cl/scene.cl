@@ -49,6 +49,8 @@ typedef struct SceneData {
 #endif
 
 // Kernel parameters and their packing into a SceneData; every kernel takes the scene this way.
+// The host binds them by these names (DeviceScene::setArgs, rt::Kernel), so renaming one here
+// means renaming it there.
 #define RT_SCENE_PARAMS                                                                     \
     global const Sphere *spheres, global const Plane *planes,                               \
         global const Triangle *triangles, global const MeshInstance *meshes,                \

@@ -110,11 +110,11 @@ class QueueFrame {
                    : 1;
     }
 
-    cl::Kernel& kernel(const std::string& name) {
+    Kernel& kernel(const std::string& name) {
         auto it = kernels_.find(name);
         if (it != kernels_.end()) return it->second;
-        cl::Kernel k(program_, name.c_str());
-        size_t most = k.getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(cl_.device().device);
+        Kernel k(program_, name);
+        size_t most = k.get().getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(cl_.device().device);
         size_t local = size_t(group_);
         bool scan = name.rfind("Queue_Scan", 0) == 0;  // their local arrays need the full group
         if (scan && most < local)
@@ -125,16 +125,19 @@ class QueueFrame {
         locals_[name] = local;
         return kernels_.emplace(name, k).first->second;
     }
-    // Scene arguments (0..11) of a kernel that takes them, with this frame's settings.
-    cl::Kernel& sceneKernel(const std::string& name, const dev::RenderSettings& s) {
-        cl::Kernel& k = kernel(name);
+    // Scene arguments of a kernel that takes them, with this frame's settings.
+    Kernel& sceneKernel(const std::string& name, const dev::RenderSettings& s) {
+        Kernel& k = kernel(name);
         scene_.setArgs(k, s);
         return k;
     }
-    static int setRays(cl::Kernel& k, int at, const QueueBuffers::Rays& r) {
-        for (const cl::Buffer* field : {&r.origin, &r.dir, &r.weight, &r.pixel, &r.meta})
-            k.setArg(at++, *field);
-        return at;
+    // The five arguments QUEUE_RAYS_PARAMS(prefix) declares (queue.cl): prefixOrigin, ...
+    static Kernel& setRays(Kernel& k, const std::string& prefix, const QueueBuffers::Rays& r) {
+        return k.set(prefix + "Origin", r.origin)
+            .set(prefix + "Dir", r.dir)
+            .set(prefix + "Weight", r.weight)
+            .set(prefix + "Pixel", r.pixel)
+            .set(prefix + "Meta", r.meta);
     }
     // 1D launches over work-items [0, items) (none when zero): one, or pieces in whole
     // work-groups when the stage's measured cost per item says one would run past the cap. A
@@ -204,7 +207,7 @@ class QueueFrame {
         size_t workItems = (items + per - 1) / per,
                global = (workItems + local - 1) / local * local;
         cl::Event e;
-        cl_.queue().enqueueNDRangeKernel(kernels_.at(name), cl::NDRange(offset / per),
+        cl_.queue().enqueueNDRangeKernel(kernels_.at(name).get(), cl::NDRange(offset / per),
                                          cl::NDRange(global), cl::NDRange(local), nullptr, &e);
         launches_.push_back({name, e, offset, items, countWord});
     }
@@ -213,7 +216,7 @@ class QueueFrame {
     cl::Program& program_;
     const DeviceScene& scene_;
     int group_;
-    std::map<std::string, cl::Kernel>& kernels_;
+    std::map<std::string, Kernel>& kernels_;
     std::map<std::string, size_t>& locals_;
     StageCosts& costs_;
     double targetMs_, fakeItemMs_;
@@ -267,79 +270,80 @@ class QueuePass {
   private:
     // Arguments that stay the same through the pass (the settings carry the sample index).
     void bindKernels(const dev::RenderSettings& s) {
-        const int a = DeviceScene::kFirstKernelArg;
-        cl::Kernel& gen = f_.sceneKernel("Queue_Generate", s);
-        QueueFrame::setRays(gen, a, b_.rays);
-        gen.setArg(a + 7, b_.retry);
-        gen.setArg(a + 10, b_.rayTally);
-        cl::Kernel& ext = f_.sceneKernel(f_.extendKernel(), s);
-        int at = QueueFrame::setRays(ext, a, b_.rays);
-        ext.setArg(at + 1, b_.nodes);
-        ext.setArg(at + 2, b_.classQueues);
-        ext.setArg(at + 3, cl_int(b_.pool));
-        ext.setArg(at + 4, b_.shadowQueue);
-        ext.setArg(at + 5, b_.counters);
-        ext.setArg(at + 6, cl_int(onDevice_ ? RT_Q_LIVE : -1));
-        ext.setArg(at + 7, b_.rayTally);
-        cl::Kernel& sh = f_.sceneKernel(f_.shadowKernel(), s);
-        sh.setArg(a, b_.nodes);
-        sh.setArg(a + 1, b_.shadowQueue);
-        sh.setArg(a + 2, b_.counters);
-        sh.setArg(a + 3, b_.rays.pixel);
-        sh.setArg(a + 4, b_.rays.meta);
-        sh.setArg(a + 5, b_.rayTally);
+        const cl_int liveWord = onDevice_ ? RT_Q_LIVE : -1;
+        Kernel& gen = f_.sceneKernel("Queue_Generate", s);
+        QueueFrame::setRays(gen, "rays", b_.rays)
+            .set("retry", b_.retry)
+            .set("rayTally", b_.rayTally);
+        Kernel& ext = f_.sceneKernel(f_.extendKernel(), s);
+        QueueFrame::setRays(ext, "rays", b_.rays)
+            .set("nodes", b_.nodes)
+            .set("classQueues", b_.classQueues)
+            .set("pool", cl_int(b_.pool))
+            .set("shadowQueue", b_.shadowQueue)
+            .set("counters", b_.counters)
+            .set("nWord", liveWord)
+            .set("rayTally", b_.rayTally);
+        f_.sceneKernel(f_.shadowKernel(), s)
+            .set("nodes", b_.nodes)
+            .set("shadowQueue", b_.shadowQueue)
+            .set("counters", b_.counters)
+            .set("rayPixel", b_.rays.pixel)
+            .set("rayMeta", b_.rays.meta)
+            .set("rayTally", b_.rayTally);
         for (const char* name : kShadeKernels) {
-            cl::Kernel& k = f_.sceneKernel(name, s);
-            at = QueueFrame::setRays(k, a, b_.rays);
-            k.setArg(at, b_.nodes);
-            k.setArg(at + 1, b_.classQueues);
-            k.setArg(at + 2, cl_int(b_.pool));
-            k.setArg(at + 3, b_.counters);
-            at = QueueFrame::setRays(k, at + 4, b_.staging);
-            k.setArg(at, b_.contrib);
-            k.setArg(at + 1, b_.children);
+            Kernel& k = f_.sceneKernel(name, s);
+            QueueFrame::setRays(k, "rays", b_.rays)
+                .set("nodes", b_.nodes)
+                .set("classQueues", b_.classQueues)
+                .set("pool", cl_int(b_.pool))
+                .set("counters", b_.counters);
+            QueueFrame::setRays(k, "staging", b_.staging)
+                .set("contrib", b_.contrib)
+                .set("children", b_.children);
         }
         bindBookkeeping();
     }
 
     // The scan, cut, accumulate and compact kernels: buffers only, no scene.
     void bindBookkeeping() {
-        cl::Kernel& scan = f_.kernel("Queue_ScanBlocks");
-        scan.setArg(0, b_.children);
-        scan.setArg(2, b_.offsets);
-        scan.setArg(3, b_.blockSums);
-        scan.setArg(4, b_.counters);
-        scan.setArg(5, cl_int(onDevice_ ? RT_Q_LIVE : -1));
-        cl::Kernel& sums = f_.kernel("Queue_ScanSums");
-        sums.setArg(0, b_.blockSums);
-        sums.setArg(2, b_.counters);
-        sums.setArg(3, cl_int(onDevice_ ? RT_Q_LIVE : -1));
-        sums.setArg(4, cl_int(b_.pool));
-        cl::Kernel& cut = f_.kernel("Queue_FindCut");
-        cut.setArg(0, b_.children);
-        cut.setArg(1, b_.offsets);
-        cut.setArg(2, b_.blockSums);
-        cut.setArg(3, b_.rays.pixel);
-        cut.setArg(5, cl_int(b_.pool));
-        cut.setArg(6, b_.counters);
-        cl::Kernel& acc = f_.kernel("Queue_Accumulate");
-        acc.setArg(0, b_.rays.pixel);
-        acc.setArg(1, b_.rays.meta);
-        acc.setArg(2, b_.contrib);
-        acc.setArg(4, b_.sums);
-        acc.setArg(5, b_.counters);
-        acc.setArg(6, cl_int(onDevice_ ? RT_Q_CUT : -1));
-        acc.setArg(7, b_.children);
-        acc.setArg(8, f_.scene().rayCountBuffer());
-        acc.setArg(9, b_.rayTally);
-        cl::Kernel& comp = f_.kernel("Queue_Compact");
-        int at = QueueFrame::setRays(comp, 0, b_.staging);
-        comp.setArg(at, b_.children);
-        comp.setArg(at + 1, b_.offsets);
-        comp.setArg(at + 2, b_.blockSums);
-        at = QueueFrame::setRays(comp, at + 4, b_.rays);
-        comp.setArg(at, b_.counters);
-        comp.setArg(at + 1, cl_int(onDevice_ ? RT_Q_CUT : -1));
+        const cl_int liveWord = onDevice_ ? RT_Q_LIVE : -1, cutWord = onDevice_ ? RT_Q_CUT : -1;
+        f_.kernel("Queue_ScanBlocks")
+            .set("children", b_.children)
+            .set("offsets", b_.offsets)
+            .set("blockSums", b_.blockSums)
+            .set("counters", b_.counters)
+            .set("nWord", liveWord);
+        f_.kernel("Queue_ScanSums")
+            .set("blockSums", b_.blockSums)
+            .set("counters", b_.counters)
+            .set("liveWord", liveWord)
+            .set("pool", cl_int(b_.pool));
+        f_.kernel("Queue_FindCut")
+            .set("children", b_.children)
+            .set("offsets", b_.offsets)
+            .set("blockSums", b_.blockSums)
+            .set("pixels", b_.rays.pixel)
+            .set("pool", cl_int(b_.pool))
+            .set("counters", b_.counters);
+        f_.kernel("Queue_Accumulate")
+            .set("pixels", b_.rays.pixel)
+            .set("meta", b_.rays.meta)
+            .set("contrib", b_.contrib)
+            .set("sums", b_.sums)
+            .set("counters", b_.counters)
+            .set("cutWord", cutWord)
+            .set("children", b_.children)
+            .set("rayCounts", f_.scene().rayCountBuffer())
+            .set("rayTally", b_.rayTally);
+        Kernel& comp = f_.kernel("Queue_Compact");
+        QueueFrame::setRays(comp, "staging", b_.staging)
+            .set("children", b_.children)
+            .set("offsets", b_.offsets)
+            .set("blockSums", b_.blockSums);
+        QueueFrame::setRays(comp, "rays", b_.rays)
+            .set("counters", b_.counters)
+            .set("cutWord", cutWord);
     }
 
     // Camera rays into slots [first, ...): pixels cut earlier first, then new ones, as many as
@@ -356,12 +360,11 @@ class QueuePass {
             ++stats_.readbacks;  // a blocking write: the host waits for the queue as well
         }
         if (count == 0) return first;
-        cl::Kernel& gen = f_.kernel("Queue_Generate");
-        const int a = DeviceScene::kFirstKernelArg + 5;
-        gen.setArg(a, cl_int(first));
-        gen.setArg(a + 1, cl_int(count));
-        gen.setArg(a + 3, cl_int(fromRetry));
-        gen.setArg(a + 4, cl_int(next_));
+        f_.kernel("Queue_Generate")
+            .set("first", cl_int(first))
+            .set("count", cl_int(count))
+            .set("retryCount", cl_int(fromRetry))
+            .set("nextPixel", cl_int(next_));
         f_.launch("Queue_Generate", count);
         next_ += count - fromRetry;
         return first + count;
@@ -371,7 +374,7 @@ class QueuePass {
     // live rays; device mode: a bound on them, the kernels read the real count).
     void enqueueStages(size_t n) {
         cl_.queue().enqueueFillBuffer(b_.counters, cl_int(0), 0, RT_Q_PER_ITERATION * 4);
-        f_.kernel(f_.extendKernel()).setArg(DeviceScene::kFirstKernelArg + 5, cl_int(n));
+        f_.kernel(f_.extendKernel()).set("n", cl_int(n));
         f_.launch(f_.extendKernel(), n);
         // Shadow and shade run over queues that extend fills: over the bound n, each kernel
         // reads its queue's length. When one launch that long could run past --max-launch-ms,
@@ -396,18 +399,18 @@ class QueuePass {
             if (classes_[c]) queueLaunch(kShadeKernels[c], RT_Q_COUNT + c);
         size_t group = size_t(QueuePipeline::groupSize(cl_.device()));
         size_t blocks = (n + group - 1) / group;
-        f_.kernel("Queue_ScanBlocks").setArg(1, cl_int(n));
+        f_.kernel("Queue_ScanBlocks").set("n", cl_int(n));
         f_.launch("Queue_ScanBlocks", n);
-        f_.kernel("Queue_ScanSums").setArg(1, cl_int(blocks));
+        f_.kernel("Queue_ScanSums").set("blocks", cl_int(blocks));
         f_.launch("Queue_ScanSums", 1);
         ++stats_.iterations;
     }
 
     // Sums of rays [0, cut) to their pixels, their children to the pool's front.
     void enqueueAccumulate(size_t cut) {
-        f_.kernel("Queue_Accumulate").setArg(3, cl_int(cut));
+        f_.kernel("Queue_Accumulate").set("cut", cl_int(cut));
         f_.launch("Queue_Accumulate", cut);
-        f_.kernel("Queue_Compact").setArg(8, cl_int(cut));
+        f_.kernel("Queue_Compact").set("cut", cl_int(cut));
         f_.launch("Queue_Compact", cut);
     }
 
@@ -441,7 +444,7 @@ class QueuePass {
         if (o_.maxLaunchMs > 0) f_.learn(c);
         size_t cut = n, kept = size_t(c[RT_Q_CHILDREN]);
         if (kept > b_.pool) {
-            f_.kernel("Queue_FindCut").setArg(4, cl_int(n));
+            f_.kernel("Queue_FindCut").set("n", cl_int(n));
             f_.launch("Queue_FindCut", 1);
             q.enqueueReadBuffer(b_.counters, CL_TRUE, 0, sizeof c, c);
             ++stats_.readbacks;
@@ -584,11 +587,11 @@ Image QueuePipeline::render(const Scene& scene, const RenderOptions& o) {
             cl_.queue().enqueueFillBuffer(buf_.rayTally, cl_uint(0), 0, buf_.rayTallyBytes);
         }
         cl_.queue().enqueueFillBuffer(buf_.counters, cl_int(0), 0, RT_Q_WORDS * 4);
-        cl::Kernel& resolve = frame.kernel("Queue_Resolve");
-        resolve.setArg(0, buf_.sums);
-        resolve.setArg(1, buf_.image);
-        resolve.setArg(2, cl_int(pixels));
-        resolve.setArg(4, cl_int(o.aa * o.aa));
+        Kernel& resolve = frame.kernel("Queue_Resolve");
+        resolve.set("sums", buf_.sums)
+            .set("image", buf_.image)
+            .set("pixels", cl_int(pixels))
+            .set("samples", cl_int(o.aa * o.aa));
         QueuePass pass(cl_, frame, buf_, o, queue_, learnedLimit_);
         // Progress in pixels started x AA samples, over the row window.
         const size_t first = pass.firstPixel(), window = pass.endPixel() - first;
@@ -598,7 +601,7 @@ Image QueuePipeline::render(const Scene& scene, const RenderOptions& o) {
             pass.run(settings, sceneClasses(scene), [&](size_t started) {
                 reportProgress((long long)(s) * (long long)(window) + (long long)(started), total);
             });
-            resolve.setArg(3, cl_int(s));
+            resolve.set("sample", cl_int(s));
             frame.launch("Queue_Resolve", pixels);
         }
         learnedKey_ = key;

@@ -39,7 +39,7 @@ struct QueueBuffers {
 // work-group sizes); arguments are set again every frame.
 struct QueueKernels {
     cl_program program = nullptr;
-    std::map<std::string, cl::Kernel> kernels;
+    std::map<std::string, Kernel> kernels;
     std::map<std::string, size_t> locals;
 };
 

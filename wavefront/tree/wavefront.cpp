@@ -135,9 +135,9 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
     stats_.extras["tree_pixel_bytes"] = pixelSize;
     stats_.extras["memory_tiles"] = memoryTiles;
 
-    cl::Kernel trace(program, "Wavefront_Trace"), image(program, "Wavefront_Image"),
+    Kernel trace(program, "Wavefront_Trace"), image(program, "Wavefront_Image"),
         reset(program, "Wavefront_Reset");
-    reset.setArg(0, traced_);
+    reset.set("traced", traced_);
     // Reset clears `words` flag words, four per work-item.
     auto resetRange = [](size_t words) { return cl::NDRange((words + 3) / 4); };
     if (needsClear_) {
@@ -145,8 +145,9 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
         // (64-bit indices) clears a new buffer rather than clEnqueueFillBuffer, which left stale
         // "traced" flags in trees over 2 GiB on NVIDIA's OpenCL (illegal-address failures).
         try {
-            reset.setArg(1, cl_ulong(pixels * flagWords));
-            cl_.queue().enqueueNDRangeKernel(reset, cl::NullRange, resetRange(pixels * flagWords));
+            reset.set("words", cl_ulong(pixels * flagWords));
+            cl_.queue().enqueueNDRangeKernel(reset.get(), cl::NullRange,
+                                             resetRange(pixels * flagWords));
         } catch (const cl::Error& e) {
             throwClError(e, "clearing the wavefront ray tree", memoryHint());
         }
@@ -189,30 +190,29 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
             for (int s = 0; s < samples; ++s) {
                 settings.sampleIndex = s;
                 scene_->setArgs(trace, settings);
-                trace.setArg(DeviceScene::kFirstKernelArg, tree_);
-                trace.setArg(DeviceScene::kFirstKernelArg + 1, traced_);
-                trace.setArg(DeviceScene::kFirstKernelArg + 2, cl_int(row0 + tile));
+                trace.set("tree", tree_).set("traced", traced_).set("rowEnd", cl_int(row0 + tile));
                 scene_->setArgs(image, settings);
-                image.setArg(DeviceScene::kFirstKernelArg, tree_);
-                image.setArg(DeviceScene::kFirstKernelArg + 1, traced_);
-                image.setArg(DeviceScene::kFirstKernelArg + 2, image_);
-                image.setArg(DeviceScene::kFirstKernelArg + 3, cl_int(row0 + tile));
+                image.set("tree", tree_)
+                    .set("traced", traced_)
+                    .set("image", image_)
+                    .set("rowEnd", cl_int(row0 + tile));
                 cl::Event et, ei, er;
                 std::vector<cl::Event> waitTrace;
                 if (haveLast) waitTrace.push_back(last);
-                cl_.queue().enqueueNDRangeKernel(trace, range.offset, range.global, range.local,
+                cl_.queue().enqueueNDRangeKernel(trace.get(), range.offset, range.global,
+                                                 range.local,
                                                  waitTrace.empty() ? nullptr : &waitTrace, &et);
                 std::vector<cl::Event> waitImage{et};
-                cl_.queue().enqueueNDRangeKernel(image, range.offset, range.global, range.local,
-                                                 &waitImage, &ei);
+                cl_.queue().enqueueNDRangeKernel(image.get(), range.offset, range.global,
+                                                 range.local, &waitImage, &ei);
                 // Only this tile's flags were set (its pixels' words come first in the buffer),
                 // so only they need clearing; payloads are never cleared. A piece of a row clears
                 // the whole row's words: the others are clear already, and the row's words are
                 // strided by slot, so its own are not one range.
                 size_t tileWords = size_t(o.width) * size_t(tile) * flagWords;
-                reset.setArg(1, cl_ulong(tileWords));
+                reset.set("words", cl_ulong(tileWords));
                 std::vector<cl::Event> waitReset{ei};
-                cl_.queue().enqueueNDRangeKernel(reset, cl::NullRange, resetRange(tileWords),
+                cl_.queue().enqueueNDRangeKernel(reset.get(), cl::NullRange, resetRange(tileWords),
                                                  cl::NullRange, &waitReset, &er);
                 events.insert(events.end(), {et, ei, er});
                 last = er;
