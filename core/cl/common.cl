@@ -9,7 +9,7 @@
 #include "types.h"
 
 // A helper that PoCL must inline. Its inliner leaves some large helpers with one caller as calls
-// (a private struct then lives in memory): RayTree_NodeFromHit and the light samples, split out
+// (a private struct then lives in memory): RayTree_Surface and the light samples, split out
 // of their callers, slowed the megakernel on every scene until they were forced inline. GPU
 // compilers inline them anyway.
 #ifdef RT_DEVICE_CPU

@@ -87,19 +87,15 @@ inline float3 RayTree_SpawnOrigin(const SceneData* sc, const Node* node, float s
 #endif
 }
 
-// Traces one ray of the given RT_RAY_* type: the closest hit, its facing normal, and its
-// shadow-ray occlusion counts. key: Sampling_PointKey of the ray's pixel, AA sample and depth,
-// which places its shadow samples on the lights (core/sampling.h).
-RT_INLINE Node RayTree_NodeFromHit(const SceneData* sc, Ray ray, Hit hit, uint key);
-inline Node RayTree_TraceNode(const SceneData* sc, Ray ray, int type, uint key) {
-    RT_COUNT_RAY(sc, type);
-    (void)type;
-    return RayTree_NodeFromHit(sc, ray, Scene_Intersect(sc, ray, INFINITY), key);
-}
+// A ray's trace in three stages, which every scheduler calls: the closest hit (Scene_Intersect),
+// the surface it found (RayTree_Surface: point, facing normal, material), and the shadow rays
+// from that surface (RayTree_CastShadows). Shading is the fourth (RayTree_NodeColor, or a shade
+// kernel of the queue wavefront). The megakernel and the tree wavefront run the first three in
+// one call (RayTree_TraceNode); the queue wavefront runs each in a kernel of its own.
 
-// The node of `ray` from its closest hit (Scene_Intersect's, or a packet's lane of the same
-// hit: wavefront/queue/queue_packet.cl): point, facing normal, material, shadow-ray counts.
-RT_INLINE Node RayTree_NodeFromHit(const SceneData* sc, Ray ray, Hit hit, uint key) {
+// The node of `ray` from its closest hit (Scene_Intersect's, or a packet's lane of the same hit:
+// wavefront/queue/queue_packet.cl): point, facing normal and material, no light occluded yet.
+RT_INLINE Node RayTree_Surface(const SceneData* sc, Ray ray, Hit hit) {
     Node n;
     n.dir = F3(ray.dir);
     n.object = hit.object;
@@ -165,11 +161,38 @@ RT_INLINE Node RayTree_NodeFromHit(const SceneData* sc, Ray ray, Hit hit, uint k
     n.point = F3(p);
     n.normal = F3(normal);
     n.material = (ushort)material;
-    float3 origin = RayTree_SpawnOrigin(sc, &n, 1.0f);
-    for (int j = 0; j < sc->settings.lightCount; ++j)
-        n.occluded[j] = (uchar)Shade_OcclusionFrom(sc, p, normal, origin, j, key);
     return n;
 }
+
+// The shadow rays of a surface node (not a miss): how many of each light's samples are
+// occluded. key: Sampling_PointKey of the ray's pixel, AA sample and depth, which places the
+// samples on the lights (core/sampling.h). The point and normal are the node's own, so a stage
+// that reads the node back from memory casts exactly the rays RayTree_TraceNode casts.
+RT_INLINE void RayTree_CastShadows(const SceneData* sc, Node* node, uint key) {
+    float3 p = f3(node->point), normal = f3(node->normal);
+    float3 origin = RayTree_SpawnOrigin(sc, node, 1.0f);
+    for (int j = 0; j < sc->settings.lightCount; ++j)
+        node->occluded[j] = (uchar)Shade_OcclusionFrom(sc, p, normal, origin, j, key);
+}
+
+// Traces one ray of the given RT_RAY_* type through the three stages: closest hit, surface,
+// shadow rays (key as RayTree_CastShadows).
+inline Node RayTree_TraceNode(const SceneData* sc, Ray ray, int type, uint key) {
+    RT_COUNT_RAY(sc, type);
+    (void)type;
+    Hit hit = Scene_Intersect(sc, ray, INFINITY);
+    Node n = RayTree_Surface(sc, ray, hit);
+    if (hit.kind != RT_KIND_MISS) RayTree_CastShadows(sc, &n, key);
+    return n;
+}
+
+// The first two stages only, for a scheduler that casts the shadow rays in a stage of its own.
+inline Node RayTree_TraceSurface(const SceneData* sc, Ray ray, int type) {
+    RT_COUNT_RAY(sc, type);
+    (void)type;
+    return RayTree_Surface(sc, ray, Scene_Intersect(sc, ray, INFINITY));
+}
+
 
 // The child ray of `parent` (at `depth`) in `slot`, or false when the parent has no such child.
 inline bool RayTree_ChildRay(const SceneData* sc, const Node* parent, int depth, int slot, Ray* out) {

@@ -147,11 +147,9 @@ kernel void Queue_Extend(RT_SCENE_PARAMS, QUEUE_RAYS_PARAMS(rays), int n, global
     if (i < n) {
         RT_SCENE_INIT(sc);
         QUEUE_RAYS_INIT(rays);
-        // Occlusion is the shadow stage's work: with no lights, RayTree_TraceNode casts none.
-        sc.settings.lightCount = 0;
         Pending p = Queue_Load(&rays, i);
         QUEUE_COUNT_INTO_PIXEL(sc, rayTally, rays.pixel[i]);
-        Node node = RayTree_TraceNode(&sc, p.ray, p.type, 0u);  // no shadow rays: no key
+        Node node = RayTree_TraceSurface(&sc, p.ray, p.type);  // shadow rays: Queue_Shadow
         nodes[i] = node;
         cls = Queue_Class(&sc, &node);
         slot = atomic_inc(&count[cls]);
@@ -164,9 +162,9 @@ kernel void Queue_Extend(RT_SCENE_PARAMS, QUEUE_RAYS_PARAMS(rays), int n, global
     if (shadowSlot >= 0) shadowQueue[base[RT_Q_CLASSES] + shadowSlot] = i;
 }
 
-// From: shadow queue, pool [0, n) / To: nodes[i].occluded. The same spawn origin and
-// Shade_OcclusionFrom call, on the same point and normal and with the same sampler key (the
-// ray's pixel, AA sample and depth), that RayTree_TraceNode makes when it casts them itself.
+// From: shadow queue, pool [0, n) / To: nodes[i].occluded. The shadow stage the other
+// pipelines run inside RayTree_TraceNode, with the same sampler key (the ray's pixel, AA sample
+// and depth).
 kernel void Queue_Shadow(RT_SCENE_PARAMS, global Node* nodes, global const int* shadowQueue,
                          global const int* counters, global const int* rayPixel,
                          global const int* rayMeta, global uint* rayTally) {
@@ -175,13 +173,11 @@ kernel void Queue_Shadow(RT_SCENE_PARAMS, global Node* nodes, global const int* 
     RT_SCENE_INIT(sc);
     int i = shadowQueue[k];
     Node node = nodes[i];
-    float3 p = f3(node.point), n = f3(node.normal);
-    float3 origin = RayTree_SpawnOrigin(&sc, &node, 1.0f);
     int pixel = rayPixel[i], y = pixel / settings.width, x = pixel - y * settings.width;
     uint key = Sampling_PointKey(x, y, settings.sampleIndex, rayMeta[i] >> 8);
     QUEUE_COUNT_INTO_PIXEL(sc, rayTally, pixel);
-    for (int j = 0; j < settings.lightCount; ++j)
-        nodes[i].occluded[j] = (uchar)Shade_OcclusionFrom(&sc, p, n, origin, j, key);
+    RayTree_CastShadows(&sc, &node, key);
+    for (int j = 0; j < settings.lightCount; ++j) nodes[i].occluded[j] = node.occluded[j];
 }
 
 // One ray of class `cls` (a constant in each kernel below, so each compiles to one code path):

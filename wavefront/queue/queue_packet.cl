@@ -3,7 +3,7 @@
 // Both stages trace a compacted queue, so RT_PACKET consecutive entries make a packet: one
 // work-item loads them, traces them together with Wide_QueryPacket (core/cl/accel_wide_packet.cl,
 // vectorised across the rays by PoCL) and then finishes each ray exactly as the single-ray
-// kernels do (RayTree_NodeFromHit, Shade_LightSamplesFrom). Every lane's hit is the one
+// kernels do (RayTree_Surface, Shade_LightSamplesFrom). Every lane's hit is the one
 // Scene_Intersect gives, so the image has the same bits as Queue_Extend and Queue_Shadow.
 // Launches count items as before; a work-item covers RT_PACKET of them, and a launch's global
 // offset is a multiple of RT_PACKET (QueueFrame::launch), so packets never straddle pieces.
@@ -103,7 +103,6 @@ kernel void Queue_ExtendPacket(RT_SCENE_PARAMS, QUEUE_RAYS_PARAMS(rays), int n,
     if (lanes > 0) {
         RT_SCENE_INIT(sc);
         QUEUE_RAYS_INIT(rays);
-        sc.settings.lightCount = 0;  // occlusion is the shadow stage's work
         PacketLanes l;
         for (int j = 0; j < RT_PACKET; ++j) {
             if (j >= lanes) {
@@ -118,7 +117,7 @@ kernel void Queue_ExtendPacket(RT_SCENE_PARAMS, QUEUE_RAYS_PARAMS(rays), int n,
         for (int j = 0; j < lanes; ++j) {
             int i = first + j;
             Pending p = Queue_Load(&rays, i);
-            Node node = RayTree_NodeFromHit(&sc, p.ray, PacketLanes_Hit(&l, j), 0u);
+            Node node = RayTree_Surface(&sc, p.ray, PacketLanes_Hit(&l, j));
             nodes[i] = node;
             cls[j] = Queue_Class(&sc, &node);
             slot[j] = atomic_inc(&count[cls[j]]);
