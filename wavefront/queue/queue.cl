@@ -104,9 +104,7 @@ kernel void Queue_Generate(RT_SCENE_PARAMS, QUEUE_RAYS_PARAMS(rays), int first, 
 inline int Queue_Class(const SceneData* sc, const Node* node) {
     if (node->kind == RT_KIND_MISS) return RT_Q_MISS;
     Material m = sc->materials[node->material];
-    if (m.opacity < 1.0f) return RT_Q_GLASS;
-    if (m.reflectance > 0.0f) return RT_Q_MIRROR;
-    return m.pattern != RT_PATTERN_NONE ? RT_Q_PROCEDURAL : RT_Q_DIFFUSE;
+    return RT_Q_MATERIAL_CLASS(m);
 }
 
 // A work-group's pushes to the class queues, the shadow queue and the per-bounce histogram are

@@ -57,16 +57,7 @@ std::vector<std::string> programDefines(const Scene& scene, const RenderOptions&
 std::array<bool, RT_Q_CLASSES> sceneClasses(const Scene& scene) {
     std::array<bool, RT_Q_CLASSES> c{};
     c[RT_Q_MISS] = true;
-    for (const dev::Material& m : scene.materials) {
-        if (m.opacity < 1.0f)
-            c[RT_Q_GLASS] = true;
-        else if (m.reflectance > 0.0f)
-            c[RT_Q_MIRROR] = true;
-        else if (m.pattern != RT_PATTERN_NONE)
-            c[RT_Q_PROCEDURAL] = true;
-        else
-            c[RT_Q_DIFFUSE] = true;
-    }
+    for (const dev::Material& m : scene.materials) c[RT_Q_MATERIAL_CLASS(m)] = true;
     return c;
 }
 

@@ -1,6 +1,6 @@
 // rtlab — the queue wavefront's shading classes and the layout of its counter buffer, shared by
 // the host (wavefront/queue/*.cpp) and the kernels (queue.cl): plain #defines, valid C++ and
-// OpenCL C alike, so both sides index the same words.
+// OpenCL C alike, so both sides index the same words and classify materials alike.
 #ifndef RTLAB_QUEUE_LAYOUT_H
 #define RTLAB_QUEUE_LAYOUT_H
 
@@ -11,6 +11,13 @@
 #define RT_Q_GLASS 3       // opacity < 1: Fresnel, reflection and refraction children
 #define RT_Q_PROCEDURAL 4  // like diffuse, with a procedural pattern: the costly one
 #define RT_Q_CLASSES 5
+// The class of a surface's material (a Material, core/types.h): the kernels sort hits by it and
+// the host launches only the shade kernels of the classes a scene's materials have.
+#define RT_Q_MATERIAL_CLASS(m)                          \
+    ((m).opacity < 1.0f               ? RT_Q_GLASS      \
+     : (m).reflectance > 0.0f         ? RT_Q_MIRROR     \
+     : (m).pattern != RT_PATTERN_NONE ? RT_Q_PROCEDURAL \
+                                      : RT_Q_DIFFUSE)
 
 // Words of the counter buffer. The first RT_Q_PER_ITERATION are cleared before every extend.
 #define RT_Q_COUNT 0                             // RT_Q_CLASSES class-queue lengths
