@@ -1,10 +1,8 @@
 #include "megakernel/megakernel.h"
 
 #include <algorithm>
-#include <chrono>
 
 #include "core/error.h"
-#include "core/kernel_resources.h"
 #include "core/pipeline_registry.h"
 
 namespace rt {
@@ -30,10 +28,7 @@ std::vector<std::string> MegakernelPipeline::defines(const Scene& scene, const R
     return d;
 }
 
-Image MegakernelPipeline::render(const Scene& scene, const RenderOptions& o) {
-    auto t0 = std::chrono::steady_clock::now();
-    checkOptions(scene, o);
-    stats_ = {};
+Image MegakernelPipeline::renderFrame(const Scene& scene, const RenderOptions& o) {
     const int branching = scene.branching();
     if (o.layout == RenderOptions::Layout::Tree) {
         checkPrivateTree(branching, o.bounces, "megakernel's tree layout", true);
@@ -51,32 +46,19 @@ Image MegakernelPipeline::render(const Scene& scene, const RenderOptions& o) {
         std::vector<std::string> d = defines(scene, o);
         d.push_back("RT_COUNT_LANES");
         try {
-            program = cl_.program("megakernel.cl", d);
+            program = this->program("megakernel.cl", d);
             countLanes = true;
         } catch (const Error&) {
         }
     }
-    if (!countLanes) program = cl_.program("megakernel.cl", defines(scene, o));
-    stats_.kernelResources = kernelResources(program, cl_.device().device);
-    stats_.program = cl_.lastProgramSource();
-    if (!scene_ || !scene_->matches(scene, o.accel))
-        scene_ = std::make_unique<DeviceScene>(cl_, scene, o.accel);
-    stats_.accel = scene_->accelStats();
+    if (!countLanes) program = this->program("megakernel.cl", defines(scene, o));
+    DeviceScene& deviceScene = this->deviceScene(scene, o.accel);
     size_t bytes = size_t(o.width) * o.height * 3 * sizeof(float);
     const bool adaptive = o.adaptiveAa && o.aa > 1;
-    // The image, and for adaptive anti-aliasing the centre samples. On a new size both are
-    // forgotten before allocating, so that a failure leaves no stale size behind.
-    if (bytes != imageBytes_) {
-        cl_.release(imageBytes_ + centerBytes_);
-        image_ = centers_ = cl::Buffer();
-        imageBytes_ = centerBytes_ = 0;
-        image_ = cl_.allocate(bytes, CL_MEM_READ_WRITE, "the image buffer");
-        imageBytes_ = bytes;
-    }
-    if (adaptive && centerBytes_ != bytes) {
-        centers_ = cl_.allocate(bytes, CL_MEM_READ_WRITE, "the adaptive-AA centre buffer");
-        centerBytes_ = bytes;
-    }
+    // The image, and for adaptive anti-aliasing the centre samples; a new image size drops
+    // both.
+    if (image_.ensure(cl_, bytes, "the image buffer")) centers_.reset();
+    if (adaptive) centers_.ensure(cl_, bytes, "the adaptive-AA centre buffer");
     stats_.addBuffer("image", bytes);
     if (adaptive) stats_.addBuffer("adaptive-AA centres", bytes);
 
@@ -101,7 +83,7 @@ Image MegakernelPipeline::render(const Scene& scene, const RenderOptions& o) {
         for (int row0 = from; row0 < to;) {
             LaunchTile tile = planner_.next(to - row0);
             settings.rowOffset = row0;
-            scene_->setArgs(kernel, settings);
+            deviceScene.setArgs(kernel, settings);
             cl::Event e;
             TileRange range = tileRange(cl_.device(), o.width, tile);
             cl_.queue().enqueueNDRangeKernel(kernel.get(), range.offset, range.global, range.local,
@@ -117,30 +99,29 @@ Image MegakernelPipeline::render(const Scene& scene, const RenderOptions& o) {
         }
     };
     try {
-        if (o.countRays) scene_->resetRayCounts(cl_.queue());
+        startRayCount(o);
         if (adaptive) {
             // Every centre first: an edge test reads the neighbouring rows' centres.
             Kernel centers(program, "Megakernel_RenderCenters");
-            centers.set("centers", centers_);
+            centers.set("centers", centers_.get());
             pass(centers, "centers", centreFirst, centreLast);
             Kernel edges(program, "Megakernel_RenderEdges");
-            edges.set("centers", centers_).set("image", image_);
+            edges.set("centers", centers_.get()).set("image", image_.get());
             pass(edges, "edges", first, last);
         } else {
             Kernel kernel(program, "Megakernel_Render");
-            kernel.set("image", image_);
+            kernel.set("image", image_.get());
             pass(kernel, "megakernel", first, last);
         }
         const size_t rowBytes = size_t(o.width) * 3 * sizeof(float);
-        cl_.queue().enqueueReadBuffer(image_, CL_TRUE, size_t(first) * rowBytes,
+        cl_.queue().enqueueReadBuffer(image_.get(), CL_TRUE, size_t(first) * rowBytes,
                                       size_t(last - first) * rowBytes,
                                       out.rgb.data() + size_t(first) * o.width * 3);
+        finishRayCount(o);
         if (o.countRays) {
-            stats_.rays = scene_->readRayCounts(cl_.queue());
-            stats_.raysCounted = true;
             if (countLanes) {
                 // Mean busy lanes of a 32-lane warp over the steps of its ray loop.
-                WarpCounts w = scene_->readWarpCounts(cl_.queue());
+                WarpCounts w = deviceScene.readWarpCounts(cl_.queue());
                 stats_.extras["warp_steps"] = w.steps;
                 stats_.extras["warp_lanes_active"] =
                     w.steps ? double(w.lanesActive) / double(w.steps) : 0.0;
@@ -152,8 +133,6 @@ Image MegakernelPipeline::render(const Scene& scene, const RenderOptions& o) {
                          " KiB of private ray storage per work-item; lower --bounces or --size, "
                          "or use --layout weighted");
     }
-    stats_.hostMs =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     return out;
 }
 

@@ -19,7 +19,6 @@
 #include <tuple>
 
 #include "core/error.h"
-#include "core/kernel_resources.h"
 #include "core/pipeline_registry.h"
 #include "wavefront/queue/queue_layout.h"
 #include "wavefront/queue/queue_split.h"
@@ -514,9 +513,7 @@ std::pair<double, double> spanAndIdleMs(const std::vector<QueueLaunch>& launches
 
 }  // namespace
 
-Image QueuePipeline::render(const Scene& scene, const RenderOptions& o) {
-    auto t0 = std::chrono::steady_clock::now();
-    checkOptions(scene, o);
+Image QueuePipeline::renderFrame(const Scene& scene, const RenderOptions& o) {
     if (o.adaptiveAa && o.aa > 1)
         throw Error("--adaptive is not supported by the queue pipeline (use --pipeline mega)",
                     FailureKind::InvalidOption);
@@ -526,7 +523,6 @@ Image QueuePipeline::render(const Scene& scene, const RenderOptions& o) {
             "--queue-launch device does not go with --max-launch-ms: its admission is "
             "learned from each bounce's time, which needs --queue-launch readback",
             FailureKind::InvalidOption);
-    stats_ = {};
     queue_ = {};
     const int C = scene.branching();
     const DeviceInfo& dev = cl_.device();
@@ -534,12 +530,8 @@ Image QueuePipeline::render(const Scene& scene, const RenderOptions& o) {
     int group = groupSize(dev);
     const bool packets = usesPackets(dev, scene, o);
     const std::vector<std::string> defines = programDefines(scene, o, group, packets, dropLane_);
-    cl::Program program = cl_.program("queue.cl", defines);
-    stats_.kernelResources = kernelResources(program, cl_.device().device);
-    stats_.program = cl_.lastProgramSource();
-    if (!scene_ || !scene_->matches(scene, o.accel))
-        scene_ = std::make_unique<DeviceScene>(cl_, scene, o.accel);
-    stats_.accel = scene_->accelStats();
+    cl::Program program = this->program("queue.cl", defines);
+    DeviceScene& deviceScene = this->deviceScene(scene, o.accel);
     size_t pixels = size_t(o.width) * size_t(o.height);
     auto hint = [&] {
         return "the queue pipeline's pool of " + std::to_string(pool) + " rays takes " +
@@ -547,7 +539,9 @@ Image QueuePipeline::render(const Scene& scene, const RenderOptions& o) {
     };
     try {
         prepareBuffers(pool, C, pixels);
-        prepareRayTally((o.countRays ? pixels + 1 : 1) * RT_RAY_TYPES * sizeof(cl_uint));
+        rayTally_.ensure(cl_, (o.countRays ? pixels + 1 : 1) * RT_RAY_TYPES * sizeof(cl_uint),
+                         "the queue pipeline's per-pixel ray counts");
+        buf_.rayTally = rayTally_.get();
     } catch (const cl::Error& e) {
         throwClError(e, "preparing queue-pipeline buffers", hint());
     }
@@ -570,13 +564,12 @@ Image QueuePipeline::render(const Scene& scene, const RenderOptions& o) {
         learnedLimit_ = 0;
         stageCosts_.clear();
     }
-    QueueFrame frame(cl_, program, *scene_, group, kernels_, stageCosts_,
+    QueueFrame frame(cl_, program, deviceScene, group, kernels_, stageCosts_,
                      onDevice ? 0.0 : o.maxLaunchMs, fakeItemMs_, packets);
     try {
-        if (o.countRays) {
-            scene_->resetRayCounts(cl_.queue());
-            cl_.queue().enqueueFillBuffer(buf_.rayTally, cl_uint(0), 0, buf_.rayTallyBytes);
-        }
+        startRayCount(o);
+        if (o.countRays)
+            cl_.queue().enqueueFillBuffer(rayTally_.get(), cl_uint(0), 0, rayTally_.bytes());
         cl_.queue().enqueueFillBuffer(buf_.counters, cl_int(0), 0, RT_Q_WORDS * 4);
         Kernel& resolve = frame.kernel("Queue_Resolve");
         resolve.set("sums", buf_.sums)
@@ -607,14 +600,13 @@ Image QueuePipeline::render(const Scene& scene, const RenderOptions& o) {
                 row[c] = words[RT_Q_HISTOGRAM + d * RT_Q_CLASSES + c];
             queue_.queueLengths.push_back(row);
         }
+        finishRayCount(o);
         if (o.countRays) {
             // Every path has ended and added its rays; the tally's first words are the rays
             // of the cut attempts (queue.cl).
-            stats_.rays = scene_->readRayCounts(cl_.queue());
             cl_uint retraced[RT_RAY_TYPES];
-            cl_.queue().enqueueReadBuffer(buf_.rayTally, CL_TRUE, 0, sizeof retraced, retraced);
+            cl_.queue().enqueueReadBuffer(rayTally_.get(), CL_TRUE, 0, sizeof retraced, retraced);
             for (int t = 0; t < RT_RAY_TYPES; ++t) queue_.retracedRays[t] = retraced[t];
-            stats_.raysCounted = true;
         }
         if (o.maxLaunchMs > 0) frame.learn(nullptr);  // the last bounce's and resolve's
         for (const QueueLaunch& l : frame.launches())
@@ -630,12 +622,10 @@ Image QueuePipeline::render(const Scene& scene, const RenderOptions& o) {
         // frame's image is incomplete. Render it again with read-backs, which cut and restart.
         RenderOptions again = o;
         setQueueLaunch(again, QueueLaunchMode::Readback);
-        Image image = render(scene, again);
+        stats_ = {};
+        Image image = renderFrame(scene, again);
         queue_.fellBack = true;
         stats_.extras["queue_launch"] = "device, fell back to readback";
-        stats_.hostMs =
-            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
-                .count();
         return image;
     }
     stats_.addBuffer("pool", queue_.poolBytes);
@@ -650,8 +640,6 @@ Image QueuePipeline::render(const Scene& scene, const RenderOptions& o) {
     stats_.extras["readbacks"] = queue_.readbacks;
     stats_.extras["span_ms"] = queue_.spanMs;
     stats_.extras["idle_ms"] = queue_.idleMs;
-    stats_.hostMs =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     return out;
 }
 

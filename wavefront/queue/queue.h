@@ -11,7 +11,7 @@
 #include <utility>
 #include <vector>
 
-#include "core/pipeline.h"
+#include "core/device_pipeline.h"
 #include "wavefront/queue/queue_options.h"
 #include "wavefront/queue/queue_split.h"
 
@@ -31,8 +31,8 @@ struct QueueBuffers {
     size_t poolBytes = 0, imageBytes = 0;  // as tallied in the ClContext
     // Ray counts (RenderOptions::countRays): the retraced rays by type, then each pixel's rays
     // of its current path by type (queue.cl, Queue_PixelRays); one stub of 4 words otherwise.
+    // QueuePipeline keeps it (a DeviceBuffer) across pool sizes; this is its handle.
     cl::Buffer rayTally;
-    size_t rayTallyBytes = 0;
 };
 
 // The kernels of the last program, created once and reused frame after frame (with their
@@ -65,12 +65,11 @@ struct QueueStats {
     std::vector<std::array<long long, 5>> queueLengths;  // RT_Q_CLASSES (queue_layout.h)
 };
 
-class QueuePipeline : public Pipeline {
+class QueuePipeline : public DevicePipeline {
   public:
-    explicit QueuePipeline(ClContext& cl) : cl_(cl) {}
+    explicit QueuePipeline(ClContext& cl) : DevicePipeline(cl) {}
     ~QueuePipeline() override;
     const char* name() const override { return "queue"; }
-    Image render(const Scene& scene, const RenderOptions& options) override;
     const QueueStats& queueStats() const { return queue_; }
 
     // Ray slots a frame uses: --pool, else a size chosen from the device (and --memory-budget);
@@ -99,13 +98,12 @@ class QueuePipeline : public Pipeline {
     void setFakeItemMsForTest(double ms) { fakeItemMs_ = ms; }
 
   private:
+    Image renderFrame(const Scene& scene, const RenderOptions& options) override;
     void prepareBuffers(size_t pool, int branching, size_t pixels);
-    void prepareRayTally(size_t bytes);
     void releaseBuffers();
 
-    ClContext& cl_;
-    std::unique_ptr<DeviceScene> scene_;
     QueueBuffers buf_;
+    DeviceBuffer rayTally_;
     QueueKernels kernels_;
     QueueStats queue_;
     // --max-launch-ms: the rays a bounce may admit and what an item of each stage costs (for

@@ -60,23 +60,11 @@ size_t QueuePipeline::poolSize(const DeviceInfo& device, int branching, int boun
 }
 
 void QueuePipeline::releaseBuffers() {
-    cl_.release(buf_.poolBytes + buf_.imageBytes + buf_.rayTallyBytes);
+    cl_.release(buf_.poolBytes + buf_.imageBytes);
     buf_ = QueueBuffers();
 }
 
-QueuePipeline::~QueuePipeline() {
-    cl_.release(buf_.poolBytes + buf_.imageBytes + buf_.rayTallyBytes);
-}
-
-void QueuePipeline::prepareRayTally(size_t bytes) {
-    if (buf_.rayTallyBytes == bytes) return;
-    cl_.release(buf_.rayTallyBytes);
-    buf_.rayTally = cl::Buffer();
-    buf_.rayTallyBytes = 0;
-    buf_.rayTally =
-        cl_.allocate(bytes, CL_MEM_READ_WRITE, "the queue pipeline's per-pixel ray counts");
-    buf_.rayTallyBytes = bytes;
-}
+QueuePipeline::~QueuePipeline() { cl_.release(buf_.poolBytes + buf_.imageBytes); }
 
 void QueuePipeline::prepareBuffers(size_t pool, int branching, size_t pixels) {
     if (buf_.pool == pool && buf_.branching == branching && buf_.pixels == pixels) return;

@@ -1,12 +1,10 @@
 #include "wavefront/tree/wavefront.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cstdio>
 #include <limits>
 
 #include "core/error.h"
-#include "core/kernel_resources.h"
 #include "core/pipeline_registry.h"
 
 namespace rt {
@@ -38,16 +36,13 @@ int WavefrontPipeline::tileRows(int width, int height, int branching, int bounce
     return int(std::min<size_t>(size_t(height), budget / row));
 }
 
-Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
-    auto t0 = std::chrono::steady_clock::now();
-    checkOptions(scene, o);
+Image WavefrontPipeline::renderFrame(const Scene& scene, const RenderOptions& o) {
     // The report's wavefront renders every AA sample of every pixel in fixed passes over the tree;
     // it has no centre-then-edges pass, so adaptive anti-aliasing is refused rather than ignored.
     if (o.adaptiveAa)
         throw Error(
             "--adaptive: the wavefront pipeline has no adaptive anti-aliasing (the "
             "megakernel and cpu pipelines do); drop the flag or use --pipeline mega");
-    stats_ = {};
     const int C = scene.branching();
     const long long treeNodes = treeNodeCount(C, o.bounces);
     const size_t flagWords = RT_TRACED_WORDS(size_t(treeNodes));
@@ -81,12 +76,8 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
         return std::string(buf);
     };
 
-    cl::Program program = cl_.program("wavefront.cl", featureDefines(scene, o));
-    stats_.kernelResources = kernelResources(program, cl_.device().device);
-    stats_.program = cl_.lastProgramSource();
-    if (!scene_ || !scene_->matches(scene, o.accel))
-        scene_ = std::make_unique<DeviceScene>(cl_, scene, o.accel);
-    stats_.accel = scene_->accelStats();
+    cl::Program program = this->program("wavefront.cl", featureDefines(scene, o));
+    DeviceScene& deviceScene = this->deviceScene(scene, o.accel);
 
     // The tree holds treeRows_ rows. A whole frame sizes it to its tile exactly; a window keeps a
     // larger tree of the same frame rather than reallocating for every piece, but never one
@@ -100,30 +91,21 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
     const size_t flagBytes = pixels * flagWords * sizeof(cl_uint);
     size_t imageBytes = size_t(o.width) * o.height * 3 * sizeof(float);
     try {
-        if (treeBytes != treeBytes_ || flagBytes != flagBytes_) {
-            // Forget the old sizes first: after a failed allocation no stale size names a buffer
-            // that is gone, and the next frame allocates afresh.
-            if (treeBytes_ + flagBytes_) cl_.release(treeBytes_ + flagBytes_);
-            tree_ = traced_ = cl::Buffer();
-            treeBytes_ = flagBytes_ = 0;
+        if (treeBytes != tree_.bytes() || flagBytes != traced_.bytes()) {
+            // Both go before either is made again: after a failed allocation neither names a
+            // size it does not have, and the next frame allocates afresh.
+            tree_.reset();
+            traced_.reset();
             treeRows_ = treeWidth_ = 0;
             treePixelBytes_ = 0;
-            tree_ = cl_.allocate(treeBytes, CL_MEM_READ_WRITE, "the wavefront ray tree");
-            treeBytes_ = treeBytes;
-            traced_ = cl_.allocate(flagBytes, CL_MEM_READ_WRITE, "the wavefront ray tree's flags");
-            flagBytes_ = flagBytes;
+            tree_.ensure(cl_, treeBytes, "the wavefront ray tree");
+            traced_.ensure(cl_, flagBytes, "the wavefront ray tree's flags");
             treeRows_ = capacityRows;
             treeWidth_ = o.width;
             treePixelBytes_ = pixelSize;
             needsClear_ = true;
         }
-        if (imageBytes != imageBytes_) {
-            if (imageBytes_) cl_.release(imageBytes_);
-            image_ = cl::Buffer();
-            imageBytes_ = 0;
-            image_ = cl_.allocate(imageBytes, CL_MEM_READ_WRITE, "the image buffer");
-            imageBytes_ = imageBytes;
-        }
+        image_.ensure(cl_, imageBytes, "the image buffer");
     } catch (const cl::Error& e) {
         throwClError(e, "preparing wavefront buffers", memoryHint());
     }
@@ -137,7 +119,7 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
 
     Kernel trace(program, "Wavefront_Trace"), image(program, "Wavefront_Image"),
         reset(program, "Wavefront_Reset");
-    reset.set("traced", traced_);
+    reset.set("traced", traced_.get());
     // Reset clears `words` flag words, four per work-item.
     auto resetRange = [](size_t words) { return cl::NDRange((words + 3) / 4); };
     if (needsClear_) {
@@ -158,7 +140,7 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
     std::vector<cl::Event> events;  // trace, image, reset per pass, for the profile
     Image out(o.width, o.height);
     try {
-        if (o.countRays) scene_->resetRayCounts(cl_.queue());
+        startRayCount(o);
         cl::Event last;
         bool haveLast = false;
         std::string key = std::to_string(o.width) + "x" + std::to_string(o.height);
@@ -189,12 +171,14 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
             // tile's P = width x tile pixels set the stride of the slot-major buffers.
             for (int s = 0; s < samples; ++s) {
                 settings.sampleIndex = s;
-                scene_->setArgs(trace, settings);
-                trace.set("tree", tree_).set("traced", traced_).set("rowEnd", cl_int(row0 + tile));
-                scene_->setArgs(image, settings);
-                image.set("tree", tree_)
-                    .set("traced", traced_)
-                    .set("image", image_)
+                deviceScene.setArgs(trace, settings);
+                trace.set("tree", tree_.get())
+                    .set("traced", traced_.get())
+                    .set("rowEnd", cl_int(row0 + tile));
+                deviceScene.setArgs(image, settings);
+                image.set("tree", tree_.get())
+                    .set("traced", traced_.get())
+                    .set("image", image_.get())
                     .set("rowEnd", cl_int(row0 + tile));
                 cl::Event et, ei, er;
                 std::vector<cl::Event> waitTrace;
@@ -237,12 +221,11 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
         }
         // Only the window's rows: the others of the image buffer may hold an earlier frame's.
         const size_t rowBytes = size_t(o.width) * 3 * sizeof(float);
-        cl_.queue().enqueueReadBuffer(image_, CL_TRUE, size_t(first) * rowBytes,
+        cl_.queue().enqueueReadBuffer(image_.get(), CL_TRUE, size_t(first) * rowBytes,
                                       size_t(end - first) * rowBytes,
                                       out.rgb.data() + size_t(first) * o.width * 3);
+        finishRayCount(o);
         if (o.countRays) {
-            stats_.rays = scene_->readRayCounts(cl_.queue());
-            stats_.raysCounted = true;
             // Every traced primary, reflected or refracted ray fills one tree slot; shadow rays
             // live inside their node. What share of the slots a frame touched.
             double slots = double(o.width) * (end - first) * samples * double(treeNodes);
@@ -258,22 +241,20 @@ Image WavefrontPipeline::render(const Scene& scene, const RenderOptions& o) {
     } catch (const cl::Error& e) {
         throwClError(e, "wavefront frame on " + dev.name, memoryHint());
     }
-    stats_.hostMs =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     return out;
 }
 
 void WavefrontPipeline::poisonPayloads() {
-    if (!treeBytes_) return;
+    if (!tree_.bytes()) return;
     const cl_float nan = std::numeric_limits<float>::quiet_NaN();
-    cl_.queue().enqueueFillBuffer(tree_, nan, 0, treeBytes_);
+    cl_.queue().enqueueFillBuffer(tree_.get(), nan, 0, tree_.bytes());
     cl_.queue().finish();
 }
 
 std::vector<uint32_t> WavefrontPipeline::tracedFlags() {
-    std::vector<uint32_t> words(flagBytes_ / sizeof(uint32_t));
+    std::vector<uint32_t> words(traced_.bytes() / sizeof(uint32_t));
     if (!words.empty())
-        cl_.queue().enqueueReadBuffer(traced_, CL_TRUE, 0, flagBytes_, words.data());
+        cl_.queue().enqueueReadBuffer(traced_.get(), CL_TRUE, 0, traced_.bytes(), words.data());
     return words;
 }
 

@@ -8,19 +8,15 @@
 #include <memory>
 #include <vector>
 
+#include "core/device_pipeline.h"
 #include "core/launch_planner.h"
-#include "core/pipeline.h"
 
 namespace rt {
 
-class WavefrontPipeline : public Pipeline {
+class WavefrontPipeline : public DevicePipeline {
   public:
-    explicit WavefrontPipeline(ClContext& cl) : cl_(cl) {}
-    ~WavefrontPipeline() override {  // keep the device-memory tally true
-        cl_.release(treeBytes_ + flagBytes_ + imageBytes_);
-    }
+    explicit WavefrontPipeline(ClContext& cl) : DevicePipeline(cl) {}
     const char* name() const override { return "wave"; }
-    Image render(const Scene& scene, const RenderOptions& options) override;
 
     // Bytes of one pixel's tree: N node payloads and RT_TRACED_WORDS(N) words of traced flags.
     // Every tree size (rows per tile, budgets, messages, stats) is counted from it.
@@ -42,10 +38,9 @@ class WavefrontPipeline : public Pipeline {
     std::vector<uint32_t> tracedFlags();
 
   private:
-    ClContext& cl_;
-    std::unique_ptr<DeviceScene> scene_;
-    cl::Buffer tree_, traced_, image_;  // node payloads, traced flags, the image
-    size_t treeBytes_ = 0, flagBytes_ = 0, imageBytes_ = 0;
+    Image renderFrame(const Scene& scene, const RenderOptions& options) override;
+
+    DeviceBuffer tree_, traced_, image_;  // node payloads, traced flags, the image
     // What the tree buffers were sized for: rows of a frame `treeWidth_` wide at pixelBytes().
     int treeRows_ = 0, treeWidth_ = 0;
     size_t treePixelBytes_ = 0;

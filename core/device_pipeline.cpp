@@ -1,0 +1,61 @@
+// rtlab — the shared part of device pipelines (device_pipeline.h).
+#include "core/device_pipeline.h"
+
+#include <chrono>
+
+#include "core/kernel_resources.h"
+
+namespace rt {
+
+bool DeviceBuffer::ensure(ClContext& cl, size_t bytes, const std::string& what) {
+    if (cl_ == &cl && bytes_ == bytes) return false;
+    reset();
+    buffer_ = cl.allocate(bytes, CL_MEM_READ_WRITE, what);
+    cl_ = &cl;
+    bytes_ = bytes;
+    return true;
+}
+
+void DeviceBuffer::reset() {
+    if (cl_) cl_->release(bytes_);
+    buffer_ = cl::Buffer();
+    bytes_ = 0;
+    cl_ = nullptr;
+}
+
+Image DevicePipeline::render(const Scene& scene, const RenderOptions& options) {
+    const auto start = std::chrono::steady_clock::now();
+    checkOptions(scene, options);
+    stats_ = {};
+    Image image = renderFrame(scene, options);
+    stats_.hostMs =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    return image;
+}
+
+cl::Program DevicePipeline::program(const std::string& file,
+                                    const std::vector<std::string>& defines) {
+    cl::Program p = cl_.program(file, defines);
+    stats_.kernelResources = kernelResources(p, cl_.device().device);
+    stats_.program = cl_.lastProgramSource();
+    return p;
+}
+
+DeviceScene& DevicePipeline::deviceScene(const Scene& scene, RenderOptions::Accel accel) {
+    if (!scene_ || !scene_->matches(scene, accel))
+        scene_ = std::make_unique<DeviceScene>(cl_, scene, accel);
+    stats_.accel = scene_->accelStats();
+    return *scene_;
+}
+
+void DevicePipeline::startRayCount(const RenderOptions& options) {
+    if (options.countRays) scene_->resetRayCounts(cl_.queue());
+}
+
+void DevicePipeline::finishRayCount(const RenderOptions& options) {
+    if (!options.countRays) return;
+    stats_.rays = scene_->readRayCounts(cl_.queue());
+    stats_.raysCounted = true;
+}
+
+}  // namespace rt

@@ -1,0 +1,62 @@
+// rtlab — what every device pipeline shares, so that a pipeline's folder holds only its own
+// schedule: the frame's host time and fresh statistics (render), program builds with their
+// statistics, the scene's device copy kept while the scene and structure stay, device buffers
+// kept from frame to frame and tallied in the context, and the device ray counters.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/pipeline.h"
+
+namespace rt {
+
+// A device buffer kept from frame to frame, its bytes tallied in its context while it lives.
+class DeviceBuffer {
+  public:
+    DeviceBuffer() = default;
+    ~DeviceBuffer() { reset(); }
+    DeviceBuffer(const DeviceBuffer&) = delete;
+    DeviceBuffer& operator=(const DeviceBuffer&) = delete;
+
+    // Makes the buffer `bytes` long, allocating only when that changes; the old buffer is
+    // forgotten first, so that after a failed allocation no stale size names a buffer that is
+    // gone. Returns true when it allocated. `what` names the buffer in an allocation error.
+    bool ensure(ClContext& cl, size_t bytes, const std::string& what);
+    void reset();
+    const cl::Buffer& get() const { return buffer_; }
+    size_t bytes() const { return bytes_; }
+
+  private:
+    ClContext* cl_ = nullptr;
+    cl::Buffer buffer_;
+    size_t bytes_ = 0;
+};
+
+class DevicePipeline : public Pipeline {
+  public:
+    // Checks the options every pipeline shares, starts the frame's statistics afresh, renders
+    // it (renderFrame) and records its host wall time.
+    Image render(const Scene& scene, const RenderOptions& options) final;
+
+  protected:
+    explicit DevicePipeline(ClContext& cl) : cl_(cl) {}
+    virtual Image renderFrame(const Scene& scene, const RenderOptions& options) = 0;
+
+    // The program of `file` with these defines (ClContext::program), with how it was obtained
+    // and its kernels' resources recorded in the frame's statistics.
+    cl::Program program(const std::string& file, const std::vector<std::string>& defines);
+    // The scene's device copy with the structure of `accel`, made again only when either
+    // changed; its structure's statistics go into the frame's.
+    DeviceScene& deviceScene(const Scene& scene, RenderOptions::Accel accel);
+    // The device ray counters, for a counting frame (RenderOptions::countRays): zeroed before
+    // it, read into the frame's statistics after it. Both do nothing for other frames.
+    void startRayCount(const RenderOptions& options);
+    void finishRayCount(const RenderOptions& options);
+
+    ClContext& cl_;
+    std::unique_ptr<DeviceScene> scene_;
+};
+
+}  // namespace rt
