@@ -27,10 +27,6 @@ void SceneFlags::add(CLI::App& cmd) {
                  "wavefront refuses it");
     cmd.add_option("--shadow-strength", shadowStrength,
                    "How much a fully occluded light darkens, 0..1 [scene default]");
-    cmd.add_option("--layout", layout,
-                   "Megakernel ray storage: tree (report, N nodes) or weighted (B*(C-1)+1 rays)")
-        ->check(CLI::IsMember({"tree", "weighted"}))
-        ->capture_default_str();
     cmd.add_option("--memory-budget", memoryBudget,
                    "Wavefront: bytes the global ray tree may use (e.g. 64M); frames past it are "
                    "rendered in row tiles [device max allocation]");
@@ -117,7 +113,6 @@ RenderOptions SceneFlags::apply(RenderOptions o) const {
     if (aa) o.aa = *aa;
     if (shadowStrength) o.shadowStrength = *shadowStrength;
     if (adaptive) o.adaptiveAa = true;
-    o.layout = layout == "weighted" ? RenderOptions::Layout::Weighted : RenderOptions::Layout::Tree;
     if (!memoryBudget.empty()) o.memoryBudget = parseBytes(memoryBudget, "--memory-budget");
     const PipelineRegistry& registry = pipelineRegistry();
     for (const PipelineOption* opt : registry.options()) {

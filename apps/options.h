@@ -18,7 +18,6 @@ struct SceneFlags {
     std::optional<int> bounces, shadowSamples, aa;
     std::optional<float> shadowStrength;
     bool adaptive = false;
-    std::string layout = "tree";
     std::string memoryBudget;  // bytes, with optional K/M/G suffix
     // The flags of the options pipelines declare (PipelineInfo::options), by option name:
     // whole numbers and choices as given, unset or empty when not.

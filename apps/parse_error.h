@@ -21,8 +21,8 @@ int reportParseError(const CLI::App& app, const CLI::ParseError& error, const ch
 std::string nearestName(const std::string& word, const std::vector<std::string>& known);
 
 // CLI11's wording of a bad value, in rtlab's: "--bounces four: not a whole number" for
-// "Could not convert: --bounces = four", "--layout foo: must be one of tree, weighted" for
-// "--layout: foo not in {tree,weighted}". Other messages pass unchanged.
+// "Could not convert: --bounces = four", "--pipeline foo: must be one of cpu, mega" for
+// "--pipeline: foo not in {cpu,mega}". Other messages pass unchanged.
 std::string plainValueError(const CLI::App& cmd, const std::string& message);
 
 }  // namespace rt::cli

@@ -9,6 +9,7 @@
 #include <fstream>
 #include <optional>
 #include <string>
+#include <variant>
 
 #include "apps/commands.h"
 #include "apps/options.h"
@@ -212,35 +213,41 @@ int runRender() {
     const double raysPerS = s.deviceMs > 0 ? double(totalRays) / (s.deviceMs * 1e-3) : 0;
     const bool capped = options.maxLaunchMs > 0;
     if (!a.statsJson.empty()) {
-        nlohmann::json j = {
-            {"scene", scene.name},
-            {"pipeline", info.name},
-            {"width", options.width},
-            {"height", options.height},
-            {"bounces", options.bounces},
-            {"shadow_samples", options.shadowSamples},
-            {"aa", options.aa},
-            {"adaptive", options.adaptiveAa},
-            {"accel", accelName(options.accel)},
-            {"layout", info.supports.layouts
-                           ? (options.layout == RenderOptions::Layout::Tree ? "tree" : "weighted")
-                           : "-"},
-            {"max_launch_ms", options.maxLaunchMs},
-            {"commit", RTLAB_COMMIT},
-            {"device", cl ? cl->device().name : std::string("cpu reference")},
-            {"driver", cl ? cl->device().driver : std::string()},
-            {"device_ms", rounded(s.deviceMs)},
-            {"host_ms", rounded(frameHostMs)},
-            {"programs",
-             {{"built", programs.built},
-              {"from_disk", programs.fromDisk},
-              {"in_memory", programs.fromMemory},
-              {"ms", rounded(programs.ms)}}},
-            {"launches", s.launches},
-            {"longest_launch_ms", rounded(s.longestLaunchMs)},
-            {"private_bytes", s.privateBytes},
-            {"extras", rounded(s.extras)}};
+        nlohmann::json j = {{"scene", scene.name},
+                            {"pipeline", info.name},
+                            {"width", options.width},
+                            {"height", options.height},
+                            {"bounces", options.bounces},
+                            {"shadow_samples", options.shadowSamples},
+                            {"aa", options.aa},
+                            {"adaptive", options.adaptiveAa},
+                            {"accel", accelName(options.accel)},
+                            {"max_launch_ms", options.maxLaunchMs},
+                            {"commit", RTLAB_COMMIT},
+                            {"device", cl ? cl->device().name : std::string("cpu reference")},
+                            {"driver", cl ? cl->device().driver : std::string()},
+                            {"device_ms", rounded(s.deviceMs)},
+                            {"host_ms", rounded(frameHostMs)},
+                            {"programs",
+                             {{"built", programs.built},
+                              {"from_disk", programs.fromDisk},
+                              {"in_memory", programs.fromMemory},
+                              {"ms", rounded(programs.ms)}}},
+                            {"launches", s.launches},
+                            {"longest_launch_ms", rounded(s.longestLaunchMs)},
+                            {"private_bytes", s.privateBytes},
+                            {"extras", rounded(s.extras)}};
         if (info.supports.tiling) j["tiles"] = s.tiles;
+        // Every registered pipeline option under its row field: the value where the pipeline
+        // rendered declares it ("layout": "tree"), "-" where it does not.
+        for (const PipelineOption* opt : pipelineRegistry().options()) j[opt->field()] = "-";
+        for (const PipelineOption& opt : info.options) {
+            const OptionValue& v = opt.value(options.pipelineOptions);
+            if (const long long* n = std::get_if<long long>(&v))
+                j[opt.field()] = *n;
+            else
+                j[opt.field()] = std::get<std::string>(v);
+        }
         for (const auto& [name, ms] : s.kernelMs) j["kernel_ms"][name] = rounded(ms);
         for (const auto& [name, bytes] : s.buffers) j["buffers"][name] = bytes;
         if (s.raysCounted) {
@@ -265,9 +272,18 @@ int runRender() {
                      options.shadowSamples, options.aa, options.adaptiveAa ? " adaptive" : "",
                      accelName(options.accel), scene.branching(),
                      treeNodeCount(scene.branching(), options.bounces), info.name.c_str());
-        if (info.supports.layouts)
-            std::fprintf(out, " (layout %s)",
-                         options.layout == RenderOptions::Layout::Tree ? "tree" : "weighted");
+        // The pipeline's own options: " (layout tree)". A number at a default outside its
+        // range (one the pipeline chooses) reads "default".
+        std::string own;
+        for (const PipelineOption& opt : info.options) {
+            const OptionValue& v = opt.value(options.pipelineOptions);
+            const long long* n = std::get_if<long long>(&v);
+            const bool chosen =
+                n && opt.isDefault(options.pipelineOptions) && (*n < opt.min || *n > opt.max);
+            own += (own.empty() ? "" : ", ") + opt.name + " " +
+                   (chosen ? std::string("default") : opt.text(v));
+        }
+        if (!own.empty()) std::fprintf(out, " (%s)", own.c_str());
         std::fprintf(out, "\n");
         if (cl) {
             std::fprintf(out, "device %s\n", cl->device().label().c_str());

@@ -343,7 +343,7 @@ int runSweepCommand() {
             for (auto& row : readJsonLines(dir / "rows.jsonl")) {
                 // A cell measured again (it failed the first time) replaces its old row.
                 size_t at = rows.size();
-                std::string cell = row.value("cell", "");
+                std::string cell = bench::currentCellKey(row.value("cell", ""));
                 auto it = cellRow.find(cell);
                 if (it != cellRow.end() && !cell.empty()) {
                     at = it->second;

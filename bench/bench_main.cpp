@@ -269,7 +269,7 @@ int sweepCommand(const Flags& f) {
             // A cell that timed out is not run again either: it would most likely hang again.
             if (!row.is_discarded() && row.contains("cell") &&
                 (row.value("status", "") == "ok" || row.value("failure", "") == "timeout"))
-                o.skip.insert(row["cell"].get<std::string>());
+                o.skip.insert(currentCellKey(row["cell"].get<std::string>()));
         }
     }
     // Frames that are bit-identical (the pipelines share their stage code, so they often

@@ -25,12 +25,6 @@ constexpr double kPixelTolerance = 1.0 / 255.0;
 constexpr double kMinFractionWithin = 0.999;
 constexpr double kMaxMeanAbs = 0.1 / 255.0;
 
-struct SmokeVariant {
-    std::string pipeline;
-    RenderOptions::Layout layout;
-    bool hasLayouts;
-};
-
 struct Frame {
     bool ok = false;
     bool timedOut = false;
@@ -39,10 +33,6 @@ struct Frame {
     double ms = 0;
     Image image;
 };
-
-std::string layoutName(RenderOptions::Layout l) {
-    return l == RenderOptions::Layout::Tree ? "tree" : "weighted";
-}
 
 }  // namespace
 
@@ -82,16 +72,14 @@ SmokeSummary runSmoke(const SmokeOptions& options, std::FILE* out) {
             throw Error("--sizes " + s + ": expected WIDTHxHEIGHT, both at least 1");
         sizes.emplace_back(w, h);
     }
-    std::vector<SmokeVariant> variants;
+    // Each pipeline asked for in each of its variants (PipelineInfo::variants); the first is
+    // the reference frame's.
+    std::vector<PipelineVariantRun> variants;
+    const std::vector<PipelineVariantRun> all = pipelineRegistry().variants(true);
     for (const std::string& p : options.pipelines) {
-        const PipelineInfo& info = pipelineInfo(p);
-        if (info.reference) continue;
-        if (info.supports.layouts) {
-            variants.push_back({info.name, RenderOptions::Layout::Tree, true});
-            variants.push_back({info.name, RenderOptions::Layout::Weighted, true});
-        } else {
-            variants.push_back({info.name, RenderOptions::Layout::Tree, false});
-        }
+        if (pipelineInfo(p).reference) continue;
+        for (const PipelineVariantRun& v : all)
+            if (v.pipeline == p) variants.push_back(v);
     }
 
     auto cl = std::make_shared<ClContext>(selectDevice(options.device), options.sources);
@@ -143,12 +131,12 @@ SmokeSummary runSmoke(const SmokeOptions& options, std::FILE* out) {
             base.height = h;
             std::string where = unit.scene + " " + std::to_string(w) + "x" + std::to_string(h);
             std::string refKey = where;
-            for (const SmokeVariant& v : variants) {
+            for (const PipelineVariantRun& v : variants) {
                 RenderOptions o = base;
-                o.layout = v.layout;
+                v.apply(o);
                 if (unit.accelApplies) o.accel = unit.accel;
                 std::string label = where + " " + v.pipeline + " " +
-                                    (v.hasLayouts ? layoutName(v.layout) : "-") + " " +
+                                    (v.variant.name.empty() ? "-" : v.variant.name) + " " +
                                     (unit.accelApplies ? accelName(unit.accel) : "-");
                 ++summary.cells;
                 if (summary.stopped) {
@@ -157,9 +145,8 @@ SmokeSummary runSmoke(const SmokeOptions& options, std::FILE* out) {
                                  label.c_str());
                     continue;
                 }
-                bool isReference = v.pipeline == variants.front().pipeline &&
-                                   v.layout == RenderOptions::Layout::Tree &&
-                                   o.accel == scene->defaults.accel;
+                bool isReference =
+                    v.name == variants.front().name && o.accel == scene->defaults.accel;
                 Frame f = render(scene, v.pipeline, o);
                 if (isReference) references[refKey] = f;
                 summary.stopped = f.deviceStuck;
@@ -176,7 +163,7 @@ SmokeSummary runSmoke(const SmokeOptions& options, std::FILE* out) {
                     auto ref = references.find(refKey);
                     if (ref == references.end()) {
                         RenderOptions r = base;
-                        r.layout = RenderOptions::Layout::Tree;
+                        variants.front().apply(r);
                         ref =
                             references.emplace(refKey, render(scene, variants.front().pipeline, r))
                                 .first;
@@ -191,9 +178,12 @@ SmokeSummary runSmoke(const SmokeOptions& options, std::FILE* out) {
                         pass = d.fractionWithin >= kMinFractionWithin && d.meanAbs <= kMaxMeanAbs;
                         char buf[200];
                         std::snprintf(buf, sizeof buf,
-                                      "against %s tree %s: max |d| %.3g, %.3f%% of pixels within "
+                                      "against %s %s %s: max |d| %.3g, %.3f%% of pixels within "
                                       "1/255, mean |d| %.2g",
                                       variants.front().pipeline.c_str(),
+                                      variants.front().variant.name.empty()
+                                          ? "-"
+                                          : variants.front().variant.name.c_str(),
                                       unit.accelApplies ? accelName(scene->defaults.accel) : "-",
                                       d.maxAbs, 100 * d.fractionWithin, d.meanAbs);
                         detail = buf;

@@ -1,10 +1,11 @@
 // rtlab bench — the smoke check that runs before any GPU result is called done (`rtlab-bench
-// --smoke`, scripts/gpu-smoke): every scene with every registered pipeline, layout and
-// acceleration structure at each size, one frame each under the cell time limit, and one line per
-// cell: PASS when the frame was rendered, every pixel is finite and it agrees with the
-// megakernel's frame (tree layout, the scene's own structure) as the accel tests require of two
-// structures; FAIL with the reason otherwise. A stuck program build or device fails its cell,
-// and the check goes on where the driver allows (bench/sweep_runner.h says when).
+// --smoke`, scripts/gpu-smoke): every scene with every registered pipeline in each of its
+// variants (the megakernel's layouts) and every acceleration structure at each size, one frame
+// each under the cell time limit, and one line per cell: PASS when the frame was rendered, every
+// pixel is finite and it agrees with the megakernel's frame (tree layout, the scene's own
+// structure) as the accel tests require of two structures; FAIL with the reason otherwise. A stuck
+// program build or device fails its cell, and the check goes on where the driver allows
+// (bench/sweep_runner.h says when).
 #pragma once
 
 #include <cstdio>
@@ -21,7 +22,7 @@ namespace rt::bench {
 struct SmokeOptions {
     std::vector<std::string> scenes;     // names in sceneDir (or paths)
     std::vector<std::string> sizes;      // "WxH"
-    std::vector<std::string> pipelines;  // registered device pipelines; layouts come with them
+    std::vector<std::string> pipelines;  // registered device pipelines; variants come with them
     std::vector<std::string> accels;     // names (core/accel.h); each applies where it differs
     std::filesystem::path sceneDir;
     ImageReader readImage;
@@ -40,8 +41,9 @@ struct SmokeSummary {
     bool stopped = false;  // a device that did not return stopped the check (cells left unrun)
 };
 
-// Prints "PASS|FAIL  <scene> <size> <pipeline> <layout> <accel>  <ms>  <detail>" to out, one
-// line per cell as it ends, in a fixed order (units in shard order, then size, then variant).
+// Prints "PASS|FAIL  <scene> <size> <pipeline> <variant> <accel>  <ms>  <detail>" to out, one
+// line per cell as it ends (<variant>: tree or weighted for the megakernel, "-" for a pipeline
+// without variants), in a fixed order (units in shard order, then size, then variant).
 SmokeSummary runSmoke(const SmokeOptions& options, std::FILE* out);
 
 }  // namespace rt::bench

@@ -2,6 +2,7 @@
 #include "bench/sweep_config.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <fstream>
 #include <map>
@@ -120,10 +121,9 @@ class ValueParser {
 };
 
 const std::set<std::string> kGroupKeys = {
-    "scenes",         "pipelines",  "sizes",         "bounces",
-    "shadow-samples", "aa",         "accel",         "layout",
-    "memory-budget",  "adaptive",   "images",        "repeats",
-    "warmup",         "count-rays", "max-launch-ms", "stop-after-failure",
+    "scenes",     "pipelines", "sizes",         "bounces",       "shadow-samples",
+    "aa",         "accel",     "memory-budget", "adaptive",      "images",
+    "repeats",    "warmup",    "count-rays",    "max-launch-ms", "stop-after-failure",
     "max-frame-s"};
 const std::set<std::string> kTopKeys = {"reference-bounces", "reference-shadow-samples",
                                         "reference-aa"};
@@ -160,9 +160,6 @@ void applyGroupKey(SweepGroup& g, const std::string& key, const std::string& val
         g.accels.clear();
         for (const std::string& w : words(value))
             if (w != "default") g.accels.push_back(p.wrap([&] { return parseAccel(w); }));
-    } else if (key == "layout") {
-        if (value != "tree" && value != "weighted") p.fail("layout must be tree or weighted");
-        g.layout = value == "tree" ? RenderOptions::Layout::Tree : RenderOptions::Layout::Weighted;
     } else if (key == "memory-budget") {
         g.memoryBudget = value == "default" ? 0 : p.bytes(value);
     } else if (key == "adaptive") {
@@ -309,8 +306,8 @@ std::string Cell::settingKey() const {
     const RenderOptions& o = options;
     std::ostringstream k;
     k << scene << '|' << o.width << 'x' << o.height << '|' << o.bounces << '|' << o.shadowSamples
-      << '|' << o.aa << '|' << (accelApplies ? accelName(o.accel) : "-") << '|' << int(o.layout)
-      << '|' << o.memoryBudget << '|' << o.adaptiveAa;
+      << '|' << o.aa << '|' << (accelApplies ? accelName(o.accel) : "-") << '|' << o.memoryBudget
+      << '|' << o.adaptiveAa;
     if (o.maxLaunchMs > 0) k << "|L" << o.maxLaunchMs;  // absent before max-launch-ms existed
     k << pipelineOptionsKey(o.pipelineOptions);
     return k.str();
@@ -319,10 +316,9 @@ std::string Cell::settingKey() const {
 std::string Cell::batchKey() const {
     const RenderOptions& o = options;
     std::ostringstream k;
-    k << scene << '|' << o.bounces << '|' << o.shadowSamples << '|' << o.aa << '|' << int(o.layout)
-      << '|' << o.memoryBudget << '|' << o.adaptiveAa << '|' << repeats << '|' << warmup << '|'
-      << countRays << '|' << images << '|' << o.maxLaunchMs
-      << pipelineOptionsKey(o.pipelineOptions);
+    k << scene << '|' << o.bounces << '|' << o.shadowSamples << '|' << o.aa << '|' << o.memoryBudget
+      << '|' << o.adaptiveAa << '|' << repeats << '|' << warmup << '|' << countRays << '|' << images
+      << '|' << o.maxLaunchMs << pipelineOptionsKey(o.pipelineOptions);
     // A cell that may be skipped depends on the smaller sizes' outcome: one size per batch.
     if (stopAfterFailure) k << '|' << o.width << 'x' << o.height;
     return k.str();
@@ -330,13 +326,51 @@ std::string Cell::batchKey() const {
 
 std::string Cell::key() const { return std::string(pipeline) + '|' + settingKey(); }
 
+std::string currentCellKey(const std::string& recordedKey) {
+    std::vector<std::string> f;
+    for (size_t at = 0;;) {
+        size_t bar = recordedKey.find('|', at);
+        f.push_back(recordedKey.substr(at, bar - at));
+        if (bar == std::string::npos) break;
+        at = bar + 1;
+    }
+    // The old form: pipeline|scene|WxH|B|S|AA|accel|layout|budget|adaptive, then "L<ms>" and
+    // option tags. Today's has the adaptive flag at index 8 and after it only fields that
+    // begin with a letter, so a bare flag at 9 (and the layout's 0 or 1 at 7) tells them apart.
+    auto flag = [](const std::string& x) { return x == "0" || x == "1"; };
+    if (f.size() < 10 || !flag(f[7]) || !flag(f[9])) return recordedKey;
+    const std::vector<const PipelineOption*> options = pipelineRegistry().options();
+    auto layoutAt = std::find_if(options.begin(), options.end(),
+                                 [](const PipelineOption* o) { return o->sweepKey == "layout"; });
+    if (layoutAt == options.end()) return recordedKey;
+    const PipelineOption& layout = **layoutAt;
+    const std::string value = layout.choices.at(size_t(std::stoi(f[7])));
+    f.erase(f.begin() + 7);
+    if (value != layout.text(layout.defaultValue)) {
+        // After the launch cap and the tags of options registered before the layout's.
+        size_t at = 9;
+        if (at < f.size() && f[at].size() > 1 && f[at][0] == 'L' &&
+            (std::isdigit((unsigned char)f[at][1]) || f[at][1] == '.'))
+            ++at;
+        auto before = [&](const std::string& field) {
+            for (auto o = options.begin(); o != layoutAt; ++o)
+                if (field.rfind((*o)->cellTag, 0) == 0) return true;
+            return false;
+        };
+        while (at < f.size() && before(f[at])) ++at;
+        f.insert(f.begin() + std::ptrdiff_t(at), layout.cellTag + value);
+    }
+    std::string out = f[0];
+    for (size_t i = 1; i < f.size(); ++i) out += "|" + f[i];
+    return out;
+}
+
 std::string Cell::label() const {
     const RenderOptions& o = options;
     std::ostringstream l;
     l << scene << ' ' << pipeline << ' ' << o.width << 'x' << o.height << " b" << o.bounces << " s"
       << o.shadowSamples << " aa" << o.aa;
     if (accelApplies) l << ' ' << accelName(o.accel);
-    if (o.layout == RenderOptions::Layout::Weighted) l << " weighted";
     if (o.adaptiveAa) l << " adaptive";
     for (const PipelineOption* opt : pipelineRegistry().options()) {
         if (opt->isDefault(o.pipelineOptions)) continue;
@@ -388,7 +422,6 @@ std::vector<Cell> expandCells(const SweepConfig& config,
                                     c.options.shadowSamples = s;
                                     c.options.aa = a;
                                     c.options.accel = accel;
-                                    c.options.layout = g.layout;
                                     c.options.memoryBudget = g.memoryBudget;
                                     c.options.adaptiveAa = g.adaptive;
                                     c.options.maxLaunchMs = g.maxLaunchMs;

@@ -22,7 +22,6 @@ struct SweepGroup {
     std::vector<std::pair<int, int>> sizes;
     std::vector<int> bounces, shadowSamples, aa;
     std::vector<RenderOptions::Accel> accels;
-    RenderOptions::Layout layout = RenderOptions::Layout::Tree;
     size_t memoryBudget = 0;
     bool adaptive = false;
     bool images = false;            // keep the frame for the accuracy comparison
@@ -81,6 +80,15 @@ struct Cell {
     std::string batchKey() const;
     std::string label() const;  // "cornell wave 1280x720 b4 s8 aa1 bv"
 };
+
+// A cell key as rows record it (Cell::key()), in today's form. Keys written while the
+// megakernel's layout was a field of RenderOptions held it as a number after the accel field
+// ("|0" tree, "|1" weighted) in every cell; today the layout is the megakernel's own option and
+// shows, as the other declared options do, only when not at its default ("|Wweighted", in
+// registration order among the option tags). A key already in today's form comes back unchanged.
+// Whatever matches recorded rows against cells (--resume, merged result folders) reads the
+// recorded keys through this.
+std::string currentCellKey(const std::string& recordedKey);
 
 // Expands the groups over the loaded scenes' defaults, merging duplicates (file order kept).
 // sceneFor returns the loaded scene of a name.

@@ -21,11 +21,22 @@ double roughCost(const Cell& c) {
     return std::max(1.0, double(o.width) * o.height * o.aa * o.aa * work * frames);
 }
 
+namespace {
+
+// The values of the options the cell's pipeline declares for itself: "|weighted".
+std::string ownOptions(const Cell& c) {
+    std::string out;
+    for (const PipelineOption& opt : pipelineInfo(c.pipeline).options)
+        out += "|" + opt.text(opt.value(c.options.pipelineOptions));
+    return out;
+}
+
+}  // namespace
+
 std::string SweepEta::programKey(const Cell& c) {
     const RenderOptions& o = c.options;
     return c.scene + "|" + c.pipeline + "|b" + std::to_string(o.bounces) + "|" +
-           (c.accelApplies ? accelName(o.accel) : "-") + "|" +
-           (o.layout == RenderOptions::Layout::Tree ? "tree" : "weighted") + "|" +
+           (c.accelApplies ? accelName(o.accel) : "-") + ownOptions(c) + "|" +
            offsetName(o.offset) + (o.robustSphere ? "|robust" : "") +
            (o.watertight ? "|watertight" : "") + (c.countRays ? "|counted" : "");
 }
@@ -34,7 +45,7 @@ SweepEta::Levels SweepEta::levels(const Cell& c) {
     const RenderOptions& o = c.options;
     // Most telling first: with few cells measured the fit puts a difference on the pipeline
     // before the scene, and on the scene before the size.
-    return {c.pipeline + (o.layout == RenderOptions::Layout::Tree ? "|tree" : "|weighted"),
+    return {c.pipeline + ownOptions(c),
             c.scene,
             std::to_string(double(o.width) * o.height * o.aa * o.aa),
             std::to_string(o.bounces),

@@ -3,10 +3,11 @@
 //
 // A cell's time is a program build, paid by the first cell of each program, plus its frames.
 // The frames cost the cell's rough relative cost (roughCost: pixels, bounces, frames) times one
-// factor per kind of cell: pipeline and layout, scene, pixel count, bounce limit, shadow samples
-// and accel. The factors are a least-squares fit of the measured cells' log(seconds / rough
-// cost), so the queue wavefront measured on one scene prices it on the next; a factor value no
-// measured cell had is the average one (the rough cost stands in for it).
+// factor per kind of cell: pipeline and the settings of its own options (the megakernel's layout),
+// scene, pixel count, bounce limit, shadow samples and accel. The factors are a least-squares fit
+// of the measured cells' log(seconds / rough cost), so the queue wavefront measured on one scene
+// prices it on the next; a factor value no measured cell had is the average one (the rough cost
+// stands in for it).
 #pragma once
 
 #include <array>

@@ -145,7 +145,6 @@ nlohmann::json rowJson(const SweepConfig& config, const Cell& c, const Measureme
         {"shadow_samples", o.shadowSamples},
         {"aa", o.aa},
         {"accel", c.accelApplies ? accelName(o.accel) : "-"},
-        {"layout", o.layout == RenderOptions::Layout::Tree ? "tree" : "weighted"},
         {"memory_budget", o.memoryBudget},
         {"adaptive", o.adaptiveAa},
         {"max_launch_ms", o.maxLaunchMs},
@@ -160,6 +159,15 @@ nlohmann::json rowJson(const SweepConfig& config, const Cell& c, const Measureme
                                      : "skipped"},
         {"error", m.error},
     };
+    // Every registered pipeline option, as the cell set it (its default where it did not), under
+    // its row field: "layout": "weighted", "pool": 4096.
+    for (const PipelineOption* opt : pipelineRegistry().options()) {
+        const OptionValue& v = opt->value(o.pipelineOptions);
+        if (const long long* n = std::get_if<long long>(&v))
+            row[opt->field()] = *n;
+        else
+            row[opt->field()] = std::get<std::string>(v);
+    }
     if (c.stopAfterFailure) row["stop_after_failure"] = true;
     if (c.maxFrameS > 0) row["max_frame_s"] = c.maxFrameS;
     if (!skipped.empty()) row["skip_reason"] = skipped;
@@ -292,7 +300,14 @@ std::string imageName(const nlohmann::json& row) {
                        std::to_string(row.at("aa").get<int>());
     std::string accel = row.at("accel");
     if (accel != "-") name += "-" + accel;
-    if (row.at("layout") != "tree") name += "-" + row.at("layout").get<std::string>();
+    // Each pipeline option off its default: "-weighted".
+    for (const PipelineOption* opt : pipelineRegistry().options()) {
+        if (!row.contains(opt->field())) continue;
+        const nlohmann::json& v = row.at(opt->field());
+        const std::string text =
+            v.is_number_integer() ? std::to_string(v.get<long long>()) : v.get<std::string>();
+        if (text != opt->text(opt->defaultValue)) name += "-" + text;
+    }
     if (row.at("adaptive").get<bool>()) name += "-adaptive";
     for (char& c : name)
         if (!std::isalnum((unsigned char)c) && c != '-' && c != '.' && c != '_') c = '_';

@@ -91,7 +91,7 @@ size_t treePrivateBytes(int branching, int bounces) {
     return size_t(treeNodeCount(branching, bounces)) * (sizeof(dev::Node) + sizeof(cl_float3));
 }
 
-void checkPrivateTree(int branching, int bounces, const std::string& who, bool suggestWeighted) {
+void checkPrivateTree(int branching, int bounces, const std::string& who, const std::string& hint) {
     size_t need = treePrivateBytes(branching, bounces);
     if (need <= kPrivateTreeLimit) return;
     int fits = bounces;
@@ -102,8 +102,7 @@ void checkPrivateTree(int branching, int bounces, const std::string& who, bool s
                       " KiB) in private memory per work-item, over rtlab's " +
                       std::to_string(kPrivateTreeLimit / 1024) + " KiB cap; the highest bounce " +
                       "limit that fits is " + std::to_string(fits);
-    if (suggestWeighted) msg += " (or use --layout weighted)";
-    throw Error(msg, FailureKind::PrivateTree);
+    throw Error(msg + hint, FailureKind::PrivateTree);
 }
 
 std::string treeNodesDefine(const Scene& scene, int bounces) {

@@ -110,8 +110,10 @@ void checkOptions(const Scene& scene, const RenderOptions& options);
 size_t treePrivateBytes(int branching, int bounces);
 constexpr size_t kPrivateTreeLimit = 256 * 1024;
 // Throws when the tree of N nodes does not fit kPrivateTreeLimit, naming the bounce limit that
-// fits. `who` names the kernel that keeps the tree, as the user knows it.
-void checkPrivateTree(int branching, int bounces, const std::string& who, bool suggestWeighted);
+// fits. `who` names the kernel that keeps the tree, as the user knows it; `hint`, appended to
+// the message, may name another way out that the kernel's own options offer.
+void checkPrivateTree(int branching, int bounces, const std::string& who,
+                      const std::string& hint = "");
 
 // The scene's object arrays on the device, with the acceleration structure of one --accel mode.
 class DeviceScene {

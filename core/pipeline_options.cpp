@@ -13,6 +13,12 @@ const OptionValue& PipelineOption::value(const PipelineOptionValues& values) con
     return v ? *v : defaultValue;
 }
 
+std::string PipelineOption::field() const {
+    std::string f = sweepKey;
+    std::replace(f.begin(), f.end(), '-', '_');
+    return f;
+}
+
 long long PipelineOption::integer(const PipelineOptionValues& values) const {
     const long long* v = std::get_if<long long>(&value(values));
     if (!v) throw Error("pipeline option " + name + " is not a number (internal error)");

@@ -21,6 +21,10 @@ class PipelineOptionValues {
   public:
     void set(const std::string& name, OptionValue value) { values_[name] = std::move(value); }
     void reset(const std::string& name) { values_.erase(name); }
+    // Sets every value `other` holds, over the ones held here.
+    void setAll(const PipelineOptionValues& other) {
+        for (const auto& [name, value] : other.values_) values_[name] = value;
+    }
     const OptionValue* find(const std::string& name) const {
         auto it = values_.find(name);
         return it == values_.end() ? nullptr : &it->second;
@@ -29,6 +33,12 @@ class PipelineOptionValues {
 
   private:
     std::map<std::string, OptionValue> values_;
+};
+
+// A setting of a pipeline's own options that tests and the smoke check cover one by one.
+struct PipelineVariant {
+    std::string name;             // "weighted"; "" for the defaults of a pipeline without variants
+    PipelineOptionValues values;  // the options it sets; the others keep their defaults
 };
 
 struct PipelineOption {
@@ -51,6 +61,9 @@ struct PipelineOption {
     std::string label = {};
 
     std::string flag() const { return "--" + name; }
+    // The field of result rows and --stats-json that holds the value: the sweep key with '_'
+    // for '-' ("queue_launch").
+    std::string field() const;
     // The value in `values`, or the default.
     const OptionValue& value(const PipelineOptionValues& values) const;
     long long integer(const PipelineOptionValues& values) const;

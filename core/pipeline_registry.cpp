@@ -71,6 +71,17 @@ std::vector<const PipelineOption*> PipelineRegistry::options() const {
     return out;
 }
 
+std::vector<PipelineVariantRun> PipelineRegistry::variants(bool devicesOnly) const {
+    std::vector<PipelineVariantRun> out;
+    for (const PipelineInfo& p : entries_) {
+        if (devicesOnly && p.reference) continue;
+        if (p.variants.empty()) out.push_back({p.name, {}, p.name});
+        for (const PipelineVariant& v : p.variants)
+            out.push_back({p.name, v, v.name.empty() ? p.name : p.name + "-" + v.name});
+    }
+    return out;
+}
+
 const PipelineOption* PipelineRegistry::findSweepOption(const std::string& sweepKey) const {
     for (const PipelineOption* o : options())
         if (o->sweepKey == sweepKey) return o;
@@ -108,7 +119,7 @@ PipelineInfo referencePipelineInfo() {
     p.title = "CPU reference";
     p.description = "the same algorithm in double precision on the host; the accuracy oracle";
     p.reference = true;
-    p.supports = {false, true, false};
+    p.supports = {.adaptiveAa = true, .tiling = false, .rowWindow = false};
     p.make = [](ClContext*) { return std::make_unique<CpuPipeline>(); };
     return p;
 }

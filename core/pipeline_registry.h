@@ -17,7 +17,6 @@ namespace rt {
 
 // What a pipeline honours beyond the options every pipeline takes.
 struct PipelineSupport {
-    bool layouts = false;     // --layout tree|weighted changes how it keeps its rays
     bool adaptiveAa = false;  // --adaptive supersamples only edges
     bool tiling = false;      // splits a frame into row tiles when its memory does not fit
     bool rowWindow = false;   // renders only RenderOptions' rows [rowBegin, rowEnd) when asked
@@ -33,12 +32,24 @@ struct PipelineInfo {
     // sweep cells from each. Every pipeline's options apply to every cell of a sweep group and
     // to every --pipeline, as shared options do; the others' pipelines ignore them.
     std::vector<PipelineOption> options;
+    // The settings of its options that tests and the smoke check run one by one; empty: the
+    // defaults only, as one variant named "".
+    std::vector<PipelineVariant> variants;
     // Called by the command line after it applied the flags, for every pipeline: lets one
     // settle a shared option whose command-line default its own options cannot honour.
     // launchCapGiven says whether --max-launch-ms was given (else it holds the CLI default).
     std::function<void(RenderOptions& options, bool launchCapGiven)> settleDefaults;
     // cl is null only for the reference, which needs no device.
     std::function<std::unique_ptr<Pipeline>(ClContext* cl)> make;
+};
+
+// A pipeline in one of its variants, as tests and the smoke check run it.
+struct PipelineVariantRun {
+    std::string pipeline;     // the registered name: "mega"
+    PipelineVariant variant;  // {"", {}} for a pipeline without variants
+    std::string name;         // for messages: "mega-weighted", or "wave" without variants
+    // Sets the variant's option values in `options`.
+    void apply(RenderOptions& options) const { options.pipelineOptions.setAll(variant.values); }
 };
 
 class PipelineRegistry {
@@ -58,6 +69,9 @@ class PipelineRegistry {
     std::string help() const;
     // Every pipeline's declared options, in registration order (the order of cell keys).
     std::vector<const PipelineOption*> options() const;
+    // Every pipeline in each of its variants, in registration order; without the reference
+    // when devicesOnly is set.
+    std::vector<PipelineVariantRun> variants(bool devicesOnly = false) const;
     // The option declared with this sweep-file key, or null.
     const PipelineOption* findSweepOption(const std::string& sweepKey) const;
     // Creates a pipeline by name; throws when it needs a device and cl is null.

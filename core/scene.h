@@ -32,9 +32,7 @@ struct RenderOptions {
     Offset offset = Offset::Bound;
 
     // Pipeline choices; the CPU reference ignores them.
-    enum class Layout { Tree, Weighted };
-    Layout layout = Layout::Tree;  // private rays: the full ray tree, or a weighted stack
-    size_t memoryBudget = 0;       // bytes a global ray tree may use (0 = device max)
+    size_t memoryBudget = 0;  // bytes a global ray tree may use (0 = device max)
     enum class Accel { None, Bv, Grid, Bvh, Wide, Cwbvh };
     Accel accel = Accel::Bv;  // how rays find triangles
     bool countRays = false;   // count rays by type on the device (slower; benchmarks)

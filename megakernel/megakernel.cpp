@@ -4,6 +4,7 @@
 
 #include "core/error.h"
 #include "core/pipeline_registry.h"
+#include "megakernel/megakernel_options.h"
 
 namespace rt {
 
@@ -17,7 +18,7 @@ std::vector<std::string> MegakernelPipeline::defines(const Scene& scene, const R
     std::vector<std::string> d = featureDefines(scene, o);
     // The private arrays are sized by B: the whole tree, or the stack of pending rays (a scene
     // without refraction needs one entry whatever B is, and shares its program across B).
-    if (o.layout == RenderOptions::Layout::Tree) {
+    if (megaLayout(o) == MegaLayout::Tree) {
         d.push_back("RT_LAYOUT_TREE");
         d.push_back(treeNodesDefine(scene, o.bounces));
     } else {
@@ -30,8 +31,9 @@ std::vector<std::string> MegakernelPipeline::defines(const Scene& scene, const R
 
 Image MegakernelPipeline::renderFrame(const Scene& scene, const RenderOptions& o) {
     const int branching = scene.branching();
-    if (o.layout == RenderOptions::Layout::Tree) {
-        checkPrivateTree(branching, o.bounces, "megakernel's tree layout", true);
+    if (megaLayout(o) == MegaLayout::Tree) {
+        checkPrivateTree(branching, o.bounces, "megakernel's tree layout",
+                         " (or use --layout weighted)");
         stats_.privateBytes = treePrivateBytes(branching, o.bounces);
     } else {
         // Pending entries: a ray (2 x float3), a weight (float3) and a depth, 64 bytes.
@@ -145,7 +147,9 @@ void registerMegakernel(PipelineRegistry& registry) {
     p.name = "mega";
     p.title = "megakernel";
     p.description = "one kernel launch per frame; each work-item keeps its rays in private memory";
-    p.supports = {.layouts = true, .adaptiveAa = true, .tiling = false, .rowWindow = true};
+    p.supports = {.adaptiveAa = true, .tiling = false, .rowWindow = true};
+    p.options = megakernelOptions();
+    p.variants = megakernelVariants();
     p.make = [](ClContext* cl) { return std::make_unique<MegakernelPipeline>(*cl); };
     registry.add(std::move(p));
 }

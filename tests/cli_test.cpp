@@ -159,7 +159,7 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"render scenes/spheres.json --max-launch-ms -3 -o /tmp/x.png",
                 "--max-launch-ms -3: must be in 0..1000000"},
         BadCase{"render scenes/spheres.json --layout diagonal -o /tmp/x.png",
-                "--layout diagonal: must be one of tree, weighted"},
+                "--layout diagonal: must be tree or weighted"},
         BadCase{"rendr scenes/spheres.json", "unknown command 'rendr' (did you mean render?)"},
         BadCase{"sweep nosuchsweep", "nosuchsweep: no such sweep file (give a path, or one of "},
         BadCase{"sweep quick --cell-timeout -2", "--cell-timeout -2: must be in 0..10000000"},
@@ -427,6 +427,8 @@ TEST(Cli, HelpExplainsEveryRenderFlag) {
          {"--pipeline", "--device", "--size", "--bounces", "--shadow-samples", "--aa", "--stats",
           "--memory-budget", "--layout", "--kernel-dir", "--offset"})
         EXPECT_NE(r.out.find(flag), std::string::npos) << flag;
+    // A pipeline's own option says its default as the shared flags do.
+    EXPECT_NE(r.out.find("weighted (B*(C-1)+1 rays) [tree]"), std::string::npos) << r.out;
 }
 
 }  // namespace

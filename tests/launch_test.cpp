@@ -10,6 +10,7 @@
 #include "core/scene_loader.h"
 #include "image/image_io.h"
 #include "megakernel/megakernel.h"
+#include "megakernel/megakernel_options.h"
 #include "test_device.h"
 #include "wavefront/tree/wavefront.h"
 
@@ -226,10 +227,9 @@ TEST(LaunchPlanner, ColumnTilesEqualSingleLaunch) {
     o.bounces = 3;
     o.aa = 2;
     MegakernelPipeline mega(test::device());
-    for (const char* layout : {"tree", "weighted"})
+    for (MegaLayout layout : {MegaLayout::Tree, MegaLayout::Weighted})
         for (bool adaptive : {false, true}) {
-            o.layout = std::string(layout) == "tree" ? RenderOptions::Layout::Tree
-                                                     : RenderOptions::Layout::Weighted;
+            setMegaLayout(o, layout);
             o.adaptiveAa = adaptive;
             o.maxLaunchMs = 0;
             Image whole = mega.render(scene, o);
@@ -237,10 +237,11 @@ TEST(LaunchPlanner, ColumnTilesEqualSingleLaunch) {
             Image tiled = mega.render(scene, o);
             Image again = mega.render(scene, o);  // planned from the measured profile
             int passes = adaptive ? 2 : 1;
-            EXPECT_GT(mega.stats().launches, passes * o.height) << layout << " " << adaptive;
+            const char* name = megaLayoutName(layout);
+            EXPECT_GT(mega.stats().launches, passes * o.height) << name << " " << adaptive;
             size_t bytes = whole.rgb.size() * sizeof(float);
-            EXPECT_EQ(std::memcmp(whole.rgb.data(), tiled.rgb.data(), bytes), 0) << layout;
-            EXPECT_EQ(std::memcmp(whole.rgb.data(), again.rgb.data(), bytes), 0) << layout;
+            EXPECT_EQ(std::memcmp(whole.rgb.data(), tiled.rgb.data(), bytes), 0) << name;
+            EXPECT_EQ(std::memcmp(whole.rgb.data(), again.rgb.data(), bytes), 0) << name;
         }
 }
 

@@ -13,6 +13,7 @@
 #include "core/launch_planner.h"
 #include "core/pipeline.h"
 #include "core/scene_loader.h"
+#include "megakernel/megakernel_options.h"
 #include "pipelines/registry.h"
 #include "test_device.h"
 #include "wavefront/tree/wavefront.h"
@@ -45,7 +46,9 @@ TEST(LimitsSweep, FileParsesIntoLimitsGroups) {
     // Bounce limit 0..16 at 640x360: past both private-tree limits (B = 12).
     EXPECT_EQ(c.groups[0].bounces.front(), 0);
     EXPECT_EQ(c.groups[0].bounces.back(), 16);
-    EXPECT_EQ(c.groups[1].layout, RenderOptions::Layout::Weighted);
+    RenderOptions second;
+    second.pipelineOptions = c.groups[1].pipelineOptions;
+    EXPECT_EQ(megaLayout(second), MegaLayout::Weighted);
     EXPECT_EQ(c.groups[2].memoryBudget, size_t(32) << 20);
     EXPECT_EQ(c.groups[2].pipelines, std::vector<std::string>{"wave"});
     EXPECT_EQ(c.groups[3].bounces, std::vector<int>{8});
@@ -82,9 +85,16 @@ TEST(LimitsSweep, NewKeysAreValidated) {
     SweepConfig c = bench::parseSweep("[quick]\nscenes = spheres\n", "q");
     EXPECT_FALSE(c.groups[0].stopAfterFailure);
     EXPECT_DOUBLE_EQ(c.groups[0].maxLaunchMs, 0);
-    // Sweeps without the new keys keep their cell keys (--resume and old result sets).
+    // Sweeps without the new keys keep their cell keys (--resume and old result sets): no launch
+    // cap field, and the key recorded while every cell held the layout after its accel ("|0",
+    // tree) reads as today's.
     Cell cell = cellsOf(c)[0];
     EXPECT_EQ(cell.key().find("|L"), std::string::npos);
+    std::string recorded = cell.key();
+    size_t accelEnd = 0;
+    for (int field = 0; field < 7; ++field) accelEnd = recorded.find('|', accelEnd) + 1;
+    recorded.insert(accelEnd, "0|");
+    EXPECT_EQ(bench::currentCellKey(recorded), cell.key()) << recorded;
 }
 
 TEST(LimitsSweep, SkipsOnlySettingsNoSmallerThanAFailure) {
@@ -228,7 +238,7 @@ TEST(LimitsSweep, EndStateAndFailureKind) {
 // The failure kind travels with the exception from where it is thrown; no code reads the message.
 TEST(LimitsSweep, FailureKindsAreSetWhereThrown) {
     try {
-        checkPrivateTree(2, 12, "test", false);
+        checkPrivateTree(2, 12, "test");
         FAIL() << "a 511 KiB private tree passed";
     } catch (const Error& e) {
         EXPECT_EQ(e.kind(), FailureKind::PrivateTree);

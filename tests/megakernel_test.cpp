@@ -14,6 +14,7 @@
 #include "core/scene_loader.h"
 #include "image/compare.h"
 #include "image/image_io.h"
+#include "megakernel/megakernel_options.h"
 #include "test_device.h"
 #include "test_scenes.h"
 
@@ -69,7 +70,7 @@ TEST(Megakernel, WeightedLayoutMatchesTree) {
         RenderOptions o = small(scene, 4);
         MegakernelPipeline mega(test::device());
         Image tree = mega.render(scene, o);
-        o.layout = RenderOptions::Layout::Weighted;
+        setMegaLayout(o, MegaLayout::Weighted);
         Image weighted = mega.render(scene, o);
         ImageDiff d = compareImages(tree, weighted, 1e-4, false);
         EXPECT_LE(d.maxAbs, 1e-4) << name;
@@ -90,7 +91,7 @@ TEST(Megakernel, RejectsTreeTooBigForPrivateMemory) {
         EXPECT_NE(msg.find("highest bounce limit that fits is 11"), std::string::npos) << msg;
         EXPECT_NE(msg.find("--layout weighted"), std::string::npos) << msg;
     }
-    o.layout = RenderOptions::Layout::Weighted;  // the weighted stack holds only B + 1 rays
+    setMegaLayout(o, MegaLayout::Weighted);  // the weighted stack holds only B + 1 rays
     o.width = 8;
     o.height = 6;
     EXPECT_NO_THROW(mega.render(scene, o));
@@ -256,13 +257,13 @@ TEST(FeatureDefines, FollowTheScene) {
 TEST(FeatureDefines, BounceLimitOnlySizesPrivateArrays) {
     Scene spheres = load("spheres");  // refracts: C = 2
     Scene shadows = load("shadows");  // C = 1
-    auto withBounces = [](const Scene& s, RenderOptions::Layout layout, int b) {
+    auto withBounces = [](const Scene& s, MegaLayout layout, int b) {
         RenderOptions o = s.defaults;
-        o.layout = layout;
+        setMegaLayout(o, layout);
         o.bounces = b;
         return o;
     };
-    using L = RenderOptions::Layout;
+    using L = MegaLayout;
     EXPECT_EQ(featureDefines(spheres, withBounces(spheres, L::Tree, 2)),
               featureDefines(spheres, withBounces(spheres, L::Tree, 6)));
     EXPECT_NE(MegakernelPipeline::defines(spheres, withBounces(spheres, L::Tree, 2)),

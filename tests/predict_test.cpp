@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/reference.h"
+#include "megakernel/megakernel_options.h"
 #include "pipelines/registry.h"
 #include "test_device.h"
 #include "test_scenes.h"
@@ -48,7 +49,7 @@ TEST(RayTreeSizes, AddUpToTheRaysADeviceCounts) {
         const long long cpu = std::accumulate(sizes.begin(), sizes.end(), 0LL);
 
         o.countRays = true;
-        o.layout = RenderOptions::Layout::Weighted;
+        setMegaLayout(o, MegaLayout::Weighted);
         auto mega = makePipeline("mega", &test::device());
         mega->render(scene, o);
         const RayCounts& r = mega->stats().rays;

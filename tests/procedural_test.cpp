@@ -18,6 +18,7 @@
 #include "core/scene_loader.h"
 #include "image/compare.h"
 #include "image/image_io.h"
+#include "megakernel/megakernel_options.h"
 #include "pipelines/registry.h"
 #include "scratch_dir.h"
 #include "test_device.h"
@@ -225,7 +226,7 @@ TEST(ProceduralScene, EveryPipelineGivesTheMegakernelsImage) {
     Image tree = mega->render(scene, o);
     auto wave = makePipeline("wave", &test::device());
     EXPECT_EQ(compareImages(tree, wave->render(scene, o), 0.0, false).maxAbs, 0.0);
-    o.layout = RenderOptions::Layout::Weighted;
+    setMegaLayout(o, MegaLayout::Weighted);
     Image weighted = mega->render(scene, o);
     auto queue = makePipeline("queue", &test::device());
     EXPECT_LE(compareImages(weighted, queue->render(scene, o), 1e-5, false).maxAbs, 1e-5);

@@ -20,7 +20,7 @@ namespace {
 
 struct Case {
     std::string pipeline;
-    RenderOptions::Layout layout = RenderOptions::Layout::Tree;
+    PipelineVariant variant = {};  // the pipeline's defaults unless set
     int aa = 1;
     bool adaptive = false;
     double maxLaunchMs = 0;
@@ -28,7 +28,7 @@ struct Case {
 };
 
 std::string label(const Case& c) {
-    return c.pipeline + (c.layout == RenderOptions::Layout::Weighted ? " weighted" : "") + " aa" +
+    return c.pipeline + (c.variant.name.empty() ? "" : " " + c.variant.name) + " aa" +
            std::to_string(c.aa) + (c.adaptive ? " adaptive" : "") +
            (c.maxLaunchMs > 0 ? " capped" : "") +
            (c.memoryBudget > 0 ? " budget " + std::to_string(c.memoryBudget) : "");
@@ -42,15 +42,14 @@ constexpr size_t kFiveRows = 5 * kRowBytes;
 // Every pipeline that renders row windows, in the settings that change its loops.
 std::vector<Case> windowCases() {
     std::vector<Case> cases;
+    for (const PipelineVariantRun& v : pipelineRegistry().variants())
+        if (pipelineInfo(v.pipeline).supports.rowWindow) cases.push_back({v.pipeline, v.variant});
     for (const PipelineInfo& p : pipelineRegistry().all()) {
         if (!p.supports.rowWindow) continue;
-        cases.push_back({p.name});
-        cases.push_back({p.name, RenderOptions::Layout::Tree, 2});
-        if (p.supports.layouts) cases.push_back({p.name, RenderOptions::Layout::Weighted});
-        if (p.supports.adaptiveAa) cases.push_back({p.name, RenderOptions::Layout::Tree, 2, true});
+        cases.push_back({p.name, {}, 2});
+        if (p.supports.adaptiveAa) cases.push_back({p.name, {}, 2, true});
         if (p.supports.tiling)  // a tree of 5 rows of the frames below: several tiles a piece
-            for (int aa : {1, 2})
-                cases.push_back({p.name, RenderOptions::Layout::Tree, aa, false, 0, kFiveRows});
+            for (int aa : {1, 2}) cases.push_back({p.name, {}, aa, false, 0, kFiveRows});
     }
     return cases;
 }
@@ -60,7 +59,7 @@ RenderOptions options(const Scene& scene, const Case& c) {
     o.width = 64;
     o.height = 48;
     o.bounces = 3;
-    o.layout = c.layout;
+    o.pipelineOptions.setAll(c.variant.values);
     o.aa = c.aa;
     o.adaptiveAa = c.adaptive;
     o.maxLaunchMs = c.maxLaunchMs;
@@ -147,12 +146,12 @@ TEST(Progress, GrowsAndEndsAtTheTotalInEveryPipelineThatReports) {
     Scene scene = test::load("cornell");
     std::vector<Case> cases = windowCases();
     // Launches capped far below a row's cost: one launch per row, each reported.
-    cases.push_back({"mega", RenderOptions::Layout::Tree, 1, false, 1e-6});
-    cases.push_back({"queue", RenderOptions::Layout::Tree, 2, false, 1e-6});
-    cases.push_back({"wave", RenderOptions::Layout::Tree, 2, false, 1e-6});
+    cases.push_back({"mega", {}, 1, false, 1e-6});
+    cases.push_back({"queue", {}, 2, false, 1e-6});
+    cases.push_back({"wave", {}, 2, false, 1e-6});
     // The CPU reference reports rows as its threads finish them (it renders every row).
     cases.push_back({"cpu"});
-    cases.push_back({"cpu", RenderOptions::Layout::Tree, 2, true});
+    cases.push_back({"cpu", {}, 2, true});
     for (const Case& c : cases) {
         SCOPED_TRACE(label(c));
         std::unique_ptr<Pipeline> pipeline =

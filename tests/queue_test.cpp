@@ -17,6 +17,7 @@
 #include "image/compare.h"
 #include "image/image_io.h"
 #include "megakernel/megakernel.h"
+#include "megakernel/megakernel_options.h"
 #include "test_device.h"
 #include "test_images.h"
 #include "test_scenes.h"
@@ -44,7 +45,7 @@ void expectSameImage(const Scene& scene, const RenderOptions& base, const std::s
     MegakernelPipeline mega(test::device());
     QueuePipeline queue(test::device());
     RenderOptions o = base;
-    o.layout = RenderOptions::Layout::Weighted;
+    setMegaLayout(o, MegaLayout::Weighted);
     Image m = mega.render(scene, o), q = queue.render(scene, o);
     for (float v : q.rgb) ASSERT_TRUE(std::isfinite(v)) << what;
     ImageDiff d = compareImages(m, q, 1e-5, false);
@@ -194,8 +195,7 @@ TEST(Queue, BenchmarkSweepCoversTheHeadlineAndEveryBounceLimit) {
     for (const bench::Cell& cell : cells) {
         queue += cell.pipeline == "queue";
         wave += cell.pipeline == "wave";
-        weighted +=
-            cell.pipeline == "mega" && cell.options.layout == RenderOptions::Layout::Weighted;
+        weighted += cell.pipeline == "mega" && megaLayout(cell.options) == MegaLayout::Weighted;
         EXPECT_EQ(cell.options.width, 1920);
         EXPECT_EQ(cell.options.shadowSamples, 8);
     }

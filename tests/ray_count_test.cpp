@@ -9,6 +9,7 @@
 #include <string>
 
 #include "core/scene_loader.h"
+#include "megakernel/megakernel_options.h"
 #include "pipelines/registry.h"
 #include "test_device.h"
 #include "test_scenes.h"
@@ -85,7 +86,6 @@ std::string typesText(const RayCounts& r) {
 // expects the weighted megakernel's rays, type by type. Returns the queue's paths restarted
 // with the small pool.
 long long expectSameCounts(const Scene& scene, const RenderOptions& base) {
-    using Layout = RenderOptions::Layout;
     using Packets = QueuePacketMode;
     RenderOptions o = base;
     o.countRays = true;
@@ -96,7 +96,7 @@ long long expectSameCounts(const Scene& scene, const RenderOptions& base) {
         return p.stats().rays;
     };
     auto mega = makePipeline("mega", &test::device());
-    o.layout = Layout::Weighted;
+    setMegaLayout(o, MegaLayout::Weighted);
     const RayCounts expected = counted("mega", o, *mega);
     EXPECT_EQ(expected[RT_RAY_PRIMARY], uint64_t(o.width) * o.height * o.aa * o.aa);
     EXPECT_GT(expected[RT_RAY_SHADOW], 0u);
@@ -105,13 +105,12 @@ long long expectSameCounts(const Scene& scene, const RenderOptions& base) {
     const bool packetsPossible = test::device().device().type == "CPU" && !scene.triangles.empty();
     for (const std::string& name : pipelineRegistry().names(true)) {
         auto p = makePipeline(name, &test::device());
-        for (Layout layout : {Layout::Tree, Layout::Weighted}) {
-            if (name != "mega" && layout == Layout::Weighted) continue;  // mega's choice only
+        for (const PipelineVariantRun& run : pipelineRegistry().variants(true)) {
+            if (run.pipeline != name) continue;
             RenderOptions v = o;
-            v.layout = layout;
+            run.apply(v);
             if (name != "queue") {
-                const std::string what =
-                    name + (layout == Layout::Tree ? " (tree layout)" : " (weighted layout)");
+                const std::string what = run.name;  // "mega-tree"
                 const RayCounts got = counted(what, v, *p);
                 EXPECT_EQ(got, expected) << scene.name << ", " << what << ": " << typesText(got)
                                          << " against " << typesText(expected);

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
 #include <fstream>
 #include <map>
@@ -12,11 +13,13 @@
 #include <string>
 
 #include "bench/sweep_config.h"
+#include "core/accel.h"
 #include "core/error.h"
 #include "core/pipeline_options.h"
 #include "core/scene_loader.h"
 #include "image/compare.h"
 #include "image/image_io.h"
+#include "megakernel/megakernel_options.h"
 #include "test_device.h"
 
 namespace rt {
@@ -225,27 +228,92 @@ TEST(Registry, SweepFilesTakeEveryDeclaredOption) {
     }
 }
 
-// Rows already in results/ were written when the queue's options were fields of RenderOptions:
-// the cells the same sweep file expands to now must have the same keys (resumed sweeps and
-// scripts match rows by them).
+// Rows already in results/ were written when the queue's options and the megakernel's layout were
+// fields of RenderOptions: the cells the same sweep file expands to now must have the keys those
+// rows recorded, read through currentCellKey (resumed sweeps and merged results match rows by
+// them).
 TEST(Registry, RecordedRowsKeepTheirCellKeys) {
-    const char* file = "results/pocl-pthread-skylake-avx512-amd-epyc/queue-launch-cpu.json";
-    std::ifstream in(file);
-    ASSERT_TRUE(in) << file;
-    const nlohmann::json results = nlohmann::json::parse(in);
-    std::set<std::string> recorded;
-    for (const nlohmann::json& row : results.at("rows")) recorded.insert(row.at("cell"));
-    bench::SweepConfig c =
-        bench::parseSweep(results.at("meta").at("config").get<std::string>(), "queue-launch-cpu");
-    std::map<std::string, Scene> scenes;
-    std::set<std::string> now;
-    for (const bench::Cell& cell :
-         bench::expandCells(c, [&](const std::string& name) -> const Scene& {
-             return scenes.try_emplace(name, loadScene("scenes/" + name + ".json", readImage))
-                 .first->second;
-         }))
-        now.insert(cell.key());
-    EXPECT_EQ(now, recorded);
+    // The queue's options; both megakernel layouts, with and without a launch cap.
+    for (const char* file : {"results/pocl-pthread-skylake-avx512-amd-epyc/queue-launch-cpu.json",
+                             "results/pocl-pthread-skylake-avx512-amd-epyc/limits.json",
+                             "results/nvidia-h200/queue.json"}) {
+        SCOPED_TRACE(file);
+        std::ifstream in(file);
+        ASSERT_TRUE(in) << file;
+        const nlohmann::json results = nlohmann::json::parse(in);
+        std::set<std::string> recorded;
+        for (const nlohmann::json& row : results.at("rows"))
+            recorded.insert(bench::currentCellKey(row.at("cell")));
+        bench::SweepConfig c =
+            bench::parseSweep(results.at("meta").at("config").get<std::string>(), file);
+        std::map<std::string, Scene> scenes;
+        std::set<std::string> now;
+        for (const bench::Cell& cell :
+             bench::expandCells(c, [&](const std::string& name) -> const Scene& {
+                 return scenes.try_emplace(name, loadScene("scenes/" + name + ".json", readImage))
+                     .first->second;
+             }))
+            now.insert(cell.key());
+        EXPECT_EQ(now, recorded);
+    }
+}
+
+// Tests and the smoke check run every pipeline in each of its variants: the megakernel in both
+// layouts, the others once at their defaults.
+TEST(Registry, VariantsCoverTheMegakernelsLayouts) {
+    std::vector<std::string> names;
+    for (const PipelineVariantRun& v : pipelineRegistry().variants(true)) {
+        names.push_back(v.name);
+        RenderOptions o;
+        v.apply(o);
+        if (v.pipeline == "mega")
+            EXPECT_EQ(megaLayoutName(megaLayout(o)), v.variant.name) << v.name;
+        else
+            EXPECT_EQ(v.name, v.pipeline);
+    }
+    EXPECT_EQ(std::count(names.begin(), names.end(), "mega-tree"), 1) << names.size();
+    EXPECT_EQ(std::count(names.begin(), names.end(), "mega-weighted"), 1) << names.size();
+    EXPECT_EQ(std::count(names.begin(), names.end(), "wave"), 1) << names.size();
+    EXPECT_EQ(std::count(names.begin(), names.end(), "cpu"), 0) << "devices only";
+}
+
+// Keys written while the layout was a field of every cell ("|0" tree, "|1" weighted after the
+// accel) lose the field and gain the megakernel's tag where weighted; today's keys pass unchanged.
+TEST(Registry, OldCellKeysTranslateToTodays) {
+    EXPECT_EQ(bench::currentCellKey("mega|spheres|640x360|5|1|1|bv|1|0|0|L100"),
+              "mega|spheres|640x360|5|1|1|bv|0|0|L100|Wweighted");
+    EXPECT_EQ(bench::currentCellKey("mega|spheres|64x36|3|1|1|bv|1|0|1"),
+              "mega|spheres|64x36|3|1|1|bv|0|1|Wweighted");
+    EXPECT_EQ(bench::currentCellKey("queue|cornell|1920x1080|8|8|1|bvh|0|0|0|L100|Qdevice|P4096"),
+              "queue|cornell|1920x1080|8|8|1|bvh|0|0|L100|Qdevice|P4096");
+    EXPECT_EQ(bench::currentCellKey("wave|empty|320x240|3|1|1|-|0|33554432|0"),
+              "wave|empty|320x240|3|1|1|-|33554432|0");
+    // The weighted layout's tag goes before the queue's: the megakernel registers first.
+    EXPECT_EQ(bench::currentCellKey("mega|cornell|64x36|3|1|1|bvh|1|0|0|Qdevice"),
+              "mega|cornell|64x36|3|1|1|bvh|0|0|Wweighted|Qdevice");
+    for (const std::string today :
+         {"mega|spheres|640x360|5|1|1|bv|0|0|L100|Wweighted", "wave|empty|320x240|3|1|1|-|0|1",
+          "queue|cornell|1920x1080|8|8|1|bvh|0|0|L100|Qdevice|P4096",
+          "mega|shadows|8x6|0|1|1|bv|0|0"})
+        EXPECT_EQ(bench::currentCellKey(today), today);
+    // And the cells of today make the keys it gives.
+    bench::SweepConfig c = bench::parseSweep(
+        "[a]\nscenes = spheres\npipelines = mega\nsizes = 64x36\nbounces = 3\nlayout = weighted\n"
+        "[b]\nscenes = spheres\npipelines = mega\nsizes = 64x36\nbounces = 3\n",
+        "t");
+    Scene scene = loadScene("scenes/spheres.json", readImage);
+    std::vector<bench::Cell> cells =
+        bench::expandCells(c, [&](const std::string&) -> const Scene& { return scene; });
+    ASSERT_EQ(cells.size(), 2u);
+    const std::string accel = accelName(cells[0].options.accel);
+    EXPECT_EQ(bench::currentCellKey("mega|spheres|64x36|3|" +
+                                    std::to_string(cells[0].options.shadowSamples) + "|" +
+                                    std::to_string(cells[0].options.aa) + "|" + accel + "|1|0|0"),
+              cells[0].key());
+    EXPECT_EQ(bench::currentCellKey("mega|spheres|64x36|3|" +
+                                    std::to_string(cells[1].options.shadowSamples) + "|" +
+                                    std::to_string(cells[1].options.aa) + "|" + accel + "|0|0|0"),
+              cells[1].key());
 }
 
 TEST(Registry, DevicePipelineNeedsADevice) {

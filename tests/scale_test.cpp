@@ -36,26 +36,6 @@ int pixelsOff(const Image& a, const Image& b) {
     return n;
 }
 
-struct Variant {
-    std::string kind;
-    RenderOptions::Layout layout;
-    std::string name;
-};
-
-// Every registered pipeline, in each of its layouts.
-std::vector<Variant> variants() {
-    std::vector<Variant> out;
-    for (const PipelineInfo& p : pipelineRegistry().all()) {
-        if (!p.supports.layouts) {
-            out.push_back({p.name, RenderOptions::Layout::Tree, p.name});
-            continue;
-        }
-        out.push_back({p.name, RenderOptions::Layout::Tree, p.name + "-tree"});
-        out.push_back({p.name, RenderOptions::Layout::Weighted, p.name + "-weighted"});
-    }
-    return out;
-}
-
 RenderOptions smallOptions(const Scene& scene) {
     RenderOptions o = scene.defaults;
     o.width = 40;
@@ -76,13 +56,15 @@ TEST_P(ScaleInvariance, EveryPipelineGivesTheSameImageFrom1e_4To1e5) {
     // Pipelines keep a scene's device copy by its address, so every copy lives to the end.
     std::vector<Scene> scaled;
     for (int e = -4; e <= 5; ++e) scaled.push_back(scaleScene(scene, std::pow(10.0, e)));
-    for (const Variant& v : variants()) {
-        o.layout = v.layout;
-        std::unique_ptr<Pipeline> p = makePipeline(v.kind, &test::device());
-        const Image base = p->render(scene, o);
+    // Every registered pipeline, in each of its variants.
+    for (const PipelineVariantRun& v : pipelineRegistry().variants()) {
+        RenderOptions vo = o;
+        v.apply(vo);
+        std::unique_ptr<Pipeline> p = makePipeline(v.pipeline, &test::device());
+        const Image base = p->render(scene, vo);
         for (int e = -4; e <= 5; ++e) {
             if (e == 0) continue;
-            const int off = pixelsOff(base, p->render(scaled[e + 4], o));
+            const int off = pixelsOff(base, p->render(scaled[e + 4], vo));
             EXPECT_LE(off, limit) << v.name << " at scale 1e" << e;
         }
     }

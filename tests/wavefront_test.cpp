@@ -14,6 +14,7 @@
 #include "image/compare.h"
 #include "image/image_io.h"
 #include "megakernel/megakernel.h"
+#include "megakernel/megakernel_options.h"
 #include "test_device.h"
 #include "test_scenes.h"
 
@@ -92,7 +93,7 @@ TEST(Wavefront, DeepTreeStepsOverEmptyWordsWithTheSameImage) {
         o.width = 12;
         o.height = 8;
         o.bounces = b;
-        o.layout = RenderOptions::Layout::Weighted;
+        setMegaLayout(o, MegaLayout::Weighted);
         Image m = mega.render(scene, o), w = wave.render(scene, o);
         for (float v : w.rgb) ASSERT_TRUE(std::isfinite(v)) << "B=" << b;
         ImageDiff d = compareImages(m, w, 1e-5, false);

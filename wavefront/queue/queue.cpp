@@ -674,7 +674,7 @@ void registerQueueWavefront(PipelineRegistry& registry) {
     p.description =
         "a pool of live rays in SoA buffers; generate, extend, shadow and per-material "
         "shade kernels over compacted queues (--pool N)";
-    p.supports = {.layouts = false, .adaptiveAa = false, .tiling = false, .rowWindow = true};
+    p.supports = {.adaptiveAa = false, .tiling = false, .rowWindow = true};
     p.options = queueOptions();
     // Device-sized launches learn no admission limit (that takes a read-back per bounce): the
     // command line's default launch cap gives way to them; a cap asked for is refused in render().

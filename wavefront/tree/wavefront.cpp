@@ -267,7 +267,7 @@ void registerWavefrontTree(PipelineRegistry& registry) {
     p.name = "wave";
     p.title = "wavefront (report's tree)";
     p.description = "trace, image and reset kernels around a global ray tree of W x rows x N slots";
-    p.supports = {.layouts = false, .adaptiveAa = false, .tiling = true, .rowWindow = true};
+    p.supports = {.adaptiveAa = false, .tiling = true, .rowWindow = true};
     p.make = [](ClContext* cl) { return std::make_unique<WavefrontPipeline>(*cl); };
     registry.add(std::move(p));
 }

@@ -1,0 +1,27 @@
+// rtlab — the megakernel's own option (--layout), declared in its registry entry
+// (core/pipeline_options.h) and read back here, typed, from RenderOptions::pipelineOptions.
+// Front ends know it only through the declaration.
+#pragma once
+
+#include <vector>
+
+#include "core/pipeline_options.h"
+#include "core/scene.h"
+
+namespace rt {
+
+// How a work-item keeps its rays in private memory: the full ray tree of the report (N nodes),
+// or a stack of pending rays, each with the weight it adds to its pixel (B * (C - 1) + 1).
+enum class MegaLayout { Tree, Weighted };
+
+// The declarations, in the order cell keys list them.
+std::vector<PipelineOption> megakernelOptions();
+// The settings tests and the smoke check run one by one: each layout.
+std::vector<PipelineVariant> megakernelVariants();
+
+MegaLayout megaLayout(const RenderOptions& options);
+void setMegaLayout(RenderOptions& options, MegaLayout layout);
+// The name as --layout takes it: tree, weighted.
+const char* megaLayoutName(MegaLayout layout);
+
+}  // namespace rt
