@@ -241,9 +241,11 @@ TEST(Registry, RecordedRowsKeepTheirCellKeys) {
         std::ifstream in(file);
         ASSERT_TRUE(in) << file;
         const nlohmann::json results = nlohmann::json::parse(in);
-        std::set<std::string> recorded;
-        for (const nlohmann::json& row : results.at("rows"))
+        std::set<std::string> recorded, pipelines;
+        for (const nlohmann::json& row : results.at("rows")) {
             recorded.insert(bench::currentCellKey(row.at("cell")));
+            pipelines.insert(row.at("pipeline"));
+        }
         bench::SweepConfig c =
             bench::parseSweep(results.at("meta").at("config").get<std::string>(), file);
         std::map<std::string, Scene> scenes;
@@ -253,7 +255,9 @@ TEST(Registry, RecordedRowsKeepTheirCellKeys) {
                  return scenes.try_emplace(name, loadScene("scenes/" + name + ".json", readImage))
                      .first->second;
              }))
-            now.insert(cell.key());
+            // A file that lists no pipelines means every one registered: the ones added since
+            // have cells of their own, which no row recorded.
+            if (pipelines.count(cell.pipeline)) now.insert(cell.key());
         EXPECT_EQ(now, recorded);
     }
 }
