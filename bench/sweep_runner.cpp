@@ -139,6 +139,7 @@ nlohmann::json rowJson(const SweepConfig& config, const Cell& c, const Measureme
         {"scene", c.scene},
         {"pipeline", c.pipeline},
         {"pipeline_title", pipelineInfo(c.pipeline).title},
+        {"family", pipelineInfo(c.pipeline).family},
         {"width", o.width},
         {"height", o.height},
         {"bounces", o.bounces},
@@ -160,14 +161,18 @@ nlohmann::json rowJson(const SweepConfig& config, const Cell& c, const Measureme
         {"error", m.error},
     };
     // Every registered pipeline option, as the cell set it (its default where it did not), under
-    // its row field: "layout": "weighted", "pool": 4096.
-    for (const PipelineOption* opt : pipelineRegistry().options()) {
-        const OptionValue& v = opt->value(o.pipelineOptions);
-        if (const long long* n = std::get_if<long long>(&v))
-            row[opt->field()] = *n;
-        else
-            row[opt->field()] = std::get<std::string>(v);
-    }
+    // its row field: "layout": "weighted", "pool": 4096. And under "options" the ones the cell's
+    // own pipeline declares, which tell its variants apart in charts and tables.
+    auto json = [](const OptionValue& v) {
+        const long long* n = std::get_if<long long>(&v);
+        return n ? nlohmann::json(*n) : nlohmann::json(std::get<std::string>(v));
+    };
+    for (const PipelineOption* opt : pipelineRegistry().options())
+        row[opt->field()] = json(opt->value(o.pipelineOptions));
+    nlohmann::json own = nlohmann::json::object();
+    for (const PipelineOption& opt : pipelineInfo(c.pipeline).options)
+        own[opt.name] = json(opt.value(o.pipelineOptions));
+    row["options"] = own;
     if (c.stopAfterFailure) row["stop_after_failure"] = true;
     if (c.maxFrameS > 0) row["max_frame_s"] = c.maxFrameS;
     if (!skipped.empty()) row["skip_reason"] = skipped;

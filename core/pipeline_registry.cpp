@@ -12,6 +12,9 @@ namespace rt {
 void PipelineRegistry::add(PipelineInfo info) {
     if (info.name.empty() || !info.make)
         throw Error("a pipeline registered without a name or factory");
+    if (info.family.empty())
+        throw Error("pipeline '" + info.name + "' registered without a family (megakernel, " +
+                    "wavefront, ...: PipelineInfo::family)");
     if (find(info.name)) throw Error("pipeline '" + info.name + "' is registered twice");
     std::vector<const PipelineOption*> known = options();
     for (const PipelineOption& o : info.options) {
@@ -117,6 +120,7 @@ PipelineInfo referencePipelineInfo() {
     PipelineInfo p;
     p.name = "cpu";
     p.title = "CPU reference";
+    p.family = "reference";
     p.description = "the same algorithm in double precision on the host; the accuracy oracle";
     p.reference = true;
     p.supports = {.adaptiveAa = true, .tiling = false, .rowWindow = false};

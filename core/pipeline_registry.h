@@ -26,7 +26,11 @@ struct PipelineInfo {
     std::string name;         // the --pipeline value and the sweep-row "pipeline": "mega"
     std::string title;        // one line for people, e.g. the architecture's name
     std::string description;  // what makes it different, for --help
-    bool reference = false;   // the CPU oracle: compared against, never measured
+    // The design family the crossover map sets against each other, recorded in every sweep row:
+    // "megakernel" (one kernel, a pixel's whole ray tree per work-item) or "wavefront" (kernels
+    // per stage over rays in global memory); "reference" for the CPU oracle.
+    std::string family;
+    bool reference = false;  // the CPU oracle: compared against, never measured
     PipelineSupport supports;
     // Options only this pipeline reads: front ends make a flag, a sweep key and their parts of
     // sweep cells from each. Every pipeline's options apply to every cell of a sweep group and

@@ -146,6 +146,7 @@ void registerMegakernel(PipelineRegistry& registry) {
     PipelineInfo p;
     p.name = "mega";
     p.title = "megakernel";
+    p.family = "megakernel";
     p.description = "one kernel launch per frame; each work-item keeps its rays in private memory";
     p.supports = {.adaptiveAa = true, .tiling = false, .rowWindow = true};
     p.options = megakernelOptions();

@@ -13,10 +13,10 @@ from collections import defaultdict
 
 from chart_style import figure, legend_row, log_ticks, plt  # noqa: F401
 from matplotlib.lines import Line2D
-from sweep_rows import Series, failure, in_group
+from sweep_rows import Series, failure, family, in_group
 
 SCENE = re.compile(r"divergence-o(\d+)-m(\d+)$")
-MEGA = "mega"
+MEGA = "megakernel"  # the family every other series is divided by
 
 
 def parse(r):
@@ -39,12 +39,12 @@ def ratios(rows):
         cells[(m, (r["width"], r["height"]), r["bounces"], k)][series.key(r)] = r
     out = defaultdict(list)
     for (m, size, b, k), by in cells.items():
-        megas = [r for key, r in by.items() if r["pipeline"] == MEGA]
+        megas = [r for key, r in by.items() if family(r) == MEGA]
         if not megas:
             continue
         best = min(megas, key=lambda r: r["device_ms"])
         for key, r in by.items():
-            if r["pipeline"] != MEGA:
+            if family(r) != MEGA:
                 out[(key, m, size, b)].append((k, r["device_ms"] / best["device_ms"], r, best))
     for v in out.values():
         v.sort(key=lambda t: t[0])

@@ -20,7 +20,7 @@ import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from charts_map import load, verdict  # noqa: E402
-from sweep_rows import Series  # noqa: E402
+from sweep_rows import Series, family, own_options  # noqa: E402
 
 
 def scene_key(path_or_name):
@@ -86,8 +86,8 @@ def score(rows, predictions, threshold):
             continue
         truth = winner.split("/")[0] == "queue"
         predicted = p["busy_lanes"] < threshold
-        measured = [r.get("extras", {}).get("warp_lanes_active") for k, r in by_key.items()
-                    if k.startswith("mega") and (r.get("layout") == "weighted")]
+        measured = [r.get("extras", {}).get("warp_lanes_active") for r in by_key.values()
+                    if family(r) == "megakernel" and own_options(r).get("layout") == "weighted"]
         measured = next((m for m in measured if m is not None), None)
         ok = "tie" if tie else ("yes" if truth == predicted else "**no**")
         if not tie and truth != predicted:

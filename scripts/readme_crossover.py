@@ -8,6 +8,7 @@ from collections import defaultdict
 
 from charts_crossover import crossing, crossover_rows, parse, ratios
 from readme_format import table
+from sweep_rows import Series, family
 
 
 # The kernels whose cost the question turns on: the megakernel, the tree wavefront's trace, the
@@ -67,10 +68,11 @@ def resource_table(rows):
     """Per pipeline (layout), material count and bounce limit: each kernel's registers, spill
     bytes (stores/loads) and private bytes per work-item, as the rows recorded them."""
     seen = {}
+    series = Series(rows)
     for r in rows:
         res = r.get("kernel_resources") or {}
         k, m = parse(r)
-        pipe = r["pipeline"] + (f" ({r['layout']})" if r["pipeline"] == "mega" else "")
+        pipe = series.label(series.key(r))
         kernels = sorted({name.split(".")[0] for name in res} & KERNELS)
         for kern in kernels:
             seen.setdefault((pipe, m, r["bounces"], kern), res)
@@ -93,7 +95,7 @@ def stage_table(rows):
     sums = defaultdict(lambda: defaultdict(float))
     octs = defaultdict(set)
     for r in rows:
-        if r["pipeline"] == "mega":
+        if family(r) == "megakernel":
             continue
         k, m = parse(r)
         octs[(r["pipeline"], m)].add(k)
@@ -115,7 +117,7 @@ def mega_cost_line(rows):
     its time at none, geometric mean over the settings."""
     best = defaultdict(dict)
     for r in rows:
-        if r["pipeline"] != "mega":
+        if family(r) != "megakernel":
             continue
         k, m = parse(r)
         key = (m, r["width"], r["height"], r["bounces"])

@@ -26,10 +26,13 @@ import json
 import os
 
 from readme_format import ms, size_label, table
-from sweep_rows import LEGACY_NODE_BYTES as NODE_BYTES, setting  # sizeof(Node), core/types.h
+from sweep_rows import LEGACY_NODE_BYTES, setting
 
 IMAGE_BYTES_PER_PIXEL = 12  # RGB float
-RAY_BYTES = 44              # origin, direction, weight, pixel, meta (queue_buffers.cpp)
+# Rows record their pipeline's record sizes (extras: node_bytes, ray_record_bytes,
+# hit_record_bytes); rows from before they did had these: a 48-byte node, and the queue's ray
+# record of origin, direction, weight, pixel and meta.
+LEGACY_RAY_BYTES = 44
 
 FLOOR_TEXT = (
     "Floor: the bytes a frame's design must move through global memory, divided by the copy "
@@ -63,17 +66,20 @@ def floor_bytes(r):
     pixels = r["width"] * r["height"]
     samples = pixels * r.get("aa", 1) ** 2
     total = pixels * IMAGE_BYTES_PER_PIXEL
+    extras = r.get("extras") or {}
     if r.get("tree_bytes", 0) > 0:
         nodes = r["tree_nodes"]
+        node_bytes = extras.get("node_bytes", LEGACY_NODE_BYTES)
         rays = r.get("rays") or {}
         traced = sum(rays.get(t, 0) for t in ("primary", "reflection", "refraction")) or samples
-        pixel = (r.get("extras") or {}).get("tree_pixel_bytes")
-        flags = pixel - nodes * NODE_BYTES if pixel else nodes  # bit mask, or a byte a node
-        total += samples * flags + traced * 2 * NODE_BYTES
-    lengths = (r.get("extras") or {}).get("queue_lengths")
+        pixel = extras.get("tree_pixel_bytes")
+        flags = pixel - nodes * node_bytes if pixel else nodes  # bit mask, or a byte a node
+        total += samples * flags + traced * 2 * node_bytes
+    lengths = extras.get("queue_lengths")
     if lengths:
         extended = sum(sum(depth) for depth in lengths)
-        total += extended * 2 * (RAY_BYTES + NODE_BYTES)
+        total += extended * 2 * (extras.get("ray_record_bytes", LEGACY_RAY_BYTES) +
+                                 extras.get("hit_record_bytes", LEGACY_NODE_BYTES))
     return total
 
 

@@ -38,19 +38,46 @@ def budget_label(b):
     return f"{b / 2**30:g} GiB" if b >= 2**30 else f"{b / 2**20:g} MiB"
 
 
-def layouts_by_pipeline(rows):
-    out = {}
+# Rows written before sweeps recorded each pipeline's design family and its own options: the
+# pipelines and the one pipeline option (the megakernel's layout) that existed then.
+LEGACY_FAMILIES = {"mega": "megakernel", "wave": "wavefront", "queue": "wavefront"}
+
+
+def family(r):
+    """The row's design family, as its pipeline's registry entry says: "megakernel",
+    "wavefront"."""
+    return r.get("family") or LEGACY_FAMILIES.get(r["pipeline"], r["pipeline"])
+
+
+def own_options(r):
+    """{name: value} of the options the row's own pipeline declares (its registry entry)."""
+    if "options" in r:
+        return r["options"]
+    return {"layout": r.get("layout") or "tree"} if r["pipeline"] == "mega" else {}
+
+
+def varying_options(rows):
+    """{pipeline: [option names whose value differs among its rows]}, in declaration order."""
+    seen = {}
     for r in rows:
-        out.setdefault(r["pipeline"], set()).add(r.get("layout") or "tree")
-    return out
+        for name, value in own_options(r).items():
+            seen.setdefault(r["pipeline"], {}).setdefault(name, set()).add(str(value))
+    return {p: [n for n, v in opts.items() if len(v) > 1] for p, opts in seen.items()}
+
+
+def option_part(name, value):
+    """A series-key part: a choice by its name ("weighted"), a number with its option's
+    ("pool=4096"), so that no part begins with a digit, as a budget's does."""
+    return f"{name}={value}" if isinstance(value, (int, float)) else str(value)
 
 
 class Series:
-    """One line of a chart / one column of a table: a pipeline, its layout where the rows hold
-    several, and a memory budget where one was set."""
+    """One line of a chart / one column of a table: a pipeline, the values of its own options
+    where its rows hold several (the megakernel's layout), and a memory budget where one was
+    set."""
 
     def __init__(self, rows):
-        self.layouts = layouts_by_pipeline(rows)
+        self.varying = varying_options(rows)
         self.titles = {}
         for r in rows:
             self.titles.setdefault(r["pipeline"], r.get("pipeline_title") or r["pipeline"])
@@ -65,8 +92,9 @@ class Series:
 
     def key(self, r):
         k = r["pipeline"]
-        if len(self.layouts.get(r["pipeline"], ())) > 1:
-            k += "/" + (r.get("layout") or "tree")
+        own = own_options(r)
+        for name in self.varying.get(r["pipeline"], ()):
+            k += "/" + option_part(name, own.get(name))
         if r.get("memory_budget"):
             k += "/" + budget_label(r["memory_budget"]).replace(" ", "")
         return k

@@ -69,6 +69,19 @@ TEST(Registry, RefusesADuplicateName) {
     EXPECT_THROW(r.make("mega", nullptr), Error);  // not in this registry
 }
 
+// Sweep rows record each pipeline's design family, which the crossover map compares: a pipeline
+// must say which it is.
+TEST(Registry, RefusesAPipelineWithoutAFamily) {
+    PipelineRegistry r;
+    PipelineInfo p = referencePipelineInfo();
+    p.family.clear();
+    EXPECT_THROW(r.add(p), Error);
+    for (const PipelineInfo& info : pipelineRegistry().all())
+        EXPECT_FALSE(info.family.empty()) << info.name;
+    EXPECT_EQ(pipelineInfo("mega").family, "megakernel");
+    EXPECT_EQ(pipelineInfo("queue").family, "wavefront");
+}
+
 // What lets a new pipeline in without a test of its own: every device pipeline renders the same
 // image as the first one registered (they share the stage code in core/cl): within 1e-5 per
 // channel, the bar for a pipeline that adds a path's contributions in another order

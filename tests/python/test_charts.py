@@ -114,6 +114,25 @@ class RowsTest(unittest.TestCase):
         self.assertEqual(series.label("mega/weighted"), "megakernel (weighted)")
         self.assertEqual(len(set(series.colors.values())), 4)
 
+    def test_a_new_pipelines_family_and_options_need_no_script_change(self):
+        # Rows of today carry the pipeline's family and its own options: a design the scripts
+        # have never heard of is compared as its family says, and split by its own option.
+        rows = [dict(row("persist", "persistent megakernel", "tree", "s", 2, device_ms=ms),
+                     family="megakernel", options={"batch": batch})
+                for batch, ms in ((32, 5.0), (64, 4.0))]
+        rows += [dict(row("queue", "queue wavefront", "weighted", "s", 2, device_ms=6.0),
+                      family="wavefront", options={"pool": 0})]
+        series = sweep_rows.Series(rows)
+        self.assertEqual(series.keys, ["persist/batch=32", "persist/batch=64", "queue"])
+        self.assertEqual(series.label("persist/batch=64"),
+                         "persistent megakernel (batch=64)")
+        self.assertEqual([sweep_rows.family(r) for r in rows],
+                         ["megakernel", "megakernel", "wavefront"])
+        # Rows from before: the megakernel's layout was its one option, every row had one.
+        old = row("wave", "wavefront", "weighted", "s", 2)
+        self.assertEqual(sweep_rows.own_options(old), {})
+        self.assertEqual(sweep_rows.family(old), "wavefront")
+
     def test_colour_of_a_pipeline_does_not_change_when_another_is_added(self):
         two = sweep_rows.Series([r for r in sweep_rows_fixture() if r["pipeline"] != "queue"])
         three = sweep_rows.Series(sweep_rows_fixture())

@@ -631,6 +631,10 @@ Image QueuePipeline::renderFrame(const Scene& scene, const RenderOptions& o) {
     stats_.addBuffer("pool", queue_.poolBytes);
     stats_.addBuffer("image", buf_.imageBytes);
     stats_.extras["pool_rays"] = queue_.poolRays;  // its bytes: buffers["pool"]
+    // What each extended ray moves through global memory at the least, for the memory floor of
+    // the result READMEs (scripts/readme_floor.py): its ray record and its hit record.
+    stats_.extras["ray_record_bytes"] = kRayRecordBytes;
+    stats_.extras["hit_record_bytes"] = sizeof(dev::Node);
     stats_.extras["bounces_run"] = queue_.iterations;
     stats_.extras["restarted_paths"] = queue_.restartedPaths;
     if (o.countRays) stats_.extras["retraced_rays"] = queue_.retracedRays;  // by RT_RAY_* type
@@ -671,6 +675,7 @@ void registerQueueWavefront(PipelineRegistry& registry) {
     PipelineInfo p;
     p.name = "queue";
     p.title = "wavefront (queues of live rays)";
+    p.family = "wavefront";
     p.description =
         "a pool of live rays in SoA buffers; generate, extend, shadow and per-material "
         "shade kernels over compacted queues (--pool N)";

@@ -80,6 +80,8 @@ class QueuePipeline : public DevicePipeline {
     // Device bytes per pool slot: ray fields, staging, node, queues (independent of B). A pool
     // takes pool * bytesPerRay + 4 + RT_Q_WORDS * 4 bytes (QueueStats::poolBytes).
     static size_t bytesPerRay(int branching);
+    // A ray's record in the pool: origin, direction, weight (3 floats each), pixel and meta.
+    static constexpr size_t kRayRecordBytes = 3 * 12 + 2 * 4;
     // Work-group size of the scan (and the most any queue kernel uses): a power of two.
     static int groupSize(const DeviceInfo& device);
     // Whether the extend and shadow stages trace packets of kPacket queue entries per work-item

@@ -11,16 +11,15 @@
 namespace rt {
 
 namespace {
-constexpr size_t kRayFieldBytes = 3 * 12 + 2 * 4;  // origin, dir, weight; pixel, meta
-constexpr size_t kMaxPool = size_t(1) << 26;       // keeps every index of C * pool in an int
+constexpr size_t kMaxPool = size_t(1) << 26;  // keeps every index of C * pool in an int
 }  // namespace
 
 size_t QueuePipeline::bytesPerRay(int branching) {
-    return kRayFieldBytes * size_t(1 + branching)  // the queue and its C staging slots
-           + sizeof(dev::Node)                     // extend's hit record, read by shade
-           + 12                                    // contribution
-           + 4 * 4                                 // children, offsets, block sums, retry
-           + 4 * (RT_Q_CLASSES + 1);               // class queues and shadow queue
+    return kRayRecordBytes * size_t(1 + branching)  // the queue and its C staging slots
+           + sizeof(dev::Node)                      // extend's hit record, read by shade
+           + 12                                     // contribution
+           + 4 * 4                                  // children, offsets, block sums, retry
+           + 4 * (RT_Q_CLASSES + 1);                // class queues and shadow queue
 }
 
 int QueuePipeline::groupSize(const DeviceInfo& device) {

@@ -115,6 +115,7 @@ Image WavefrontPipeline::renderFrame(const Scene& scene, const RenderOptions& o)
     // The tree held, both buffers: one tile's (a window's may be an earlier piece's, larger).
     stats_.extras["tree_bytes"] = treeBytes + flagBytes;
     stats_.extras["tree_pixel_bytes"] = pixelSize;
+    stats_.extras["node_bytes"] = sizeof(dev::Node);  // a slot's payload (the memory floor)
     stats_.extras["memory_tiles"] = memoryTiles;
 
     Kernel trace(program, "Wavefront_Trace"), image(program, "Wavefront_Image"),
@@ -266,6 +267,7 @@ void registerWavefrontTree(PipelineRegistry& registry) {
     PipelineInfo p;
     p.name = "wave";
     p.title = "wavefront (report's tree)";
+    p.family = "wavefront";
     p.description = "trace, image and reset kernels around a global ray tree of W x rows x N slots";
     p.supports = {.adaptiveAa = false, .tiling = true, .rowWindow = true};
     p.make = [](ClContext* cl) { return std::make_unique<WavefrontPipeline>(*cl); };
