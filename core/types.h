@@ -21,17 +21,16 @@ typedef uchar uint8_t;
 #else
 #include <cstddef>
 #include <cstdint>
-#define RT_DEV_BEGIN \
-    namespace rt::dev {
+#define RT_DEV_BEGIN namespace rt::dev {
 #define RT_DEV_END }
 #endif
 
 RT_DEV_BEGIN
 
 // Limits baked into the records. Scenes past them are rejected by the loader with a clear error.
-#define RT_MAX_LIGHTS 4         // Node keeps one occlusion count per light
+#define RT_MAX_LIGHTS 4            // Node keeps one occlusion count per light
 #define RT_MAX_SHADOW_SAMPLES 255  // ... in one byte
-#define RT_MAX_MATERIALS 65535  // Node keeps the material in 16 bits
+#define RT_MAX_MATERIALS 65535     // Node keeps the material in 16 bits
 // The highest bounce limit B any front end, scene file or sweep accepts: a global ray tree at
 // B=16 already needs 2^17 nodes per pixel of a transparent scene.
 #define RT_MAX_BOUNCE_LIMIT 16
@@ -153,14 +152,14 @@ typedef struct RenderSettings {
     int32_t aaSamples;      // N: N x N sub-pixel samples
     int32_t sampleIndex;    // which sub-pixel sample this launch renders (AA in passes)
     int32_t sphereCount, planeCount, triangleCount, meshCount, lightCount, materialCount;
-    float shadowStrength;   // fully occluded light keeps (1 - shadowStrength) of its contribution
-    int32_t cubemapSize;    // face edge in texels; 0 = sky gradient
-    int32_t rowOffset;      // first image row of this launch (tiling)
+    float shadowStrength;  // fully occluded light keeps (1 - shadowStrength) of its contribution
+    int32_t cubemapSize;   // face edge in texels; 0 = sky gradient
+    int32_t rowOffset;     // first image row of this launch (tiling)
     Float3 skyZenith;
     Float3 skyHorizon;
     Float3 skyGround;
     Camera camera;
-    Grid grid;              // filled by DeviceScene::setArgs, not by makeSettings
+    Grid grid;  // filled by DeviceScene::setArgs, not by makeSettings
 } RenderSettings;
 
 // Node kinds: what the ray hit.
@@ -281,7 +280,8 @@ static_assert(offsetof(Material, diffuse2) == 64);
 static_assert(sizeof(Sphere) == 32);
 static_assert(sizeof(Plane) == 32);
 static_assert(sizeof(Triangle) == 80);
-static_assert(offsetof(Triangle, v1) == 12 && offsetof(Triangle, v2) == 24);  // Hit_Triangle's loads
+static_assert(offsetof(Triangle, v1) == 12 &&
+              offsetof(Triangle, v2) == 24);  // Hit_Triangle's loads
 static_assert(sizeof(MeshInstance) == 64);
 static_assert(sizeof(Light) == 32);
 static_assert(sizeof(Camera) == 32);

@@ -37,12 +37,18 @@ inline uint Cwbvh_Enter(float4 w0, float4 w2, float4 w3, float4 w4, float3 rayOr
     float3 scale = step * inv, offset = (w0.xyz - rayOrigin) * inv;
     uint2 loX = as_uint2(w2.xy), loY = as_uint2(w2.zw), loZ = as_uint2(w3.xy);
     uint2 hiX = as_uint2(w3.zw), hiY = as_uint2(w4.xy), hiZ = as_uint2(w4.zw);
-    float8 nx = fma(convert_float8(as_uchar8(inv.x < 0.0f ? hiX : loX)), (float8)(scale.x), (float8)(offset.x));
-    float8 fx = fma(convert_float8(as_uchar8(inv.x < 0.0f ? loX : hiX)), (float8)(scale.x), (float8)(offset.x));
-    float8 ny = fma(convert_float8(as_uchar8(inv.y < 0.0f ? hiY : loY)), (float8)(scale.y), (float8)(offset.y));
-    float8 fy = fma(convert_float8(as_uchar8(inv.y < 0.0f ? loY : hiY)), (float8)(scale.y), (float8)(offset.y));
-    float8 nz = fma(convert_float8(as_uchar8(inv.z < 0.0f ? hiZ : loZ)), (float8)(scale.z), (float8)(offset.z));
-    float8 fz = fma(convert_float8(as_uchar8(inv.z < 0.0f ? loZ : hiZ)), (float8)(scale.z), (float8)(offset.z));
+    float8 nx = fma(convert_float8(as_uchar8(inv.x < 0.0f ? hiX : loX)), (float8)(scale.x),
+                    (float8)(offset.x));
+    float8 fx = fma(convert_float8(as_uchar8(inv.x < 0.0f ? loX : hiX)), (float8)(scale.x),
+                    (float8)(offset.x));
+    float8 ny = fma(convert_float8(as_uchar8(inv.y < 0.0f ? hiY : loY)), (float8)(scale.y),
+                    (float8)(offset.y));
+    float8 fy = fma(convert_float8(as_uchar8(inv.y < 0.0f ? loY : hiY)), (float8)(scale.y),
+                    (float8)(offset.y));
+    float8 nz = fma(convert_float8(as_uchar8(inv.z < 0.0f ? hiZ : loZ)), (float8)(scale.z),
+                    (float8)(offset.z));
+    float8 fz = fma(convert_float8(as_uchar8(inv.z < 0.0f ? loZ : hiZ)), (float8)(scale.z),
+                    (float8)(offset.z));
     float8 enter = fmax(fmax(nx, ny), fmax(nz, (float8)(0.0f)));
     float8 leave = fmin(fmin(fx, fy), fmin(fz, (float8)(tMax)));
     int8 bits = (enter <= leave) & (int8)(1, 2, 4, 8, 16, 32, 64, 128);

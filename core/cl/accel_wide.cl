@@ -18,8 +18,8 @@ inline float Wide_Step(uchar e) { return as_float((uint)e << 23); }
 // so mad() and the host's arithmetic agree up to the rounding of one addition; the boxes are
 // padded far beyond that (core/accel.cpp kPad).
 inline float4 Wide_Enter(global const WideNode* n, float3 rayOrigin, float3 inv, float tMax) {
-    float3 step = (float3)(Wide_Step(n->exponent[0]), Wide_Step(n->exponent[1]),
-                           Wide_Step(n->exponent[2]));
+    float3 step =
+        (float3)(Wide_Step(n->exponent[0]), Wide_Step(n->exponent[1]), Wide_Step(n->exponent[2]));
     float3 a = (f3(n->origin) - rayOrigin) * inv;
     float3 b = step * inv;
     float4 x0 = mad(convert_float4(vload4(0, n->loX)), b.x, a.x);

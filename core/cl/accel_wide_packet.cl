@@ -266,8 +266,7 @@ inline intP Packet_Triangle(global const Triangle* tri, const RayPacket* r, floa
     floatP v = f * (r->dx * qx + r->dy * qy + r->dz * qz);
     floatP t = f * (e2.x * qx + e2.y * qy + e2.z * qz);
     // Triangle_Intersect's early outs, then Hit_Triangle's 0 < t < hit->t.
-    intP miss = (a == 0.0f) | (u < 0.0f) | (u > 1.0f) | (v < 0.0f) | (u + v > 1.0f) |
-                (t <= 0.0f);
+    intP miss = (a == 0.0f) | (u < 0.0f) | (u > 1.0f) | (v < 0.0f) | (u + v > 1.0f) | (t <= 0.0f);
     *tOut = t;
     *uOut = u;
     *vOut = v;
@@ -279,8 +278,8 @@ inline intP Packet_Triangle(global const Triangle* tri, const RayPacket* r, floa
 // Tests the triangles of one leaf for every ray. Closest hit: a ray's hit becomes each nearer
 // triangle (Hit_Triangle). Any hit: a ray that is occluded gets t = 0, which no box or triangle
 // passes.
-inline void Packet_Leaf(const SceneData* sc, int first, int count, const RayPacket* r,
-                        PacketHit* h, bool anyHit) {
+inline void Packet_Leaf(const SceneData* sc, int first, int count, const RayPacket* r, PacketHit* h,
+                        bool anyHit) {
     for (int i = first; i < first + count; ++i) {
         floatP t, u, v;
         intP hit = Packet_Triangle(sc->triangles + i, r, h->t, &t, &u, &v);
@@ -350,10 +349,10 @@ inline void Wide_QueryPacket(const SceneData* sc, const RayPacket* r, PacketHit*
         // visited.
         floatP t[4];
         for (int k = 0; k < 4; ++k)
-            t[k] = n->child[k] == -1 ? (floatP)(INFINITY)
-                                     : Packet_Enter(&slabs, slabs.lo[0][k], slabs.lo[1][k],
-                                                    slabs.lo[2][k], slabs.hi[0][k],
-                                                    slabs.hi[1][k], slabs.hi[2][k], h->t);
+            t[k] = n->child[k] == -1
+                       ? (floatP)(INFINITY)
+                       : Packet_Enter(&slabs, slabs.lo[0][k], slabs.lo[1][k], slabs.lo[2][k],
+                                      slabs.hi[0][k], slabs.hi[1][k], slabs.hi[2][k], h->t);
         // Leaves first: hits there shorten the rays before the inner children are ordered.
         for (int k = 0; k < 4; ++k) {
             if (n->count[k] == 0 || !Packet_Any(t[k] < h->t)) continue;
@@ -427,7 +426,8 @@ inline RayPacket Packet_Load(global const float8* rays, int first, int count, fl
     float o[3 * RT_PACKET], d[3 * RT_PACKET], tm[RT_PACKET];
     for (int j = 0; j < RT_PACKET; ++j) {
         bool used = first + j < count;
-        float8 ray = used ? rays[first + j] : (float8)(0.0f, 0.0f, 0.0f, 0.0f, 1.0f, 0.0f, 0.0f, 0.0f);
+        float8 ray =
+            used ? rays[first + j] : (float8)(0.0f, 0.0f, 0.0f, 0.0f, 1.0f, 0.0f, 0.0f, 0.0f);
         o[j] = ray.s0;
         o[RT_PACKET + j] = ray.s1;
         o[2 * RT_PACKET + j] = ray.s2;

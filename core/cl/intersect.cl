@@ -79,9 +79,12 @@ inline float Triangle_Intersect(Ray ray, float3 v0, float3 v1, float3 v2, float2
     }
     float sx = component(ray.dir, kx) / dz, sy = component(ray.dir, ky) / dz, sz = 1.0f / dz;
     float3 A = v0 - ray.origin, B = v1 - ray.origin, C = v2 - ray.origin;
-    float ax = component(A, kx) - sx * component(A, kz), ay = component(A, ky) - sy * component(A, kz);
-    float bx = component(B, kx) - sx * component(B, kz), by = component(B, ky) - sy * component(B, kz);
-    float cx = component(C, kx) - sx * component(C, kz), cy = component(C, ky) - sy * component(C, kz);
+    float ax = component(A, kx) - sx * component(A, kz),
+          ay = component(A, ky) - sy * component(A, kz);
+    float bx = component(B, kx) - sx * component(B, kz),
+          by = component(B, ky) - sy * component(B, kz);
+    float cx = component(C, kx) - sx * component(C, kz),
+          cy = component(C, ky) - sy * component(C, kz);
     float U = cx * by - cy * bx, V = ax * cy - ay * cx, W = bx * ay - by * ax;
     if ((U < 0.0f || V < 0.0f || W < 0.0f) && (U > 0.0f || V > 0.0f || W > 0.0f)) return RT_MISS;
     float det = U + V + W;

@@ -126,8 +126,8 @@ kernel void Probe_Spawn(RT_SCENE_PARAMS, global const float* rays, int spawn, gl
         if (cosG == 0.0f) continue;
         bool out_ = cosG > 0.0f;
         Hit h = Scene_Intersect(&sc, makeRay(out_ ? outer : inner, w), INFINITY);
-        bool sameObject = h.kind == node.kind &&
-                          (node.kind == RT_KIND_SPHERE ? h.object == node.object : false);
+        bool sameObject =
+            h.kind == node.kind && (node.kind == RT_KIND_SPHERE ? h.object == node.object : false);
 #ifdef RT_HAS_TRIANGLES
         if (node.kind == RT_KIND_TRIANGLE && h.kind == RT_KIND_TRIANGLE)
             sameObject = sc.triangles[h.object].mesh == mesh;
@@ -212,14 +212,14 @@ kernel void Probe_Shade(RT_SCENE_PARAMS, global const float* rays, global float*
     Node nodes[RT_TREE_NODES];
     float3 colors[RT_TREE_NODES];
     // Rays without a pixel: the sampler key of pixel i of row 0, sample 0.
-    nodes[0] = RayTree_TraceNode(&sc,
-                                 makeRay((float3)(r[0], r[1], r[2]), (float3)(r[3], r[4], r[5])),
-                                 RT_RAY_PRIMARY, Sampling_PointKey((int)i, 0, 0, 0));
+    nodes[0] =
+        RayTree_TraceNode(&sc, makeRay((float3)(r[0], r[1], r[2]), (float3)(r[3], r[4], r[5])),
+                          RT_RAY_PRIMARY, Sampling_PointKey((int)i, 0, 0, 0));
     for (int k = 1; k < RT_TREE_NODES; ++k) {
         int parent = (k - 1) / RT_BRANCH;
         Ray ray;
-        if (RayTree_ChildRay(&sc, &nodes[parent], RayTree_Depth(parent),
-                             k - 1 - parent * RT_BRANCH, &ray))
+        if (RayTree_ChildRay(&sc, &nodes[parent], RayTree_Depth(parent), k - 1 - parent * RT_BRANCH,
+                             &ray))
             nodes[k] = RayTree_TraceNode(&sc, ray, RayTree_SlotType(k),
                                          Sampling_PointKey((int)i, 0, 0, RayTree_Depth(k)));
         else

@@ -1,10 +1,10 @@
 // rtlab — the per-pixel ray tree (report 3.2, core/SHADING.md sections 6 and 8). Both pipelines
 // build and combine trees with these functions and nothing else, which is what makes their
 // images bit-identical (the tree wavefront's image kernel visits only traced slots, but shades
-// each with RayTree_NodeColor on the same inputs RayTree_Combine gives it). Node i at depth k has children i*C + 1 + slot (slot 0 reflection,
-// slot 1 refraction); C = RT_BRANCH. A tree of B levels below the root has N nodes
-// (RayTree_NodeCount); programs that keep a whole tree in private memory know N at build time
-// as RT_TREE_NODES.
+// each with RayTree_NodeColor on the same inputs RayTree_Combine gives it). Node i at depth k has
+// children i*C + 1 + slot (slot 0 reflection, slot 1 refraction); C = RT_BRANCH. A tree of B levels
+// below the root has N nodes (RayTree_NodeCount); programs that keep a whole tree in private memory
+// know N at build time as RT_TREE_NODES.
 #ifndef RTLAB_CL_RAYTREE
 #define RTLAB_CL_RAYTREE
 #include "camera.cl"
@@ -193,9 +193,9 @@ inline Node RayTree_TraceSurface(const SceneData* sc, Ray ray, int type) {
     return RayTree_Surface(sc, ray, Scene_Intersect(sc, ray, INFINITY));
 }
 
-
 // The child ray of `parent` (at `depth`) in `slot`, or false when the parent has no such child.
-inline bool RayTree_ChildRay(const SceneData* sc, const Node* parent, int depth, int slot, Ray* out) {
+inline bool RayTree_ChildRay(const SceneData* sc, const Node* parent, int depth, int slot,
+                             Ray* out) {
     if (!(parent->flags & RT_NODE_TRACED) || parent->kind == RT_KIND_MISS) return false;
     if (depth >= sc->settings.bounces) return false;
     Material m = sc->materials[parent->material];

@@ -19,7 +19,7 @@ typedef struct SceneData {
     global const BvhNode* bvh;  // RT_ACCEL_BVH: root at 0; RT_ACCEL_WIDE, _CWBVH: their nodes
     global const int* cells;    // RT_ACCEL_GRID: cell offsets, then references (core/accel.h);
                                 // RT_ACCEL_CWBVH: CwbvhPrim records
-    global uint* rayCounts;  // RT_RAY_* counters, written only when RT_COUNT_RAYS is defined
+    global uint* rayCounts;     // RT_RAY_* counters, written only when RT_COUNT_RAYS is defined
     RenderSettings settings;
 } SceneData;
 
@@ -34,15 +34,15 @@ typedef struct SceneData {
 // lanes and one step (core/types.h, RT_COUNT_LANES_ACTIVE). NVIDIA only (PTX's activemask and
 // laneid), and only in the untimed counting frame: the host asks for it with RT_COUNT_LANES.
 #if defined(RT_COUNT_RAYS) && defined(RT_COUNT_LANES)
-#define RT_COUNT_WARP_STEP(sc)                                                           \
-    do {                                                                                 \
-        uint rtMask_, rtLane_;                                                           \
-        __asm__ volatile("activemask.b32 %0;" : "=r"(rtMask_));                          \
-        __asm__ volatile("mov.u32 %0, %%laneid;" : "=r"(rtLane_));                       \
-        if ((rtMask_ & ((1u << rtLane_) - 1u)) == 0u) {                                  \
-            atomic_add(&(sc)->rayCounts[RT_COUNT_LANES_ACTIVE], popcount(rtMask_));      \
-            atomic_inc(&(sc)->rayCounts[RT_COUNT_WARP_STEPS]);                           \
-        }                                                                                \
+#define RT_COUNT_WARP_STEP(sc)                                                      \
+    do {                                                                            \
+        uint rtMask_, rtLane_;                                                      \
+        __asm__ volatile("activemask.b32 %0;" : "=r"(rtMask_));                     \
+        __asm__ volatile("mov.u32 %0, %%laneid;" : "=r"(rtLane_));                  \
+        if ((rtMask_ & ((1u << rtLane_) - 1u)) == 0u) {                             \
+            atomic_add(&(sc)->rayCounts[RT_COUNT_LANES_ACTIVE], popcount(rtMask_)); \
+            atomic_inc(&(sc)->rayCounts[RT_COUNT_WARP_STEPS]);                      \
+        }                                                                           \
     } while (0)
 #else
 #define RT_COUNT_WARP_STEP(sc)
@@ -51,27 +51,25 @@ typedef struct SceneData {
 // Kernel parameters and their packing into a SceneData; every kernel takes the scene this way.
 // The host binds them by these names (DeviceScene::setArgs, rt::Kernel), so renaming one here
 // means renaming it there.
-#define RT_SCENE_PARAMS                                                                     \
-    global const Sphere *spheres, global const Plane *planes,                               \
-        global const Triangle *triangles, global const MeshInstance *meshes,                \
-        global const Kdop *kdops, global const Light *lights,                               \
-        global const Material *materials, global const float *cubemap,                      \
-        global const BvhNode *bvh, global const int *cells, global uint *rayCounts,         \
-        const RenderSettings settings
+#define RT_SCENE_PARAMS                                                                           \
+    global const Sphere *spheres, global const Plane *planes, global const Triangle *triangles,   \
+        global const MeshInstance *meshes, global const Kdop *kdops, global const Light *lights,  \
+        global const Material *materials, global const float *cubemap, global const BvhNode *bvh, \
+        global const int *cells, global uint *rayCounts, const RenderSettings settings
 
-#define RT_SCENE_INIT(sc)          \
-    SceneData sc;                  \
-    sc.spheres = spheres;          \
-    sc.planes = planes;            \
-    sc.triangles = triangles;      \
-    sc.meshes = meshes;            \
-    sc.kdops = kdops;              \
-    sc.lights = lights;            \
-    sc.materials = materials;      \
-    sc.cubemap = cubemap;          \
-    sc.bvh = bvh;                  \
-    sc.cells = cells;              \
-    sc.rayCounts = rayCounts;      \
+#define RT_SCENE_INIT(sc)     \
+    SceneData sc;             \
+    sc.spheres = spheres;     \
+    sc.planes = planes;       \
+    sc.triangles = triangles; \
+    sc.meshes = meshes;       \
+    sc.kdops = kdops;         \
+    sc.lights = lights;       \
+    sc.materials = materials; \
+    sc.cubemap = cubemap;     \
+    sc.bvh = bvh;             \
+    sc.cells = cells;         \
+    sc.rayCounts = rayCounts; \
     sc.settings = settings
 
 typedef struct Hit {

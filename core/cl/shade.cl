@@ -2,8 +2,8 @@
 // (core/SHADING.md sections 3 to 9). Shared by both pipelines.
 #ifndef RTLAB_CL_SHADE
 #define RTLAB_CL_SHADE
-#include "scene.cl"
 #include "sampling.h"  // the shadow samples' hash, shared with the CPU reference
+#include "scene.cl"
 #ifdef RT_HAS_PROCEDURAL
 #include "procedural.cl"
 #endif
@@ -43,7 +43,8 @@ inline float3 Cubemap_Lookup(const SceneData* sc, float3 d) {
     float x0 = floor(fx), y0 = floor(fy);
     float tx = fx - x0, ty = fy - y0;
     int ix = (int)x0, iy = (int)y0;
-    float3 top = Cubemap_Texel(sc, face, ix, iy) * (1.0f - tx) + Cubemap_Texel(sc, face, ix + 1, iy) * tx;
+    float3 top =
+        Cubemap_Texel(sc, face, ix, iy) * (1.0f - tx) + Cubemap_Texel(sc, face, ix + 1, iy) * tx;
     float3 bot = Cubemap_Texel(sc, face, ix, iy + 1) * (1.0f - tx) +
                  Cubemap_Texel(sc, face, ix + 1, iy + 1) * tx;
     return top * (1.0f - ty) + bot * ty;
@@ -148,7 +149,7 @@ typedef struct LightSamples {
 } LightSamples;
 
 RT_INLINE LightSamples Shade_LightSamplesFrom(const SceneData* sc, float3 p, float3 n, int j,
-                                           uint key) {
+                                              uint key) {
     Light light = sc->lights[j];
     LightSamples s;
     s.center = f3(light.position);
@@ -182,7 +183,7 @@ RT_INLINE float3 Shade_LightPoint(const LightSamples* s, uint key, int j, int k)
 // Occluded shadow rays toward light j from `origin`, the offset start of hit point p with
 // shading normal n; 0 when the light is behind the surface. key: as Shade_LightSamplesFrom.
 RT_INLINE int Shade_OcclusionFrom(const SceneData* sc, float3 p, float3 n, float3 origin, int j,
-                               uint key) {
+                                  uint key) {
     LightSamples s = Shade_LightSamplesFrom(sc, p, n, j, key);
     int occluded = 0;
     for (int k = 0; k < s.count; ++k) {

@@ -6,8 +6,7 @@
 #include "scene.cl"
 
 // From: rays. To: t of the closest hit below tMax, -1 on a miss.
-kernel void Rays_Closest(RT_SCENE_PARAMS, global const float8* rays, global float* t,
-                           int count) {
+kernel void Rays_Closest(RT_SCENE_PARAMS, global const float8* rays, global float* t, int count) {
     size_t i = get_global_id(0);
     if (i >= (size_t)count) return;  // the work-group padding
     RT_SCENE_INIT(sc);
@@ -17,8 +16,8 @@ kernel void Rays_Closest(RT_SCENE_PARAMS, global const float8* rays, global floa
 }
 
 // From: rays. To: 1 where something lies between the origin and tMax, else 0.
-kernel void Rays_Occluded(RT_SCENE_PARAMS, global const float8* rays,
-                            global int* occluded, int count) {
+kernel void Rays_Occluded(RT_SCENE_PARAMS, global const float8* rays, global int* occluded,
+                          int count) {
     size_t i = get_global_id(0);
     if (i >= (size_t)count) return;  // the work-group padding
     RT_SCENE_INIT(sc);
@@ -46,8 +45,8 @@ kernel void Rays_ClosestPacket(RT_SCENE_PARAMS, global const float8* rays, globa
 }
 
 // From: rays, RT_PACKET per work-item. To: as Rays_Occluded, ray by ray.
-kernel void Rays_OccludedPacket(RT_SCENE_PARAMS, global const float8* rays,
-                                global int* occluded, int count) {
+kernel void Rays_OccludedPacket(RT_SCENE_PARAMS, global const float8* rays, global int* occluded,
+                                int count) {
     int first = (int)get_global_id(0) * RT_PACKET;
     if (first >= count) return;  // the work-group padding
     RT_SCENE_INIT(sc);

@@ -28,15 +28,15 @@ typedef struct QueueRays {
     global int* meta;   // depth << 8 | RT_RAY_* type
 } QueueRays;
 
-#define QUEUE_RAYS_PARAMS(p)                                                            \
-    global float *p##Origin, global float *p##Dir, global float *p##Weight,             \
-        global int *p##Pixel, global int *p##Meta
-#define QUEUE_RAYS_INIT(p)       \
-    QueueRays p;                 \
-    p.origin = p##Origin;        \
-    p.dir = p##Dir;              \
-    p.weight = p##Weight;        \
-    p.pixel = p##Pixel;          \
+#define QUEUE_RAYS_PARAMS(p)                                                                      \
+    global float *p##Origin, global float *p##Dir, global float *p##Weight, global int *p##Pixel, \
+        global int *p##Meta
+#define QUEUE_RAYS_INIT(p) \
+    QueueRays p;           \
+    p.origin = p##Origin;  \
+    p.dir = p##Dir;        \
+    p.weight = p##Weight;  \
+    p.pixel = p##Pixel;    \
     p.meta = p##Meta
 
 // A launch's real length: the host's `n` (readback mode, word < 0), or, when launches are sized
@@ -127,8 +127,9 @@ inline void Queue_GroupPushesReserve(local const int* count, local int* base,
     barrier(CLK_LOCAL_MEM_FENCE);
 }
 
-// From: pool [0, n) (n: see Queue_Length) / To: nodes[i], class queues, shadow queue, per-bounce histogram.
-// Pushes are aggregated per work-group in local memory: one global atomic per queue per group.
+// From: pool [0, n) (n: see Queue_Length) / To: nodes[i], class queues, shadow queue, per-bounce
+// histogram. Pushes are aggregated per work-group in local memory: one global atomic per queue per
+// group.
 kernel void Queue_Extend(RT_SCENE_PARAMS, QUEUE_RAYS_PARAMS(rays), int n, global Node* nodes,
                          global int* classQueues, int pool, global int* shadowQueue,
                          global int* counters, int nWord, global uint* rayTally) {
@@ -181,8 +182,8 @@ kernel void Queue_Shadow(RT_SCENE_PARAMS, global Node* nodes, global const int* 
 // One ray of class `cls` (a constant in each kernel below, so each compiles to one code path):
 // its contribution to contrib[i], its children to staging slots [C i, C i + children).
 inline void Queue_Shade(const SceneData* sc, int cls, int i, const QueueRays* rays,
-                        global const Node* nodes, const QueueRays* staging,
-                        global float* contrib, global int* children) {
+                        global const Node* nodes, const QueueRays* staging, global float* contrib,
+                        global int* children) {
     Pending p = Queue_Load(rays, i);
     float3 term;
     int c = 0;
@@ -203,17 +204,17 @@ inline void Queue_Shade(const SceneData* sc, int cls, int i, const QueueRays* ra
     children[i] = c;
 }
 
-#define QUEUE_SHADE_KERNEL(name, cls)                                                          \
-    kernel void name(RT_SCENE_PARAMS, QUEUE_RAYS_PARAMS(rays), global const Node* nodes,       \
-                     global const int* classQueues, int pool, global const int* counters,      \
+#define QUEUE_SHADE_KERNEL(name, cls)                                                           \
+    kernel void name(RT_SCENE_PARAMS, QUEUE_RAYS_PARAMS(rays), global const Node* nodes,        \
+                     global const int* classQueues, int pool, global const int* counters,       \
                      QUEUE_RAYS_PARAMS(staging), global float* contrib, global int* children) { \
-        int k = get_global_id(0);                                                              \
-        if (k >= counters[RT_Q_COUNT + cls]) return;                                           \
-        RT_SCENE_INIT(sc);                                                                     \
-        QUEUE_RAYS_INIT(rays);                                                                 \
-        QUEUE_RAYS_INIT(staging);                                                              \
-        Queue_Shade(&sc, cls, classQueues[cls * pool + k], &rays, nodes, &staging, contrib,    \
-                    children);                                                                 \
+        int k = get_global_id(0);                                                               \
+        if (k >= counters[RT_Q_COUNT + cls]) return;                                            \
+        RT_SCENE_INIT(sc);                                                                      \
+        QUEUE_RAYS_INIT(rays);                                                                  \
+        QUEUE_RAYS_INIT(staging);                                                               \
+        Queue_Shade(&sc, cls, classQueues[cls * pool + k], &rays, nodes, &staging, contrib,     \
+                    children);                                                                  \
     }
 
 // From: class queue / To: contrib, children, staging.

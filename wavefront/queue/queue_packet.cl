@@ -87,10 +87,9 @@ inline Hit PacketLanes_Hit(const PacketLanes* l, int j) {
 }
 
 // From: pool [RT_PACKET g, RT_PACKET (g + 1)) of [0, n) / To: as Queue_Extend, ray by ray.
-kernel void Queue_ExtendPacket(RT_SCENE_PARAMS, QUEUE_RAYS_PARAMS(rays), int n,
-                               global Node* nodes, global int* classQueues, int pool,
-                               global int* shadowQueue, global int* counters, int nWord,
-                               global uint* rayTally) {
+kernel void Queue_ExtendPacket(RT_SCENE_PARAMS, QUEUE_RAYS_PARAMS(rays), int n, global Node* nodes,
+                               global int* classQueues, int pool, global int* shadowQueue,
+                               global int* counters, int nWord, global uint* rayTally) {
     local int count[RT_Q_CLASSES + 1], base[RT_Q_CLASSES + 1];
     local int histogram[(RT_Q_MAX_DEPTH + 1) * RT_Q_CLASSES];
     int lid = get_local_id(0), size = get_local_size(0), g = get_global_id(0);
@@ -136,10 +135,9 @@ kernel void Queue_ExtendPacket(RT_SCENE_PARAMS, QUEUE_RAYS_PARAMS(rays), int n,
 
 // From: shadow queue [RT_PACKET g, RT_PACKET (g + 1)), pool / To: nodes[i].occluded, as
 // Queue_Shadow: sample k of light j of every lane goes in one packet.
-kernel void Queue_ShadowPacket(RT_SCENE_PARAMS, global Node* nodes,
-                               global const int* shadowQueue, global const int* counters,
-                               global const int* rayPixel, global const int* rayMeta,
-                               global uint* rayTally) {
+kernel void Queue_ShadowPacket(RT_SCENE_PARAMS, global Node* nodes, global const int* shadowQueue,
+                               global const int* counters, global const int* rayPixel,
+                               global const int* rayMeta, global uint* rayTally) {
     int first = get_global_id(0) * RT_PACKET;
     int lanes = min(counters[RT_Q_SHADOW] - first, RT_PACKET);
     if (lanes <= 0) return;

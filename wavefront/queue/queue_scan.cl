@@ -41,7 +41,8 @@ kernel void Queue_ScanSums(global int* blockSums, int blocks, global int* counte
     local int tmp[RT_QUEUE_GROUP];
     int lid = get_local_id(0), carry = 0;
     // Launches sized by a bound: the blocks past the queue's real length were not scanned.
-    if (liveWord >= 0) blocks = min(blocks, (counters[liveWord] + RT_QUEUE_GROUP - 1) / RT_QUEUE_GROUP);
+    if (liveWord >= 0)
+        blocks = min(blocks, (counters[liveWord] + RT_QUEUE_GROUP - 1) / RT_QUEUE_GROUP);
     for (int b0 = 0; b0 < blocks; b0 += RT_QUEUE_GROUP) {
         int b = b0 + lid;
         int v = b < blocks ? blockSums[b] : 0;
@@ -74,8 +75,10 @@ kernel void Queue_FindCut(global const int* children, global const int* offsets,
     int lo = 0, hi = n - 1;  // the answer is in [lo, hi]: the total is over the pool
     while (lo < hi) {
         int mid = (lo + hi) / 2;
-        if (Queue_Offset(offsets, blockSums, mid) + children[mid] > pool) hi = mid;
-        else lo = mid + 1;
+        if (Queue_Offset(offsets, blockSums, mid) + children[mid] > pool)
+            hi = mid;
+        else
+            lo = mid + 1;
     }
     int cut = lo;
     while (cut > 0 && pixels[cut - 1] == pixels[lo]) --cut;
@@ -83,10 +86,10 @@ kernel void Queue_FindCut(global const int* children, global const int* offsets,
     counters[RT_Q_KEPT] = cut > 0 ? Queue_Offset(offsets, blockSums, cut) : 0;
 }
 
-// From: contrib of rays [0, cut) (cut: see Queue_Length) / To: the pixel's running sum of this AA sample. The first ray
-// of each path's run adds the run in pool order; a path's first bounce starts the sum from zero,
-// as the megakernel's colour does. Ray counts: a run whose rays have no children ends its path,
-// whose rays (the pixel's tally, queue.cl) then join the frame's counters.
+// From: contrib of rays [0, cut) (cut: see Queue_Length) / To: the pixel's running sum of this AA
+// sample. The first ray of each path's run adds the run in pool order; a path's first bounce starts
+// the sum from zero, as the megakernel's colour does. Ray counts: a run whose rays have no children
+// ends its path, whose rays (the pixel's tally, queue.cl) then join the frame's counters.
 kernel void Queue_Accumulate(global const int* pixels, global const int* meta,
                              global const float* contrib, int cut, global float* sums,
                              global const int* counters, int cutWord, global const int* children,

@@ -42,9 +42,9 @@ kernel void Wavefront_Trace(RT_SCENE_PARAMS, global Node* tree, global uint* tra
     if (x >= settings.width || y >= rowEnd) return;
     RT_SCENE_INIT(sc);
     WaveTree t = Wavefront_Tree(&settings, x, y, rowEnd);
-    tree[t.pixel] = RayTree_TraceNode(&sc, RayTree_PrimaryRay(&sc, x, y, settings.sampleIndex),
-                                      RT_RAY_PRIMARY,
-                                      Sampling_PointKey(x, y, settings.sampleIndex, 0));
+    tree[t.pixel] =
+        RayTree_TraceNode(&sc, RayTree_PrimaryRay(&sc, x, y, settings.sampleIndex), RT_RAY_PRIMARY,
+                          Sampling_PointKey(x, y, settings.sampleIndex, 0));
     uint word = 1u;  // bits of slots [32 * wordIndex, 32 * wordIndex + 32): the root so far
     int wordIndex = 0;
     uint parentWord = 0u;  // a stored word, cached: parents of a word's slots share one or two
@@ -90,9 +90,9 @@ kernel void Wavefront_Trace(RT_SCENE_PARAMS, global Node* tree, global uint* tra
         }
         Ray ray;
         if (RayTree_ChildRay(&sc, &parent, RayTree_Depth(p), i - 1 - p * RT_BRANCH, &ray)) {
-            tree[(size_t)i * t.pixels + t.pixel] = RayTree_TraceNode(
-                &sc, ray, RayTree_SlotType(i),
-                Sampling_PointKey(x, y, settings.sampleIndex, RayTree_Depth(i)));
+            tree[(size_t)i * t.pixels + t.pixel] =
+                RayTree_TraceNode(&sc, ray, RayTree_SlotType(i),
+                                  Sampling_PointKey(x, y, settings.sampleIndex, RayTree_Depth(i)));
             word |= 1u << (i & 31);
             levelTraced = true;
         }
@@ -135,8 +135,8 @@ inline float3 Wavefront_Combine(const SceneData* sc, global const Node* tree,
             continue;
         }
         Node node = tree[(size_t)f->slot * t.pixels + t.pixel];
-        float3 color = RayTree_NodeColor(sc, &node, f->hasRefl != 0, f->refl, f->hasRefr != 0,
-                                         f->refr);
+        float3 color =
+            RayTree_NodeColor(sc, &node, f->hasRefl != 0, f->refl, f->hasRefr != 0, f->refr);
         if (top == 0) return color;
         WaveFrame* up = &stack[--top];
         if (up->next == 1) {
