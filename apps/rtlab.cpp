@@ -10,8 +10,8 @@
 #include <string>
 
 #include "apps/commands.h"
-#include "apps/parse_error.h"
 #include "bench/watchdog.h"
+#include "cli/parse_error.h"
 #include "core/cl_runtime.h"
 #include "core/error.h"
 #include "core/version.h"

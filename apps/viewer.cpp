@@ -14,11 +14,11 @@
 #include <vector>
 
 #include "apps/options.h"
-#include "apps/parse_error.h"
 #include "apps/viewer_app.h"
 #include "apps/viewer_gl.h"
 #include "apps/viewer_overlay.h"
 #include "apps/viewer_renderer.h"
+#include "cli/parse_error.h"
 #include "core/error.h"
 #include "core/scene_loader.h"
 #include "core/version.h"

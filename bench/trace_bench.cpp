@@ -22,11 +22,11 @@
 #include <map>
 #include <thread>
 
-#include "apps/parse_error.h"
 #include "bench/embree_peer.h"
 #include "bench/measure.h"
 #include "bench/ray_batch.h"
 #include "bench/trace_visits.h"
+#include "cli/parse_error.h"
 #include "core/accel.h"
 #include "core/cl_runtime.h"
 #include "core/error.h"

@@ -1,4 +1,4 @@
-#include "apps/parse_error.h"
+#include "cli/parse_error.h"
 
 #include <algorithm>
 #include <cmath>
