@@ -85,18 +85,20 @@ int runCompare() {
     double cpuMs = cpu->stats().hostMs;
     if (!a.outputPrefix.empty()) writeImage(reference, a.outputPrefix + "-" + ref.name + ".png");
 
-    std::printf("%-6s %12s %12s %14s %12s %12s %12s %10s %9s\n", "pipe", "device ms", "host ms",
-                "within 2/255", "mean |err|", "max |err|", "rays", "Mrays/s", "launches");
-    std::printf("%-6s %12s %12.2f %14s %12s %12s %12s %10s %9s\n", ref.name.c_str(), "-", cpuMs,
-                "reference", "-", "-", "-", "-", "-");
     const std::vector<std::string> names = registry.names(true);
+    int w = 6;  // the first column: as wide as the longest pipeline name
+    for (const std::string& n : registry.names()) w = std::max(w, int(n.size()));
+    std::printf("%-*s %12s %12s %14s %12s %12s %12s %10s %9s\n", w, "pipe", "device ms", "host ms",
+                "within 2/255", "mean |err|", "max |err|", "rays", "Mrays/s", "launches");
+    std::printf("%-*s %12s %12.2f %14s %12s %12s %12s %10s %9s\n", w, ref.name.c_str(), "-", cpuMs,
+                "reference", "-", "-", "-", "-", "-");
     std::vector<Image> images;
     long long nonfinite = countNonFinite(reference);
     std::vector<std::string> compared;
     for (const std::string& name : names) {
         // Adaptive anti-aliasing is compared only where a pipeline has it (the registry says).
         if (o.adaptiveAa && !registry.get(name).supports.adaptiveAa) {
-            std::printf("%-6s %12s   (no adaptive anti-aliasing: not compared)\n", name.c_str(),
+            std::printf("%-*s %12s   (no adaptive anti-aliasing: not compared)\n", w, name.c_str(),
                         "-");
             continue;
         }
@@ -118,7 +120,7 @@ int runCompare() {
             for (int t = 0; t < RT_RAY_TYPES; ++t) rays += p->stats().rays[t];
         ImageDiff d = compareImages(img, reference, 2.0 / 255.0);
         nonfinite += countNonFinite(img);
-        std::printf("%-6s %12.3f %12.3f %13.3f%% %10.3f/255 %8.2f/255 %12llu %10.1f %9d\n",
+        std::printf("%-*s %12.3f %12.3f %13.3f%% %10.3f/255 %8.2f/255 %12llu %10.1f %9d\n", w,
                     name.c_str(), median(dev), median(host), 100.0 * d.fractionWithin,
                     d.meanAbs * 255.0, d.maxAbs * 255.0, rays,
                     median(dev) > 0 ? double(rays) / (median(dev) * 1e3) : 0.0, launches);

@@ -1,0 +1,127 @@
+// rtlab — the persistent megakernel's host driver (persistent.h).
+#include "persistent/persistent.h"
+
+#include <algorithm>
+
+#include "core/error.h"
+#include "core/pipeline_registry.h"
+#include "megakernel/megakernel.h"
+#include "megakernel/megakernel_options.h"
+
+namespace rt {
+
+namespace {
+
+const PipelineOption& groupsOption() {
+    static const PipelineOption o{
+        .name = "persistent-groups",
+        .type = PipelineOption::Type::Integer,
+        .help =
+            "Persistent megakernel: work-groups per compute unit, 1..64; they take pixels "
+            "from a counter until the frame is done [4]",
+        .defaultValue = 4ll,
+        .min = 1,
+        .max = 64,
+        .sweepKey = "persistent-groups",
+        .cellTag = "G",
+        .label = "{} groups per unit",
+    };
+    return o;
+}
+
+}  // namespace
+
+size_t PersistentPipeline::workItems(const DeviceInfo& device, const RenderOptions& o,
+                                     size_t local) {
+    const size_t groups = size_t(groupsOption().integer(o.pipelineOptions));
+    return std::max<cl_uint>(device.computeUnits, 1) * groups * local;
+}
+
+Image PersistentPipeline::renderFrame(const Scene& scene, const RenderOptions& o) {
+    if (o.adaptiveAa && o.aa > 1)
+        throw Error(
+            "--adaptive: the persistent megakernel has no adaptive anti-aliasing (use "
+            "--pipeline mega)",
+            FailureKind::InvalidOption);
+    // The weighted megakernel's program: its stack of pending rays is what a work-item keeps.
+    RenderOptions weighted = o;
+    setMegaLayout(weighted, MegaLayout::Weighted);
+    const std::vector<std::string> defines = MegakernelPipeline::defines(scene, weighted);
+    stats_.privateBytes = size_t(o.bounces * (scene.branching() - 1) + 1) * 64;
+    cl::Program program = this->program("persistent.cl", defines);
+    DeviceScene& deviceScene = this->deviceScene(scene, o.accel);
+    const DeviceInfo& dev = cl_.device();
+    const size_t bytes = size_t(o.width) * o.height * 3 * sizeof(float);
+    try {
+        image_.ensure(cl_, bytes, "the image buffer");
+        next_.ensure(cl_, sizeof(cl_int), "the persistent megakernel's pixel counter");
+    } catch (const cl::Error& e) {
+        throwClError(e, "preparing persistent-megakernel buffers");
+    }
+    stats_.addBuffer("image", bytes);
+
+    Kernel kernel(program, "Persistent_Render");
+    kernel.set("image", image_.get()).set("next", next_.get());
+    const size_t local = dev.isGpu() ? 128 : 64;
+    const size_t most = workItems(dev, o, local);
+    dev::RenderSettings settings = makeSettings(scene, o);
+    deviceScene.setArgs(kernel, settings);
+    std::string key = std::to_string(o.width) + "x" + std::to_string(o.height);
+    for (const std::string& d : defines) key += " " + d;
+    key += " b" + std::to_string(o.bounces) + " g" + std::to_string(most);
+    const int first = o.rowBegin, last = o.lastRow();
+    if (first != 0 || last != o.height)
+        key += " rows " + std::to_string(first) + "-" + std::to_string(last);
+    planner_.begin(o.maxLaunchMs, key, o.width, 1);
+    Image out(o.width, o.height);
+    try {
+        startRayCount(o);
+        // Tiles of whole rows, or of part of one row, when --max-launch-ms asks for them.
+        for (int row0 = first; row0 < last;) {
+            const LaunchTile tile = planner_.next(last - row0);
+            const int start = row0 * o.width + (tile.partialRow() ? tile.col0 : 0);
+            const int count = tile.partialRow() ? tile.cols : tile.rows * o.width;
+            cl_.queue().enqueueFillBuffer(next_.get(), cl_int(0), 0, sizeof(cl_int));
+            kernel.set("first", cl_int(start)).set("count", cl_int(count));
+            const size_t global = std::min(most, (size_t(count) + local - 1) / local * local);
+            cl::Event e;
+            cl_.queue().enqueueNDRangeKernel(kernel.get(), cl::NullRange, cl::NDRange(global),
+                                             cl::NDRange(local), nullptr, &e);
+            e.wait();
+            const double ms = eventMs(e);
+            planner_.record(tile, ms);
+            stats_.addKernel("persistent", ms);
+            ++stats_.launches;
+            if (tile.partialRow() && tile.col0 + tile.cols < o.width) continue;  // row goes on
+            row0 += tile.rows;
+            reportProgress(row0 - first, last - first);
+        }
+        const size_t rowBytes = size_t(o.width) * 3 * sizeof(float);
+        cl_.queue().enqueueReadBuffer(image_.get(), CL_TRUE, size_t(first) * rowBytes,
+                                      size_t(last - first) * rowBytes,
+                                      out.rgb.data() + size_t(first) * o.width * 3);
+        finishRayCount(o);
+    } catch (const cl::Error& e) {
+        throwClError(e, "persistent-megakernel frame on " + dev.name,
+                     "each work-item keeps " + std::to_string(stats_.privateBytes) +
+                         " bytes of pending rays; lower --bounces or --persistent-groups");
+    }
+    stats_.extras["work_items"] = most;
+    return out;
+}
+
+void registerPersistentMegakernel(PipelineRegistry& registry) {
+    PipelineInfo p;
+    p.name = "persist";
+    p.title = "persistent megakernel";
+    p.family = "megakernel";
+    p.description =
+        "the weighted megakernel with persistent threads: a device-filling launch whose "
+        "work-items take pixels from a global counter (--persistent-groups N)";
+    p.supports = {.adaptiveAa = false, .tiling = false, .rowWindow = true};
+    p.options = {groupsOption()};
+    p.make = [](ClContext* cl) { return std::make_unique<PersistentPipeline>(*cl); };
+    registry.add(std::move(p));
+}
+
+}  // namespace rt

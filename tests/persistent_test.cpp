@@ -1,0 +1,113 @@
+// Persistent megakernel: the weighted megakernel's image to the bit on every standard scene,
+// whoever renders which pixel (one work-group per compute unit or many, one launch or pieces
+// under --max-launch-ms, a row window), the same rays counted, and one clear error per option it
+// refuses.
+#include "persistent/persistent.h"
+
+#include <gtest/gtest.h>
+
+#include "core/error.h"
+#include "megakernel/megakernel.h"
+#include "megakernel/megakernel_options.h"
+#include "pipelines/registry.h"
+#include "test_device.h"
+#include "test_images.h"
+#include "test_scenes.h"
+
+namespace rt {
+namespace {
+
+using test::load;
+using test::sameBits;
+
+RenderOptions weighted(const Scene& scene, int bounces, int aa) {
+    RenderOptions o = scene.defaults;
+    o.width = 40;
+    o.height = 30;
+    o.bounces = bounces;
+    o.aa = aa;
+    setMegaLayout(o, MegaLayout::Weighted);
+    return o;
+}
+
+void setGroups(RenderOptions& o, long long groups) {
+    const PipelineInfo& info = pipelineInfo("persist");
+    ASSERT_EQ(info.options.size(), 1u);
+    info.options[0].set(o.pipelineOptions, groups);
+}
+
+class PersistentVsMega : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(PersistentVsMega, SameBitsAsTheWeightedMegakernel) {
+    Scene scene = load(GetParam());
+    MegakernelPipeline mega(test::device());
+    PersistentPipeline persist(test::device());
+    for (int b : {0, 3, 8}) {
+        RenderOptions o = weighted(scene, b, b == 3 ? 2 : 1);
+        const Image m = mega.render(scene, o);
+        EXPECT_TRUE(sameBits(m, persist.render(scene, o))) << GetParam() << " B=" << b;
+        setGroups(o, 1);  // fewer work-items than pixels: each takes many in turn
+        EXPECT_TRUE(sameBits(m, persist.render(scene, o)))
+            << GetParam() << " B=" << b << " 1 group";
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(StandardScenes, PersistentVsMega, ::testing::ValuesIn(test::kScenes));
+
+TEST(Persistent, PiecesAndRowWindowsKeepTheBits) {
+    Scene scene = load("cornell");
+    RenderOptions o = weighted(scene, 4, 1);
+    MegakernelPipeline mega(test::device());
+    PersistentPipeline persist(test::device());
+    const Image m = mega.render(scene, o);
+    RenderOptions capped = o;
+    capped.maxLaunchMs = 1e-6;  // every launch over the cap: a row, or part of one, at a time
+    const Image pieces = persist.render(scene, capped);
+    EXPECT_GT(persist.stats().launches, o.height);
+    EXPECT_TRUE(sameBits(m, pieces));
+    RenderOptions window = o;
+    window.rowBegin = 7;
+    window.rowEnd = 19;
+    const Image part = persist.render(scene, window);
+    for (int y = 7; y < 19; ++y)
+        for (int i = 0; i < o.width * 3; ++i)
+            ASSERT_EQ(part.rgb[size_t(y * o.width * 3 + i)], m.rgb[size_t(y * o.width * 3 + i)])
+                << "row " << y;
+}
+
+TEST(Persistent, CountsTheRaysTheMegakernelCounts) {
+    Scene scene = load("spheres");
+    RenderOptions o = weighted(scene, 5, 2);
+    o.countRays = true;
+    MegakernelPipeline mega(test::device());
+    PersistentPipeline persist(test::device());
+    mega.render(scene, o);
+    persist.render(scene, o);
+    ASSERT_TRUE(persist.stats().raysCounted);
+    EXPECT_EQ(persist.stats().rays, mega.stats().rays);
+    EXPECT_GT(persist.stats().rays[RT_RAY_PRIMARY], 0u);
+}
+
+TEST(Persistent, RefusesAdaptiveAntiAliasingAndGroupsOutOfRange) {
+    Scene scene = load("spheres");
+    RenderOptions o = weighted(scene, 2, 2);
+    o.adaptiveAa = true;
+    PersistentPipeline persist(test::device());
+    try {
+        persist.render(scene, o);
+        ADD_FAILURE() << "no error for --adaptive";
+    } catch (const Error& e) {
+        EXPECT_EQ(e.kind(), FailureKind::InvalidOption);
+        EXPECT_NE(std::string(e.what()).find("--adaptive"), std::string::npos) << e.what();
+    }
+    RenderOptions g = weighted(scene, 2, 1);
+    try {
+        setGroups(g, 0);
+        ADD_FAILURE() << "no error for --persistent-groups 0";
+    } catch (const Error& e) {
+        EXPECT_STREQ(e.what(), "--persistent-groups 0: must be in 1..64");
+    }
+}
+
+}  // namespace
+}  // namespace rt
