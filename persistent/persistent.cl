@@ -2,8 +2,8 @@
 // work-items as the device keeps busy at once, each taking its next pixel from a global counter
 // once its own pixel is done, so that a lane whose ray tree ends early starts another pixel
 // instead of idling until the warp's deepest tree is done. The per-pixel work is the weighted
-// megakernel's (megakernel.cl), so the image is the same to the bit.
-#include "megakernel.cl"
+// megakernel's (megakernel_sample.cl), so the image is the same to the bit.
+#include "megakernel_sample.cl"
 
 // Pixels [first, first + count) of the frame, in row-major order; *next counts the ones taken
 // (zeroed by the host before each launch).
