@@ -29,16 +29,18 @@ std::vector<std::string> MegakernelPipeline::defines(const Scene& scene, const R
     return d;
 }
 
+size_t MegakernelPipeline::privateBytes(const Scene& scene, const RenderOptions& o) {
+    if (megaLayout(o) == MegaLayout::Tree) return treePrivateBytes(scene.branching(), o.bounces);
+    // Pending entries: a ray (2 x float3), a weight (float3) and a depth, 64 bytes.
+    return size_t(weightedStackEntries(scene.branching(), o.bounces)) * 64;
+}
+
 Image MegakernelPipeline::renderFrame(const Scene& scene, const RenderOptions& o) {
     const int branching = scene.branching();
-    if (megaLayout(o) == MegaLayout::Tree) {
+    if (megaLayout(o) == MegaLayout::Tree)
         checkPrivateTree(branching, o.bounces, "megakernel's tree layout",
                          " (or use --layout weighted)");
-        stats_.privateBytes = treePrivateBytes(branching, o.bounces);
-    } else {
-        // Pending entries: a ray (2 x float3), a weight (float3) and a depth, 64 bytes.
-        stats_.privateBytes = size_t(weightedStackEntries(branching, o.bounces)) * 64;
-    }
+    stats_.privateBytes = privateBytes(scene, o);
 
     // The counting frame on NVIDIA also counts the warps' busy lanes (inline PTX); should the
     // driver refuse that, the frame counts rays alone.

@@ -47,7 +47,7 @@ Image PersistentPipeline::renderFrame(const Scene& scene, const RenderOptions& o
     RenderOptions weighted = o;
     setMegaLayout(weighted, MegaLayout::Weighted);
     const std::vector<std::string> defines = MegakernelPipeline::defines(scene, weighted);
-    stats_.privateBytes = size_t(o.bounces * (scene.branching() - 1) + 1) * 64;
+    stats_.privateBytes = MegakernelPipeline::privateBytes(scene, weighted);
     cl::Program program = this->program("persistent.cl", defines);
     DeviceScene& deviceScene = this->deviceScene(scene, o.accel);
     const DeviceInfo& dev = cl_.device();
