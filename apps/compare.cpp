@@ -94,7 +94,7 @@ int runCompare() {
                 "reference", "-", "-", "-", "-", "-");
     std::vector<Image> images;
     long long nonfinite = countNonFinite(reference);
-    std::vector<std::string> compared;
+    std::vector<std::string> compared, notes;
     for (const std::string& name : names) {
         // Adaptive anti-aliasing is compared only where a pipeline has it (the registry says).
         if (o.adaptiveAa && !registry.get(name).supports.adaptiveAa) {
@@ -127,8 +127,11 @@ int runCompare() {
         if (!a.outputPrefix.empty()) writeImage(img, a.outputPrefix + "-" + name + ".png");
         images.push_back(std::move(img));
         compared.push_back(name);
+        if (!p->stats().note.empty()) notes.push_back(p->stats().note);
     }
     std::printf("\n");
+    for (const std::string& note : notes) std::printf("%s\n", note.c_str());
+    if (!notes.empty()) std::printf("\n");
     for (size_t i = 0; i < compared.size(); ++i)
         for (size_t j = i + 1; j < compared.size(); ++j) {
             ImageDiff d = compareImages(images[i], images[j], 0.0, false);

@@ -189,6 +189,7 @@ int runRender() {
     programs.ms -= before.ms;
     writeImage(image, output);
     FrameStats s = pipeline->stats();
+    if (!s.note.empty()) std::fprintf(stderr, "%s\n", s.note.c_str());
     // The frame's host time without the program builds and loads it waited for.
     const double frameHostMs = std::max(0.0, s.hostMs - programs.ms);
     if (a.stats || !a.statsJson.empty()) {

@@ -57,6 +57,9 @@ struct FrameStats {
     AccelStats accel;
     // Pipeline-specific values (numbers or strings), carried as they are into sweep rows.
     nlohmann::json extras = nlohmann::json::object();
+    // One line the pipeline wants its user to read about the frame ("auto: chose queue: 13.1
+    // busy lanes ..."); front ends print it. Empty for most frames.
+    std::string note;
     // Per kernel of the program: registers and spills (NVIDIA), private bytes
     // (core/kernel_resources.h), carried into sweep rows as kernel_resources.
     std::map<std::string, double> kernelResources;

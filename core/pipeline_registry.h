@@ -28,7 +28,8 @@ struct PipelineInfo {
     std::string description;  // what makes it different, for --help
     // The design family the crossover map sets against each other, recorded in every sweep row:
     // "megakernel" (one kernel, a pixel's whole ray tree per work-item) or "wavefront" (kernels
-    // per stage over rays in global memory); "reference" for the CPU oracle.
+    // per stage over rays in global memory); "selector" for one that renders with one of those,
+    // chosen per scene (auto); "reference" for the CPU oracle.
     std::string family;
     bool reference = false;  // the CPU oracle: compared against, never measured
     PipelineSupport supports;

@@ -1,0 +1,260 @@
+// rtlab — `--pipeline auto` (auto.h): the choice, the trial frames and the delegation.
+#include "auto/auto.h"
+
+#include <chrono>
+#include <cstdio>
+#include <limits>
+#include <utility>
+#include <vector>
+
+#include "core/error.h"
+#include "core/pipeline_registry.h"
+#include "megakernel/megakernel.h"
+#include "wavefront/queue/queue.h"
+#include "wavefront/tree/wavefront.h"
+
+namespace rt {
+
+namespace {
+
+enum class AutoChoice { Predict, Measure };
+enum class AutoRule { Device, Gpu, Cpu };
+
+const PipelineOption& choiceOption() {
+    static const PipelineOption o{
+        .name = "auto-choice",
+        .type = PipelineOption::Type::Choice,
+        .help =
+            "Auto: how it picks a design for a scene: predict (busy lanes of a sample of "
+            "warps, traced on the CPU) or measure (two trial frames of each candidate) "
+            "[predict]",
+        .defaultValue = std::string("predict"),
+        .choices = {"predict", "measure"},
+        .sweepKey = "auto-choice",
+        .cellTag = "A",
+        .label = "auto by {}",
+    };
+    return o;
+}
+
+const PipelineOption& ruleOption() {
+    static const PipelineOption o{
+        .name = "auto-rule",
+        .type = PipelineOption::Type::Choice,
+        .help =
+            "Auto, predict: whose fitted rule decides: the device's kind, gpu (the H200 "
+            "map's) or cpu (the PoCL map's) [device]",
+        .defaultValue = std::string("device"),
+        .choices = {"device", "gpu", "cpu"},
+        .sweepKey = "auto-rule",
+        .cellTag = "R",
+        .label = "{} rule",
+    };
+    return o;
+}
+
+std::string format(const char* fmt, double a, double b = 0) {
+    char buf[256];
+    std::snprintf(buf, sizeof buf, fmt, a, b);
+    return buf;
+}
+
+// What a decision depends on: the scene (by address, as DeviceScene keeps it) and every setting
+// but the row window, the launch cap and ray counting, which change how a frame is cut or
+// counted, not which design is fastest for it.
+struct DecisionKey {
+    const Scene* scene = nullptr;
+    int width = 0, height = 0, bounces = 0, shadowSamples = 0, aa = 0;
+    bool adaptive = false, robustSphere = false, watertight = false;
+    RenderOptions::Offset offset{};
+    RenderOptions::Accel accel{};
+    size_t memoryBudget = 0;
+    PipelineOptionValues pipelineOptions;
+    bool operator==(const DecisionKey&) const = default;
+
+    DecisionKey() = default;
+    DecisionKey(const Scene& s, const RenderOptions& o)
+        : scene(&s),
+          width(o.width),
+          height(o.height),
+          bounces(o.bounces),
+          shadowSamples(o.shadowSamples),
+          aa(o.aa),
+          adaptive(o.adaptiveAa && o.aa > 1),
+          robustSphere(o.robustSphere),
+          watertight(o.watertight),
+          offset(o.offset),
+          accel(o.accel),
+          memoryBudget(o.memoryBudget),
+          pipelineOptions(o.pipelineOptions) {}
+};
+
+}  // namespace
+
+std::string AutoDesign::name() const {
+    return pipeline == "mega" ? std::string("mega-") + megaLayoutName(layout) : pipeline;
+}
+
+AutoDesign chooseDesign(const LaneEstimate& e, const AutoContext& c) {
+    const std::string lanes = format("%.1f busy lanes of %.0f", e.busyLanes, double(e.lanes));
+    const MegaLayout fitting = c.treeFits ? MegaLayout::Tree : MegaLayout::Weighted;
+    if (c.adaptive) return {"mega", fitting, "adaptive anti-aliasing: only the megakernel has it"};
+    if (!c.gpuRule)
+        return {"mega", fitting,
+                "a CPU runs work-items without lock-step lanes: the queue wavefront never won "
+                "the CPU map, where the megakernel ties with or beats the others"};
+    if (e.busyLanes < kQueueBelowLanes)
+        return {"queue", MegaLayout::Weighted,
+                lanes + format(" (below %.1f): neighbouring pixels' trees disagree, so "
+                               "compacted queues keep lanes busy",
+                               kQueueBelowLanes)};
+    if (c.waveFits)
+        return {"wave", MegaLayout::Weighted,
+                lanes + format(" (at least %.1f): one tree a work-item, and the tree "
+                               "wavefront's smaller kernels won 18 of the map's 19 such walls",
+                               kQueueBelowLanes)};
+    return {"mega", MegaLayout::Weighted,
+            lanes + format(" (at least %.1f): one tree a work-item; the tree wavefront's tree "
+                           "needs row tiles here, the weighted megakernel none",
+                           kQueueBelowLanes)};
+}
+
+struct AutoPipeline::Impl {
+    explicit Impl(ClContext& cl) : cl(cl) {}
+
+    ClContext& cl;
+    std::unique_ptr<Pipeline> mega, wave, queue;
+    DecisionKey key;
+    AutoDesign design;
+    bool decided = false;
+
+    Pipeline& pipeline(const std::string& name, const Pipeline::Progress& progress) {
+        std::unique_ptr<Pipeline>& p = name == "mega" ? mega : name == "wave" ? wave : queue;
+        if (!p) {
+            if (name == "mega")
+                p = std::make_unique<MegakernelPipeline>(cl);
+            else if (name == "wave")
+                p = std::make_unique<WavefrontPipeline>(cl);
+            else
+                p = std::make_unique<QueuePipeline>(cl);
+        }
+        p->setProgress(progress);
+        return *p;
+    }
+
+    static RenderOptions optionsFor(const RenderOptions& o, const AutoDesign& d) {
+        RenderOptions out = o;
+        if (d.pipeline == "mega") setMegaLayout(out, d.layout);
+        return out;
+    }
+
+    AutoContext context(const Scene& scene, const RenderOptions& o, AutoRule rule) const {
+        AutoContext c;
+        const DeviceInfo& dev = cl.device();
+        c.gpuRule = rule == AutoRule::Gpu || (rule == AutoRule::Device && dev.isGpu());
+        c.adaptive = o.adaptiveAa && o.aa > 1;
+        const int C = scene.branching();
+        c.treeFits = treePrivateBytes(C, o.bounces) <= kPrivateTreeLimit;
+        size_t budget = dev.maxAlloc;
+        if (o.memoryBudget && o.memoryBudget < budget) budget = o.memoryBudget;
+        try {
+            c.waveFits = WavefrontPipeline::tileRows(o.width, o.height, C, o.bounces, budget, "") >=
+                         o.height;
+        } catch (const Error&) {
+            c.waveFits = false;  // not even one row fits
+        }
+        return c;
+    }
+};
+
+AutoPipeline::AutoPipeline(ClContext& cl) : impl_(std::make_unique<Impl>(cl)) {}
+AutoPipeline::~AutoPipeline() = default;
+
+Image AutoPipeline::render(const Scene& scene, const RenderOptions& o) {
+    Impl& m = *impl_;
+    const Progress forward = [this](long long done, long long total) {
+        reportProgress(done, total);
+    };
+    const DecisionKey key(scene, o);
+    const bool decideNow = !m.decided || !(m.key == key);
+    nlohmann::json extras = nlohmann::json::object();
+    Image image;
+    if (decideNow) {
+        m.decided = false;
+        const auto choice = AutoChoice(choiceOption().index(o.pipelineOptions));
+        const auto rule = AutoRule(ruleOption().index(o.pipelineOptions));
+        const AutoContext context = m.context(scene, o, rule);
+        if (choice == AutoChoice::Predict) {
+            const auto start = std::chrono::steady_clock::now();
+            const LaneEstimate estimate = estimateBusyLanes(scene, o);
+            extras["auto_predict_ms"] =
+                std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+                    .count();
+            extras["auto_busy_lanes"] = estimate.busyLanes;
+            m.design = chooseDesign(estimate, context);
+        } else {
+            // Every design that can render the frame in one piece, two frames each (the first
+            // may pay for first-launch work), the faster of the two compared.
+            std::vector<AutoDesign> candidates;
+            if (context.treeFits) candidates.push_back({"mega", MegaLayout::Tree, ""});
+            candidates.push_back({"mega", MegaLayout::Weighted, ""});
+            if (!context.adaptive) {
+                if (context.waveFits) candidates.push_back({"wave", MegaLayout::Weighted, ""});
+                candidates.push_back({"queue", MegaLayout::Weighted, ""});
+            }
+            double best = std::numeric_limits<double>::infinity();
+            std::string times;
+            nlohmann::json trials = nlohmann::json::object();
+            for (const AutoDesign& d : candidates) {
+                Pipeline& p = m.pipeline(d.pipeline, forward);
+                const RenderOptions options = Impl::optionsFor(o, d);
+                double ms = std::numeric_limits<double>::infinity();
+                Image frame;
+                for (int i = 0; i < 2; ++i) {
+                    frame = p.render(scene, options);
+                    ms = std::min(ms, p.stats().deviceMs);
+                }
+                trials[d.name()] = ms;
+                times += (times.empty() ? "" : ", ") + d.name() + format(" %.3f ms", ms);
+                if (ms < best) {
+                    best = ms;
+                    m.design = d;
+                    image = std::move(frame);
+                    stats_ = p.stats();
+                }
+            }
+            m.design.reason = "measured (device time, the faster of 2 frames each): " + times;
+            extras["auto_trials_ms"] = trials;
+        }
+        m.key = key;
+        m.decided = true;
+    }
+    const AutoDesign& d = m.design;
+    if (!decideNow || AutoChoice(choiceOption().index(o.pipelineOptions)) == AutoChoice::Predict) {
+        Pipeline& p = m.pipeline(d.pipeline, forward);
+        image = p.render(scene, Impl::optionsFor(o, d));
+        stats_ = p.stats();
+    }
+    stats_.extras["auto_design"] = d.name();
+    stats_.extras["auto_reason"] = d.reason;
+    stats_.extras["auto_decided"] = decideNow;
+    stats_.note = "auto: " + d.name() + ": " + d.reason;
+    for (auto& [k, v] : extras.items()) stats_.extras[k] = v;
+    return image;
+}
+
+void registerAutoPipeline(PipelineRegistry& registry) {
+    PipelineInfo p;
+    p.name = "auto";
+    p.title = "auto (chooses a design per scene)";
+    p.family = "selector";
+    p.description =
+        "renders with the design the predictor names for the scene (rtlab predict), or the "
+        "fastest of trial frames (--auto-choice measure); --stats says which and why";
+    p.supports = {.adaptiveAa = true, .tiling = false, .rowWindow = true};
+    p.options = {choiceOption(), ruleOption()};
+    p.make = [](ClContext* cl) { return std::make_unique<AutoPipeline>(*cl); };
+    registry.add(std::move(p));
+}
+
+}  // namespace rt

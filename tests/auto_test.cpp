@@ -1,0 +1,170 @@
+// `--pipeline auto`: the rule's branches, and that a frame is the chosen design's frame to the bit,
+// chosen once per scene and settings, by prediction or by trial frames.
+#include "auto/auto.h"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "core/error.h"
+#include "pipelines/registry.h"
+#include "test_device.h"
+#include "test_images.h"
+#include "test_scenes.h"
+
+namespace rt {
+namespace {
+
+using test::sameBits;
+
+// A wall of spheres two pixels across, half of them mirrors or glass at random, in front of a
+// plane: the trees of neighbouring pixels disagree (the crossover map's left column, in small).
+Scene divergentWall(int width, int height) {
+    Scene s;
+    s.name = "wall";
+    auto material = [&](float reflectance, float opacity) {
+        dev::Material m{};
+        m.ambient = {0.05f, 0.05f, 0.05f}, m.diffuse = {0.7f, 0.3f, 0.2f};
+        m.specular = {0.5f, 0.5f, 0.5f}, m.exponent = 50;
+        m.reflectance = reflectance, m.opacity = opacity, m.ior = 1.5f;
+        s.materials.push_back(m);
+        s.materialNames.push_back("m" + std::to_string(s.materials.size()));
+        return int(s.materials.size()) - 1;
+    };
+    const int plain = material(0, 1), mirror = material(0.9f, 1), glass = material(0, 0);
+    s.camera.fovY = 40 * 3.14159265f / 180;  // from the origin along +z
+    const float halfH = 10 * std::tan(s.camera.fovY / 2), pixel = 2 * halfH / float(height);
+    const float halfW = halfH * float(width) / float(height);
+    std::mt19937 rng(7);
+    for (float y = -halfH + pixel; y < halfH; y += 2 * pixel)
+        for (float x = -halfW + pixel; x < halfW; x += 2 * pixel) {
+            const unsigned r = rng() % 4;
+            const int m = r == 0 ? mirror : r == 1 ? glass : plain;
+            s.spheres.push_back({{x, y, 10}, 0.95f * pixel, m, {0, 0, 0}});
+        }
+    s.planes.push_back({{0, 0, -1}, -12, plain, {0, 0, 0}});
+    dev::Light light{};
+    light.position = {2, 6, 0}, light.color = {1, 1, 1};
+    s.lights = {light};
+    finalizeScene(s);
+    return s;
+}
+
+void setAuto(RenderOptions& o, const std::string& choice, const std::string& rule) {
+    const PipelineInfo& info = pipelineInfo("auto");
+    for (const PipelineOption& opt : info.options) {
+        if (opt.name == "auto-choice") opt.set(o.pipelineOptions, choice);
+        if (opt.name == "auto-rule") opt.set(o.pipelineOptions, rule);
+    }
+}
+
+// The frame the named design renders, made with its own pipeline.
+Image renderAs(const std::string& design, const Scene& scene, RenderOptions o) {
+    std::string pipeline = design;
+    if (design.rfind("mega-", 0) == 0) {
+        pipeline = "mega";
+        setMegaLayout(o, design == "mega-tree" ? MegaLayout::Tree : MegaLayout::Weighted);
+    }
+    return makePipeline(pipeline, &test::device())->render(scene, o);
+}
+
+TEST(AutoRule, EachBranchNamesItsDesignAndWhy) {
+    LaneEstimate e;
+    e.lanes = 32;
+    AutoContext gpu;
+    e.busyLanes = kQueueBelowLanes - 0.1;
+    EXPECT_EQ(chooseDesign(e, gpu).name(), "queue");
+    EXPECT_NE(chooseDesign(e, gpu).reason.find("busy lanes of 32"), std::string::npos);
+    e.busyLanes = kQueueBelowLanes;
+    EXPECT_EQ(chooseDesign(e, gpu).name(), "wave");
+    AutoContext tiled = gpu;
+    tiled.waveFits = false;
+    EXPECT_EQ(chooseDesign(e, tiled).name(), "mega-weighted");
+    AutoContext cpu = gpu;
+    cpu.gpuRule = false;
+    e.busyLanes = 3;  // lanes do not decide on a CPU
+    EXPECT_EQ(chooseDesign(e, cpu).name(), "mega-tree");
+    cpu.treeFits = false;
+    EXPECT_EQ(chooseDesign(e, cpu).name(), "mega-weighted");
+    AutoContext adaptive = gpu;
+    adaptive.adaptive = true;
+    EXPECT_EQ(chooseDesign(e, adaptive).name(), "mega-tree");
+    EXPECT_NE(chooseDesign(e, adaptive).reason.find("adaptive"), std::string::npos);
+}
+
+TEST(Auto, RendersTheDesignItNamesToTheBit) {
+    const Scene wall = divergentWall(64, 32);
+    const Scene empty = test::load("empty");
+    struct Case {
+        const Scene* scene;
+        const char* rule;
+        const char* design;  // what the rule must pick
+    };
+    // The wall's lanes are far below the GPU threshold; in the empty scene every pixel's tree is
+    // one ray, all 32 lanes busy.
+    for (const Case& c : {Case{&wall, "gpu", "queue"}, Case{&empty, "gpu", "wave"},
+                          Case{&wall, "cpu", "mega-tree"}}) {
+        SCOPED_TRACE(std::string(c.scene->name) + " rule " + c.rule);
+        RenderOptions o = c.scene->defaults;
+        o.width = 64, o.height = 32, o.bounces = 4;
+        setAuto(o, "predict", c.rule);
+        AutoPipeline autoPipeline(test::device());
+        const Image first = autoPipeline.render(*c.scene, o);
+        const nlohmann::json& x = autoPipeline.stats().extras;
+        ASSERT_EQ(x.value("auto_design", ""), c.design) << x.dump();
+        EXPECT_TRUE(x.value("auto_decided", false));
+        if (std::string(c.rule) == "gpu")
+            EXPECT_EQ(x.value("auto_busy_lanes", -1.0) < kQueueBelowLanes,
+                      std::string(c.design) == "queue");
+        EXPECT_TRUE(sameBits(first, renderAs(c.design, *c.scene, o)));
+        // The next frame keeps the choice without predicting again.
+        const Image second = autoPipeline.render(*c.scene, o);
+        EXPECT_FALSE(autoPipeline.stats().extras.value("auto_decided", true));
+        EXPECT_EQ(autoPipeline.stats().extras.value("auto_design", ""), c.design);
+        EXPECT_TRUE(sameBits(first, second));
+    }
+}
+
+TEST(Auto, MeasureRendersTheFastestTrial) {
+    const Scene scene = test::load("cornell");
+    RenderOptions o = scene.defaults;
+    o.width = 48, o.height = 32, o.bounces = 3;
+    setAuto(o, "measure", "device");
+    AutoPipeline autoPipeline(test::device());
+    const Image image = autoPipeline.render(scene, o);
+    const nlohmann::json& x = autoPipeline.stats().extras;
+    const nlohmann::json& trials = x.at("auto_trials_ms");
+    ASSERT_EQ(trials.size(), 4u) << trials.dump();  // both layouts, wave and queue
+    const std::string design = x.at("auto_design");
+    for (const auto& [name, ms] : trials.items())
+        EXPECT_LE(trials.at(design).get<double>(), ms.get<double>()) << name;
+    EXPECT_TRUE(sameBits(image, renderAs(design, scene, o)));
+    // A setting that changes the frame decides again.
+    o.bounces = 2;
+    autoPipeline.render(scene, o);
+    EXPECT_TRUE(autoPipeline.stats().extras.value("auto_decided", false));
+}
+
+TEST(Auto, AdaptiveAntiAliasingGoesToTheMegakernel) {
+    const Scene scene = divergentWall(32, 16);
+    RenderOptions o = scene.defaults;
+    o.width = 32, o.height = 16, o.aa = 2, o.adaptiveAa = true;
+    setAuto(o, "predict", "gpu");
+    AutoPipeline autoPipeline(test::device());
+    const Image image = autoPipeline.render(scene, o);
+    EXPECT_EQ(autoPipeline.stats().extras.value("auto_design", ""), "mega-tree");
+    EXPECT_TRUE(sameBits(image, renderAs("mega-tree", scene, o)));
+}
+
+TEST(Auto, ABadChoiceIsOneClearError) {
+    RenderOptions o;
+    try {
+        setAuto(o, "guess", "device");
+        FAIL() << "no error";
+    } catch (const Error& e) {
+        EXPECT_STREQ(e.what(), "--auto-choice guess: must be predict or measure");
+    }
+}
+
+}  // namespace
+}  // namespace rt
