@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <ctime>
 #include <fstream>
 #include <map>
@@ -140,6 +141,8 @@ nlohmann::json rowJson(const SweepConfig& config, const Cell& c, const Measureme
         {"pipeline", c.pipeline},
         {"pipeline_title", pipelineInfo(c.pipeline).title},
         {"family", pipelineInfo(c.pipeline).family},
+        // Extra compiler options an experiment built every program with (register-study).
+        {"cl_options", std::getenv("RTLAB_CL_OPTIONS") ? std::getenv("RTLAB_CL_OPTIONS") : ""},
         {"width", o.width},
         {"height", o.height},
         {"bounces", o.bounces},

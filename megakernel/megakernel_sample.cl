@@ -33,14 +33,43 @@ inline float3 Megakernel_Sample(const SceneData* sc, int x, int y, int sample) {
 }
 #else
 
+#ifdef RT_PACKED_STACK
+// The register-pressure study's smaller stack record (scripts/register-study): 40 bytes a
+// pending ray instead of Pending's 64 (a float3 takes 16), three packed Float3 and the depth and
+// type in one word. The same values, so the same image.
+typedef struct PackedPending {
+    Float3 origin, dir, weight;
+    int depthType;  // depth << 8 | type
+} PackedPending;
+inline PackedPending Megakernel_Pack(Pending p) {
+    PackedPending q;
+    q.origin = F3(p.ray.origin);
+    q.dir = F3(p.ray.dir);
+    q.weight = F3(p.weight);
+    q.depthType = p.depth << 8 | p.type;
+    return q;
+}
+inline Pending Megakernel_Unpack(PackedPending q) {
+    return PathState_Make(makeRay(f3(q.origin), f3(q.dir)), f3(q.weight), q.depthType >> 8,
+                          q.depthType & 0xff);
+}
+#define RT_STACK_RECORD PackedPending
+#define RT_STACK_PUSH(p) Megakernel_Pack(p)
+#define RT_STACK_POP(q) Megakernel_Unpack(q)
+#else
+#define RT_STACK_RECORD Pending
+#define RT_STACK_PUSH(p) (p)
+#define RT_STACK_POP(q) (q)
+#endif
+
 inline float3 Megakernel_Sample(const SceneData* sc, int x, int y, int sample) {
-    Pending stack[RT_STACK_SIZE];
+    RT_STACK_RECORD stack[RT_STACK_SIZE];
     int top = 0;
-    stack[top++] = PathState_Primary(sc, x, y, sample);
+    stack[top++] = RT_STACK_PUSH(PathState_Primary(sc, x, y, sample));
     float3 color = (float3)(0.0f, 0.0f, 0.0f);
     while (top > 0) {
         RT_COUNT_WARP_STEP(sc);  // the lanes that still have a ray to trace
-        Pending p = stack[--top];
+        Pending p = RT_STACK_POP(stack[--top]);
         Node node = RayTree_TraceNode(sc, p.ray, p.type, Sampling_PointKey(x, y, sample, p.depth));
         if (node.kind == RT_KIND_MISS) {
             color += PathState_Miss(sc, &p);
@@ -50,8 +79,8 @@ inline float3 Megakernel_Sample(const SceneData* sc, int x, int y, int sample) {
         bool hasRefl, hasRefr;
         color += PathState_Step(sc, &node, &p, true, true, &refl, &hasRefl, &refr, &hasRefr);
         // Depth-first: at most one pending sibling per level, so B*(C-1)+1 entries suffice.
-        if (hasRefr) stack[top++] = refr;
-        if (hasRefl) stack[top++] = refl;
+        if (hasRefr) stack[top++] = RT_STACK_PUSH(refr);
+        if (hasRefl) stack[top++] = RT_STACK_PUSH(refl);
     }
     return color;
 }

@@ -18,6 +18,38 @@
 #define RT_INLINE inline
 #endif
 
+// The stage functions the register-pressure study (scripts/register-study) keeps out of line,
+// one at a time: built with -DRT_OUTLINE_QUERY (the traversal, Scene_Query), _SURFACE
+// (RayTree_Surface), _SHADOWS (RayTree_CastShadows), _STEP (PathState_Step: shading and the
+// children's rays) or _PATTERN (Procedural_Apply), that function is a call instead of being
+// inlined, and its kernel's register count shows what inlining it cost. Without them, as before.
+#define RT_OUTLINE __attribute__((noinline))
+#ifdef RT_OUTLINE_QUERY
+#define RT_QUERY_LINKAGE RT_OUTLINE
+#else
+#define RT_QUERY_LINKAGE inline
+#endif
+#ifdef RT_OUTLINE_SURFACE
+#define RT_SURFACE_LINKAGE RT_OUTLINE
+#else
+#define RT_SURFACE_LINKAGE RT_INLINE
+#endif
+#ifdef RT_OUTLINE_SHADOWS
+#define RT_SHADOWS_LINKAGE RT_OUTLINE
+#else
+#define RT_SHADOWS_LINKAGE RT_INLINE
+#endif
+#ifdef RT_OUTLINE_STEP
+#define RT_STEP_LINKAGE RT_OUTLINE
+#else
+#define RT_STEP_LINKAGE inline
+#endif
+#ifdef RT_OUTLINE_PATTERN
+#define RT_PATTERN_LINKAGE RT_OUTLINE
+#else
+#define RT_PATTERN_LINKAGE inline
+#endif
+
 inline float3 f3(Float3 v) { return (float3)(v.x, v.y, v.z); }
 
 inline Float3 F3(float3 v) {

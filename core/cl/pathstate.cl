@@ -39,9 +39,9 @@ inline float3 PathState_Miss(const SceneData* sc, const Pending* p) {
 // w (1 - F) o base, and the children with weights w F (reflection) and w (1 - F)(1 - o)
 // (refraction). mayReflect / mayRefract let a caller that knows the material class skip a
 // child that cannot exist (RayTree_ChildRay would say no anyway), so the result is the same.
-inline float3 PathState_Step(const SceneData* sc, const Node* node, const Pending* p,
-                             bool mayReflect, bool mayRefract, Pending* refl, bool* hasRefl,
-                             Pending* refr, bool* hasRefr) {
+RT_STEP_LINKAGE float3 PathState_Step(const SceneData* sc, const Node* node, const Pending* p,
+                                      bool mayReflect, bool mayRefract, Pending* refl,
+                                      bool* hasRefl, Pending* refr, bool* hasRefr) {
     Ray r0, r1;
     *hasRefl = mayReflect && RayTree_ChildRay(sc, node, p->depth, 0, &r0);
     *hasRefr = RT_BRANCH == 2 && mayRefract && RayTree_ChildRay(sc, node, p->depth, 1, &r1);

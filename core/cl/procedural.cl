@@ -100,7 +100,7 @@ inline float3 Procedural_Bump(float3 p, float3 n, int octaves, float strength) {
 }
 
 // Shade_Base's hook: the diffuse colour and shading normal of material m at hit point p.
-inline void Procedural_Apply(const Material* m, float3 p, float3* diffuse, float3* n) {
+RT_PATTERN_LINKAGE void Procedural_Apply(const Material* m, float3 p, float3* diffuse, float3* n) {
     float3 q = p * m->patternScale;
     if (m->pattern == RT_PATTERN_BUMP) {
         *n = Procedural_Bump(q, *n, m->octaves, m->bump);

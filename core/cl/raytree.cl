@@ -95,7 +95,7 @@ inline float3 RayTree_SpawnOrigin(const SceneData* sc, const Node* node, float s
 
 // The node of `ray` from its closest hit (Scene_Intersect's, or a packet's lane of the same hit:
 // wavefront/queue/queue_packet.cl): point, facing normal and material, no light occluded yet.
-RT_INLINE Node RayTree_Surface(const SceneData* sc, Ray ray, Hit hit) {
+RT_SURFACE_LINKAGE Node RayTree_Surface(const SceneData* sc, Ray ray, Hit hit) {
     Node n;
     n.dir = F3(ray.dir);
     n.object = hit.object;
@@ -168,7 +168,7 @@ RT_INLINE Node RayTree_Surface(const SceneData* sc, Ray ray, Hit hit) {
 // occluded. key: Sampling_PointKey of the ray's pixel, AA sample and depth, which places the
 // samples on the lights (core/sampling.h). The point and normal are the node's own, so a stage
 // that reads the node back from memory casts exactly the rays RayTree_TraceNode casts.
-RT_INLINE void RayTree_CastShadows(const SceneData* sc, Node* node, uint key) {
+RT_SHADOWS_LINKAGE void RayTree_CastShadows(const SceneData* sc, Node* node, uint key) {
     float3 p = f3(node->point), normal = f3(node->normal);
     float3 origin = RayTree_SpawnOrigin(sc, node, 1.0f);
     for (int j = 0; j < sc->settings.lightCount; ++j)

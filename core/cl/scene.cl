@@ -117,7 +117,7 @@ inline bool Scene_Planes(const SceneData* sc, Ray ray, Hit* hit, bool anyHit) {
 // Closest hit with 0 < t < tMax, or with anyHit the first one found (shadow rays stop there).
 // Without a grid or BVH the order is spheres, planes, triangles (mesh by mesh) and ties keep
 // the first object (core/SHADING.md section 2); with one, planes come first.
-inline Hit Scene_Query(const SceneData* sc, Ray ray, float tMax, bool anyHit) {
+RT_QUERY_LINKAGE Hit Scene_Query(const SceneData* sc, Ray ray, float tMax, bool anyHit) {
     Hit hit = Hit_None(tMax);
 #if defined(RT_ACCEL_GRID) || defined(RT_ACCEL_BVH) || defined(RT_ACCEL_WIDE) || \
     defined(RT_ACCEL_CWBVH)
