@@ -441,5 +441,41 @@ class PredictEvalTest(unittest.TestCase):
         self.assertIn("**no** (1.20x slower)", "\n".join(lines))
 
 
+class RegisterStudyTest(unittest.TestCase):
+    """scripts/register_study.py: occupancy from registers as the map's table derives it, and a
+    variant's time a tie when its frames' range overlaps the plain build's."""
+
+    def load(self):
+        spec = importlib.util.spec_from_file_location("register_study", os.path.join(SCRIPTS, "register_study.py"))
+        m = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(m)
+        return m
+
+    def test_occupancy(self):
+        m = self.load()
+        self.assertEqual(m.occupancy(142), (12, 12 / 64))  # the weighted megakernel: 19%
+        self.assertEqual(m.occupancy(117), (16, 0.25))
+        self.assertEqual(m.occupancy(32), (64, 1.0))
+
+    def test_table(self):
+        def rows(regs, ms, spread, opts):
+            r = row("mega", "mega", "weighted", "map/a", 4, 1920, 1080)
+            r.update(status="ok", device_ms=ms, device_ms_min=ms - spread, device_ms_max=ms + spread,
+                     cl_options=opts, kernel_resources={"Megakernel_Render.registers": regs})
+            return [r]
+        with tempfile.TemporaryDirectory() as d:
+            for name, rs in (("plain", rows(142, 10.0, 0.1, "")),
+                             ("packed-stack", rows(120, 8.0, 0.1, "-DRT_PACKED_STACK")),
+                             ("outline-query", rows(100, 10.05, 0.1, "-DRT_OUTLINE_QUERY"))):
+                os.makedirs(os.path.join(d, name))
+                with open(os.path.join(d, name, "rows.jsonl"), "w") as f:
+                    f.writelines(json.dumps(r) + "\n" for r in rs)
+            out = subprocess.run([sys.executable, os.path.join(SCRIPTS, "register_study.py"), d],
+                                 capture_output=True, text=True, check=True).stdout
+        self.assertIn("| plain | `-` | 142 | 0/0 | 12 | 19% | 10.000 |", out)
+        self.assertIn("| packed-stack | `-DRT_PACKED_STACK` | 120 | 0/0 | 16 | 25% | 8.000 (0.80×) |", out)
+        self.assertIn("10.050 (tie)", out)
+
+
 if __name__ == "__main__":
     unittest.main()
