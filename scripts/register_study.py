@@ -13,7 +13,7 @@ import pathlib
 import sys
 
 ORDER = ["plain", "packed-stack", "outline-query", "outline-surface", "outline-shadows",
-         "outline-step", "outline-pattern"]
+         "outline-step", "outline-pattern", "cap-128", "cap-96", "cap-64", "query-cap-128"]
 KERNEL = "Megakernel_Render"
 
 
