@@ -17,7 +17,7 @@ namespace rt {
 
 namespace {
 
-enum class AutoChoice { Predict, Measure };
+enum class AutoChoice { Predict, Lanes, Measure };
 enum class AutoRule { Device, Gpu, Cpu };
 
 const PipelineOption& choiceOption() {
@@ -25,11 +25,12 @@ const PipelineOption& choiceOption() {
         .name = "auto-choice",
         .type = PipelineOption::Type::Choice,
         .help =
-            "Auto: how it picks a design for a scene: predict (busy lanes of a sample of "
-            "warps, traced on the CPU) or measure (two trial frames of each candidate) "
+            "Auto: how it picks a design for a scene: predict (the predictor's busy lanes "
+            "name the kind of design, two trial frames each pick within it), lanes (the "
+            "predictor alone, no trial frames) or measure (trial frames of every design) "
             "[predict]",
         .defaultValue = std::string("predict"),
-        .choices = {"predict", "measure"},
+        .choices = {"predict", "lanes", "measure"},
         .sweepKey = "auto-choice",
         .cellTag = "A",
         .label = "auto by {}",
@@ -95,28 +96,27 @@ std::string AutoDesign::name() const {
     return pipeline == "mega" ? std::string("mega-") + megaLayoutName(layout) : pipeline;
 }
 
-AutoDesign chooseDesign(const LaneEstimate& e, const AutoContext& c) {
+AutoKind chooseKind(const LaneEstimate& e, const AutoContext& c) {
     const std::string lanes = format("%.1f busy lanes of %.0f", e.busyLanes, double(e.lanes));
     const MegaLayout fitting = c.treeFits ? MegaLayout::Tree : MegaLayout::Weighted;
-    if (c.adaptive) return {"mega", fitting, "adaptive anti-aliasing: only the megakernel has it"};
+    if (c.adaptive)
+        return {{{"mega", fitting, ""}}, "adaptive anti-aliasing: only the megakernel has it"};
     if (!c.gpuRule)
-        return {"mega", fitting,
+        return {{{"mega", fitting, ""}},
                 "a CPU runs work-items without lock-step lanes: the queue wavefront never won "
                 "the CPU map, where the megakernel ties with or beats the others"};
     if (e.busyLanes < kQueueBelowLanes)
-        return {"queue", MegaLayout::Weighted,
+        return {{{"queue", MegaLayout::Weighted, ""}},
                 lanes + format(" (below %.1f): neighbouring pixels' trees disagree, so "
                                "compacted queues keep lanes busy",
                                kQueueBelowLanes)};
+    AutoKind k{{{"mega", MegaLayout::Weighted, ""}},
+               lanes + format(" (at least %.1f): one tree a work-item", kQueueBelowLanes)};
     if (c.waveFits)
-        return {"wave", MegaLayout::Weighted,
-                lanes + format(" (at least %.1f): one tree a work-item, and the tree "
-                               "wavefront's smaller kernels won 18 of the map's 19 such walls",
-                               kQueueBelowLanes)};
-    return {"mega", MegaLayout::Weighted,
-            lanes + format(" (at least %.1f): one tree a work-item; the tree wavefront's tree "
-                           "needs row tiles here, the weighted megakernel none",
-                           kQueueBelowLanes)};
+        k.designs.push_back({"wave", MegaLayout::Weighted, ""});
+    else
+        k.reason += "; the tree wavefront's tree would need row tiles";
+    return k;
 }
 
 struct AutoPipeline::Impl {
@@ -126,6 +126,7 @@ struct AutoPipeline::Impl {
     std::unique_ptr<Pipeline> mega, wave, queue;
     DecisionKey key;
     AutoDesign design;
+    nlohmann::json extras;  // what the decision found, carried into every frame's statistics
     bool decided = false;
 
     Pipeline& pipeline(const std::string& name, const Pipeline::Progress& progress) {
@@ -177,31 +178,41 @@ Image AutoPipeline::render(const Scene& scene, const RenderOptions& o) {
     };
     const DecisionKey key(scene, o);
     const bool decideNow = !m.decided || !(m.key == key);
-    nlohmann::json extras = nlohmann::json::object();
     Image image;
+    bool rendered = false;
     if (decideNow) {
         m.decided = false;
+        m.extras = nlohmann::json::object();
         const auto choice = AutoChoice(choiceOption().index(o.pipelineOptions));
         const auto rule = AutoRule(ruleOption().index(o.pipelineOptions));
         const AutoContext context = m.context(scene, o, rule);
-        if (choice == AutoChoice::Predict) {
-            const auto start = std::chrono::steady_clock::now();
-            const LaneEstimate estimate = estimateBusyLanes(scene, o);
-            extras["auto_predict_ms"] =
-                std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
-                    .count();
-            extras["auto_busy_lanes"] = estimate.busyLanes;
-            m.design = chooseDesign(estimate, context);
-        } else {
-            // Every design that can render the frame in one piece, two frames each (the first
-            // may pay for first-launch work), the faster of the two compared.
-            std::vector<AutoDesign> candidates;
+        std::vector<AutoDesign> candidates;
+        std::string reason;
+        if (choice == AutoChoice::Measure) {
+            // Every design that can render the frame in one piece.
             if (context.treeFits) candidates.push_back({"mega", MegaLayout::Tree, ""});
             candidates.push_back({"mega", MegaLayout::Weighted, ""});
             if (!context.adaptive) {
                 if (context.waveFits) candidates.push_back({"wave", MegaLayout::Weighted, ""});
                 candidates.push_back({"queue", MegaLayout::Weighted, ""});
             }
+        } else {
+            const auto start = std::chrono::steady_clock::now();
+            const LaneEstimate estimate = estimateBusyLanes(scene, o);
+            m.extras["auto_predict_ms"] =
+                std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+                    .count();
+            m.extras["auto_busy_lanes"] = estimate.busyLanes;
+            AutoKind kind = chooseKind(estimate, context);
+            reason = kind.reason;
+            candidates = std::move(kind.designs);
+            if (choice == AutoChoice::Lanes) candidates.resize(1);
+        }
+        if (candidates.size() == 1) {
+            m.design = candidates.front();
+            m.design.reason = reason;
+        } else {
+            // Two frames each (the first may pay for first-launch work), the faster compared.
             double best = std::numeric_limits<double>::infinity();
             std::string times;
             nlohmann::json trials = nlohmann::json::object();
@@ -223,14 +234,16 @@ Image AutoPipeline::render(const Scene& scene, const RenderOptions& o) {
                     stats_ = p.stats();
                 }
             }
-            m.design.reason = "measured (device time, the faster of 2 frames each): " + times;
-            extras["auto_trials_ms"] = trials;
+            m.design.reason = (reason.empty() ? "" : reason + "; ") +
+                              "the fastest of 2 trial frames each: " + times;
+            m.extras["auto_trials_ms"] = trials;
+            rendered = true;
         }
         m.key = key;
         m.decided = true;
     }
     const AutoDesign& d = m.design;
-    if (!decideNow || AutoChoice(choiceOption().index(o.pipelineOptions)) == AutoChoice::Predict) {
+    if (!rendered) {
         Pipeline& p = m.pipeline(d.pipeline, forward);
         image = p.render(scene, Impl::optionsFor(o, d));
         stats_ = p.stats();
@@ -238,8 +251,8 @@ Image AutoPipeline::render(const Scene& scene, const RenderOptions& o) {
     stats_.extras["auto_design"] = d.name();
     stats_.extras["auto_reason"] = d.reason;
     stats_.extras["auto_decided"] = decideNow;
+    for (auto& [k, v] : m.extras.items()) stats_.extras[k] = v;
     stats_.note = "auto: " + d.name() + ": " + d.reason;
-    for (auto& [k, v] : extras.items()) stats_.extras[k] = v;
     return image;
 }
 
@@ -249,8 +262,8 @@ void registerAutoPipeline(PipelineRegistry& registry) {
     p.title = "auto (chooses a design per scene)";
     p.family = "selector";
     p.description =
-        "renders with the design the predictor names for the scene (rtlab predict), or the "
-        "fastest of trial frames (--auto-choice measure); --stats says which and why";
+        "renders with the design the predictor (rtlab predict) and trial frames pick for the "
+        "scene; --auto-choice says how, --stats and a line on stderr say which and why";
     p.supports = {.adaptiveAa = true, .tiling = false, .rowWindow = true};
     p.options = {choiceOption(), ruleOption()};
     p.make = [](ClContext* cl) { return std::make_unique<AutoPipeline>(*cl); };

@@ -1,11 +1,13 @@
 // rtlab — `--pipeline auto`: renders a scene with the design that should be fastest for it, and
-// says which it chose and why (FrameStats::extras). It chooses once per scene and settings, either
-// from the predictor (core/predict.h: the busy lanes of a sample of warps, traced on the CPU
-// before any device work) or from a trial frame of each candidate, timed on the device.
+// says which it chose and why (FrameStats::note and extras). It chooses once per scene and
+// settings: the predictor (core/predict.h: the busy lanes of a sample of warps, traced on the CPU
+// before any device work) names the kind of design, and trial frames, timed on the device, pick
+// among the designs of that kind (or of every kind, --auto-choice measure).
 #pragma once
 
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "core/pipeline.h"
 #include "core/predict.h"
@@ -30,12 +32,21 @@ struct AutoContext {
     bool treeFits = true;   // the megakernel's whole tree fits its private budget
 };
 
-// The rule. On a GPU: the queue wavefront below kQueueBelowLanes busy lanes; at or above it the
-// report's tree wavefront when its tree fits one tile (it won 18 of the map's 19 coherent walls),
-// else the weighted megakernel. On a CPU, whose work-items run without lock-step lanes: the
-// megakernel (the queue never won the CPU map; the others tie there), in the tree layout when it
-// fits. Adaptive anti-aliasing forces the megakernel, the only design that has it.
-AutoDesign chooseDesign(const LaneEstimate& estimate, const AutoContext& context);
+// The kind of design the predictor names, as the designs of that kind auto may render with
+// (first: the one to take without trial frames) and why.
+struct AutoKind {
+    std::vector<AutoDesign> designs;
+    std::string reason;
+};
+
+// The rule. On a GPU: the queue wavefront below kQueueBelowLanes busy lanes; at or above it one
+// tree a work-item, the weighted megakernel or the report's tree wavefront (when its tree fits one
+// tile). Which of those two wins the lanes do not say: on the H200 the tree wavefront won most of
+// the map's coherent walls and the weighted megakernel every standard scene, so auto times both.
+// On a CPU, whose work-items run without lock-step lanes: the megakernel (the queue never won the
+// CPU map), in the tree layout when it fits. Adaptive anti-aliasing: the megakernel, the only
+// design that has it.
+AutoKind chooseKind(const LaneEstimate& estimate, const AutoContext& context);
 
 class AutoPipeline : public Pipeline {
   public:

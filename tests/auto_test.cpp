@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
 
 #include "core/error.h"
@@ -68,28 +69,36 @@ Image renderAs(const std::string& design, const Scene& scene, RenderOptions o) {
     return makePipeline(pipeline, &test::device())->render(scene, o);
 }
 
-TEST(AutoRule, EachBranchNamesItsDesignAndWhy) {
+std::vector<std::string> names(const AutoKind& k) {
+    std::vector<std::string> out;
+    for (const AutoDesign& d : k.designs) out.push_back(d.name());
+    return out;
+}
+
+TEST(AutoRule, EachBranchNamesItsDesignsAndWhy) {
+    using V = std::vector<std::string>;
     LaneEstimate e;
     e.lanes = 32;
     AutoContext gpu;
     e.busyLanes = kQueueBelowLanes - 0.1;
-    EXPECT_EQ(chooseDesign(e, gpu).name(), "queue");
-    EXPECT_NE(chooseDesign(e, gpu).reason.find("busy lanes of 32"), std::string::npos);
+    EXPECT_EQ(names(chooseKind(e, gpu)), V{"queue"});
+    EXPECT_NE(chooseKind(e, gpu).reason.find("busy lanes of 32"), std::string::npos);
     e.busyLanes = kQueueBelowLanes;
-    EXPECT_EQ(chooseDesign(e, gpu).name(), "wave");
+    EXPECT_EQ(names(chooseKind(e, gpu)), (V{"mega-weighted", "wave"}));
     AutoContext tiled = gpu;
     tiled.waveFits = false;
-    EXPECT_EQ(chooseDesign(e, tiled).name(), "mega-weighted");
+    EXPECT_EQ(names(chooseKind(e, tiled)), V{"mega-weighted"});
+    EXPECT_NE(chooseKind(e, tiled).reason.find("row tiles"), std::string::npos);
     AutoContext cpu = gpu;
     cpu.gpuRule = false;
     e.busyLanes = 3;  // lanes do not decide on a CPU
-    EXPECT_EQ(chooseDesign(e, cpu).name(), "mega-tree");
+    EXPECT_EQ(names(chooseKind(e, cpu)), V{"mega-tree"});
     cpu.treeFits = false;
-    EXPECT_EQ(chooseDesign(e, cpu).name(), "mega-weighted");
+    EXPECT_EQ(names(chooseKind(e, cpu)), V{"mega-weighted"});
     AutoContext adaptive = gpu;
     adaptive.adaptive = true;
-    EXPECT_EQ(chooseDesign(e, adaptive).name(), "mega-tree");
-    EXPECT_NE(chooseDesign(e, adaptive).reason.find("adaptive"), std::string::npos);
+    EXPECT_EQ(names(chooseKind(e, adaptive)), V{"mega-tree"});
+    EXPECT_NE(chooseKind(e, adaptive).reason.find("adaptive"), std::string::npos);
 }
 
 TEST(Auto, RendersTheDesignItNamesToTheBit) {
@@ -97,30 +106,38 @@ TEST(Auto, RendersTheDesignItNamesToTheBit) {
     const Scene empty = test::load("empty");
     struct Case {
         const Scene* scene;
+        const char* choice;
         const char* rule;
-        const char* design;  // what the rule must pick
+        std::vector<std::string> designs;  // what it may pick
+        size_t trials;                     // trial designs timed
     };
     // The wall's lanes are far below the GPU threshold; in the empty scene every pixel's tree is
-    // one ray, all 32 lanes busy.
-    for (const Case& c : {Case{&wall, "gpu", "queue"}, Case{&empty, "gpu", "wave"},
-                          Case{&wall, "cpu", "mega-tree"}}) {
-        SCOPED_TRACE(std::string(c.scene->name) + " rule " + c.rule);
+    // one ray, all 32 lanes busy, and the two one-tree designs are timed.
+    for (const Case& c : {Case{&wall, "predict", "gpu", {"queue"}, 0},
+                          Case{&empty, "predict", "gpu", {"mega-weighted", "wave"}, 2},
+                          Case{&empty, "lanes", "gpu", {"mega-weighted"}, 0},
+                          Case{&wall, "predict", "cpu", {"mega-tree"}, 0}}) {
+        SCOPED_TRACE(std::string(c.scene->name) + " " + c.choice + ", rule " + c.rule);
         RenderOptions o = c.scene->defaults;
         o.width = 64, o.height = 32, o.bounces = 4;
-        setAuto(o, "predict", c.rule);
+        setAuto(o, c.choice, c.rule);
         AutoPipeline autoPipeline(test::device());
         const Image first = autoPipeline.render(*c.scene, o);
-        const nlohmann::json& x = autoPipeline.stats().extras;
-        ASSERT_EQ(x.value("auto_design", ""), c.design) << x.dump();
+        const nlohmann::json x = autoPipeline.stats().extras;
+        const std::string design = x.value("auto_design", "");
+        EXPECT_NE(std::find(c.designs.begin(), c.designs.end(), design), c.designs.end())
+            << x.dump();
         EXPECT_TRUE(x.value("auto_decided", false));
+        EXPECT_EQ(x.contains("auto_trials_ms") ? x["auto_trials_ms"].size() : 0u, c.trials);
         if (std::string(c.rule) == "gpu")
-            EXPECT_EQ(x.value("auto_busy_lanes", -1.0) < kQueueBelowLanes,
-                      std::string(c.design) == "queue");
-        EXPECT_TRUE(sameBits(first, renderAs(c.design, *c.scene, o)));
-        // The next frame keeps the choice without predicting again.
+            EXPECT_EQ(x.value("auto_busy_lanes", -1.0) < kQueueBelowLanes, design == "queue");
+        EXPECT_TRUE(sameBits(first, renderAs(design, *c.scene, o)));
+        // The next frame keeps the choice without predicting or timing again.
         const Image second = autoPipeline.render(*c.scene, o);
-        EXPECT_FALSE(autoPipeline.stats().extras.value("auto_decided", true));
-        EXPECT_EQ(autoPipeline.stats().extras.value("auto_design", ""), c.design);
+        const nlohmann::json& y = autoPipeline.stats().extras;
+        EXPECT_FALSE(y.value("auto_decided", true));
+        EXPECT_EQ(y.value("auto_design", ""), design);
+        EXPECT_EQ(y.value("auto_busy_lanes", -1.0), x.value("auto_busy_lanes", -1.0));
         EXPECT_TRUE(sameBits(first, second));
     }
 }
@@ -162,7 +179,7 @@ TEST(Auto, ABadChoiceIsOneClearError) {
         setAuto(o, "guess", "device");
         FAIL() << "no error";
     } catch (const Error& e) {
-        EXPECT_STREQ(e.what(), "--auto-choice guess: must be predict or measure");
+        EXPECT_STREQ(e.what(), "--auto-choice guess: must be predict, lanes or measure");
     }
 }
 
