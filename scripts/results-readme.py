@@ -18,8 +18,9 @@ Every figure comes from the JSON; the header says which device, driver, commit a
 
 The pipelines, their titles and layouts come from the rows (sweep_rows.py), so a new pipeline
 needs no change here. With --index, results/README.md (the tracked index of every result set:
-device, commit, which pipeline wins on each scene, the speed-against-accuracy chart) is rewritten
-too; only committing a result set should ask for that, never a user's own sweep.
+device, commit, which pipeline wins on each scene, the speed-against-accuracy chart, and every
+folder under results/ with the commits its data records) is rewritten too; only committing a
+result set should ask for that, never a user's own sweep.
 Standard library only.
 """
 import argparse
@@ -34,6 +35,7 @@ from readme_format import accel_label, clean_meta, ms, size_label, table, tree_t
 from readme_crossover import crossover_section  # noqa: E402
 from readme_floor import floor_section  # noqa: E402
 from readme_limits import limits_section, limits_summary  # noqa: E402
+import results_index  # noqa: E402
 from sweep_rows import Series, by_setting, failure, in_group  # noqa: E402
 
 CHARTS = [("time-vs-resolution.png", "Frame time against resolution"),
@@ -299,10 +301,9 @@ def write_index(results):
            "the full tables. " + RATIO_TEXT + " A `limits` "
            "sweep (bench/sweeps/limits) says how far each pipeline goes on that device.",
            ""]
-    for slug in sorted(os.listdir(results)):
+    # Every folder that holds a sweep JSON, sub-folders too (a re-measured set of its own).
+    for slug in results_index.folders(results):
         folder = os.path.join(results, slug)
-        if not os.path.isdir(folder):
-            continue
         for name, data in sweep_files(folder):
             meta = clean_meta(data["meta"], data["rows"])
             rows = [r for r in data["rows"] if failure(r) == ""]
@@ -321,12 +322,42 @@ def write_index(results):
             if is_limits:
                 if os.path.exists(os.path.join(folder, "limits.png")):
                     doc += [f"![Limits on {meta.get('device')}]({slug}/limits.png)", ""]
-            elif os.path.exists(os.path.join(folder, "speed-vs-accuracy.png")):
+            # A folder's charts are drawn from one sweep each: show a chart only under the
+            # sweep that has its cells.
+            elif in_group(data["rows"], "crossover") and \
+                    os.path.exists(os.path.join(folder, "crossover.png")):
+                doc += [f"![Crossover on {meta.get('device')}]({slug}/crossover.png)", ""]
+            elif in_group(data["rows"], "accuracy") and \
+                    os.path.exists(os.path.join(folder, "speed-vs-accuracy.png")):
                 doc += [f"![Speed against accuracy on {meta.get('device')}]"
                         f"({slug}/speed-vs-accuracy.png)", ""]
+    doc += folder_table(results)
     with open(os.path.join(results, "README.md"), "w") as f:
         f.write("\n".join(doc))
     print(f"results-readme: wrote {os.path.join(results, 'README.md')}")
+
+
+def folder_table(results):
+    """Every folder under results/, its README (or the nearest one above it that describes it),
+    its title and the commits its own data files carry (results_index.py)."""
+    body = []
+    for rel in results_index.folders(results):
+        own = os.path.exists(os.path.join(results, rel, "README.md"))
+        readme = results_index.readme_of(results, rel)
+        commits = sorted({c[:7] for c in results_index.data_commits(
+            os.path.join(results, rel), recursive=False)})
+        body.append([f"[`{rel}`]({rel}/README.md)" if own else f"`{rel}`",
+                     results_index.title_of(results, rel).replace("|", "/")
+                     or f"described in [`{readme}`]({readme})",
+                     ", ".join(f"`{c}`" for c in commits) or "—"])
+    return ["## Every result folder",
+            "",
+            "Each folder under results/, with the title of its README (a folder without one is "
+            "described by the README above it) and the commits its own data files record "
+            "(rows, sweep metadata, the tools' logs; sub-folders apart).",
+            "",
+            table(["Folder", "What", "Commits in its data"], body),
+            ""]
 
 
 def header_table(meta, json_rel):
