@@ -51,8 +51,9 @@ def settings(files):
             ran = [k for k, r in by_key.items() if r.get("status") == "ok"]
             if "queue" in ran and len(ran) >= 2:
                 v = verdict({k: by_key[k] for k in ran}, ran)
-                if v and v[0] != "queue" and not v[3]:
-                    out.append((scene, v[0], v[1], v[2], False, series, by_key, "partial"))
+                # A tie between two designs of the other kind still settles it.
+                if v and not is_queue(v[0]) and not undecided(v[0], v[1], v[3]):
+                    out.append((scene, v[0], v[1], v[2], v[3], series, by_key, "partial"))
     return meta, out
 
 

@@ -468,6 +468,22 @@ class PredictEvalTest(unittest.TestCase):
         self.assertAlmostEqual(worst, 1.2)  # map/e: the best tree design (wave, 1.2) over 1.0
         self.assertIn("**no** (1.20x slower)", "\n".join(lines))
 
+    def test_a_partial_setting_tied_within_one_kind_is_still_scored(self):
+        # The weighted megakernel did not run; the tree megakernel and the tree wavefront tie
+        # (2.00 and 2.01, spreads 0.04) and both beat the queue: a tree design wins either way.
+        m = self.load()
+        rows = self.rows({"map/p": {"mega": 2.0, "wave": 2.01, "queue": 3.0}})
+        rows.append(dict(row("mega", "mega", "weighted", "map/p", 4, 1920, 1080, group="map"),
+                         status="error", failure="timeout"))
+        with tempfile.TemporaryDirectory() as d:
+            with open(os.path.join(d, "p.jsonl"), "w") as f:
+                f.writelines(json.dumps(r) + "\n" for r in rows)
+            _, found = m.settings([os.path.join(d, "p.jsonl")])
+        self.assertEqual(len(found), 1)
+        scene, winner, runner, _, tie, *_, partial = found[0]
+        self.assertEqual((scene, tie, partial), ("map/p", True, "partial"))
+        self.assertFalse(m.undecided(winner, runner, tie))
+
 
 class RegisterStudyTest(unittest.TestCase):
     """scripts/register_study.py: occupancy from registers as the map's table derives it, and a
