@@ -14,8 +14,9 @@ Writes, next to the JSON unless --out says otherwise, each chart whose group the
   crossover.png            time over the best megakernel against material cost, a panel per
                            number of materials (charts_crossover.py, [crossover])
 A chart whose group the sweep lacks is not written (and one already in the folder, from another
-sweep of the same device, is left alone). The pipelines, their titles, colours and layouts come
-from the rows (sweep_rows.py). Every chart's footer names the device, driver, commit and timing.
+sweep of the same device, is left alone). The pipelines, their titles and layouts come from the
+rows (sweep_rows.py), their colours and markers from the one palette (chart_style.py), wins and
+ties from compare.py. Every chart's footer names the device, driver, commit and timing.
 Needs Debian's python3-matplotlib (scripts/setup), hence /usr/bin/python3.
 """
 import argparse

@@ -9,7 +9,7 @@ its frame spread. A ratio under 1 is a win over the megakernel only beyond the f
 (compare.py); a tie is drawn hollow, and a star marks the first measured octave count where a
 series wins beyond the spread (never a point interpolated between two measurements).
 """
-from chart_style import figure, legend_row, log_ticks, plt, series_style  # noqa: F401
+from chart_style import figure, legend_row, log_ticks, series_style
 from matplotlib.lines import Line2D
 from compare import spread
 from readme_crossover import crossing, crossover_rows, outcome, ratios
