@@ -3,7 +3,6 @@
 README and chart uses, with numbers from measured rows. Standard library only; CTest runs this
 with /usr/bin/python3.
 """
-import importlib.util
 import json
 import os
 import sys
@@ -13,6 +12,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 SCRIPTS = os.path.join(ROOT, "scripts")
 sys.path.insert(0, SCRIPTS)
 import compare  # noqa: E402
+import readme_winners  # noqa: E402
 import sweep_rows  # noqa: E402
 
 H200_FULL = os.path.join(ROOT, "results", "nvidia-h200", "full.json")
@@ -20,14 +20,6 @@ H200_FULL = os.path.join(ROOT, "results", "nvidia-h200", "full.json")
 
 def cell(ms, lo, hi):
     return {"device_ms": ms, "device_ms_min": lo, "device_ms_max": hi}
-
-
-def readme_module():
-    spec = importlib.util.spec_from_file_location("results_readme",
-                                                  os.path.join(SCRIPTS, "results-readme.py"))
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
 
 
 class TieRuleTest(unittest.TestCase):
@@ -113,7 +105,7 @@ class LikeWithLikeTest(unittest.TestCase):
         # 84": the weighted layout ran in 52 of them. Over those 52, ties apart.
         with open(H200_FULL) as f:
             rows = [r for r in json.load(f)["rows"] if sweep_rows.failure(r) == ""]
-        mod = readme_module()
+        mod = readme_winners
         series, t = mod.sweep_tally(rows)
         self.assertEqual((t.total, t.n), (136, 52))
         self.assertEqual(t.ran["mega/weighted"], 52)
