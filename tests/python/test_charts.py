@@ -324,6 +324,44 @@ class ChartsTest(unittest.TestCase):
         self.assertEqual(plain["color"], small["color"])
         self.assertNotEqual(plain["linestyle"], small["linestyle"])
 
+    def test_a_cell_not_measured_is_marked_not_left_as_a_line_that_stops(self):
+        rows = [r for r in sweep_rows_fixture(("bounces",))
+                if not (r["layout"] == "weighted" and r["bounces"] >= 3)]
+        fig = charts.time_vs_bounces(META, rows)
+        crosses = [line for ax in fig.axes for line in ax.lines
+                   if line.get_marker() == chart_style.MISSING_MARKER]
+        # The weighted layout missed B = 3 and 4 in both scenes: one row of crosses a panel.
+        self.assertEqual(sorted(len(c.get_xdata()) for c in crosses), [2, 2])
+        self.assertEqual({c.get_color() for c in crosses},
+                         {chart_style.SERIES_STYLES[("mega", "weighted")][0]})
+
+    def test_kernel_breakdown_has_a_panel_per_series_and_no_second_axis(self):
+        fig = charts.kernel_breakdown(META, sweep_rows_fixture(("bounces",)))
+        panels = [ax for ax in fig.axes if ax.patches]
+        self.assertEqual(len(panels), 2 * 4)  # two scenes, four series
+        self.assertEqual([ax for ax in fig.axes if ax.get_ylabel().endswith("(log)")], [])
+
+    def test_speed_chart_names_a_layout_without_accuracy_cells(self):
+        rows = sweep_rows_fixture(("bounces",))
+        rows += [row(p, t, lay, "spheres", b, group="accuracy", rmse=0.1 / (1 + b), psnr_db=20,
+                     reference={"bounces": 8}) for p, t, lay in PIPES if lay != "weighted"
+                 for b in range(3)]
+        fig = charts.speed_vs_accuracy(META, rows)
+        texts = [t.get_text() for t in fig.axes[-1].get_legend().get_texts()]
+        self.assertIn("megakernel (weighted): not measured in this sweep's accuracy cells", texts)
+
+    def test_crossover_star_only_at_a_win_beyond_the_spread(self):
+        import charts_crossover
+        rows = crossover_fixture()
+        for r in rows:  # every cell's frames spread by 30%: the queue's 0.8 is a tie
+            r.update(device_ms_min=r["device_ms"] * 0.85, device_ms_max=r["device_ms"] * 1.15)
+        fig = charts_crossover.crossover_chart(META, rows)
+        stars = [line for ax in fig.axes[:2] for line in ax.lines if line.get_marker() == "*"]
+        self.assertEqual(stars, [])
+        fig = charts_crossover.crossover_chart(META, crossover_fixture())
+        stars = [line for ax in fig.axes[:2] for line in ax.lines if line.get_marker() == "*"]
+        self.assertEqual([tuple(s.get_xdata()) for s in stars], [(4,), (4,)])
+
     def test_pipelines_have_distinct_colours_in_line_charts(self):
         fig = charts.time_vs_bounces(META, sweep_rows_fixture())
         colours = {line.get_color() for line in fig.axes[0].lines}
