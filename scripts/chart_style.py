@@ -1,22 +1,65 @@
-"""Figure scaffolding the result charts share (charts.py, charts_limits.py): the footer that
-names device, driver, commit and timing, a row under the panels that holds the legend (so that no
-legend covers data), log axes labelled in one style, and labels that must not overlap.
+"""Figure scaffolding every result chart shares (charts.py, charts_limits.py,
+charts_crossover.py, charts_map.py): the one palette (a fixed colour and marker per pipeline and
+layout), the footer that names device, driver, commit and timing, a row under the panels that
+holds the legend (so that no legend covers data), log axes labelled in one style, labels that
+must not overlap, and how a missing cell is marked.
 Needs Debian's python3-matplotlib (scripts/setup).
 """
 import math
 import textwrap
+import zlib
 
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 from matplotlib.transforms import Bbox  # noqa: E402
+from sweep_rows import own_options  # noqa: E402
 from matplotlib.ticker import (FixedLocator, FuncFormatter, MaxNLocator,  # noqa: E402
                                NullFormatter, NullLocator)
 
 
 DPI = 110
 MARKERS = "osD^v<>p*h"
+
+# The palette: one colour and marker per series, the same in every chart, keyed by pipeline and,
+# for pipelines with a ray-storage layout, the layout. Okabe-Ito colours, which stay apart for
+# colour-blind readers; the megakernel family in blues and greens, the wavefronts in warm hues.
+SERIES_STYLES = {
+    ("mega", "tree"): ("#0072B2", "o"),       # blue
+    ("mega", "weighted"): ("#009E73", "s"),   # bluish green
+    ("persist", None): ("#56B4E9", "v"),      # sky blue
+    ("wave", None): ("#D55E00", "^"),         # vermillion
+    ("queue", None): ("#CC79A7", "D"),        # reddish purple
+    ("auto", None): ("#E69F00", "P"),         # orange
+    ("cpu", None): ("#000000", "X"),          # black: the CPU reference
+}
+# Pipelines not listed above: a colour none of them uses, picked by a stable hash of the name.
+OTHER_COLORS = ["#8c564b", "#7f7f7f", "#bcbd22", "#17becf", "#9467bd"]
+OTHER_MARKERS = "<>ph*"
+LINESTYLES = ["-", "--", ":", "-."]
+MISSING_MARKER = "x"  # a cell that did not run, drawn where its point would be
+TIE_COLOR = "#dddddd"  # a setting without a winner beyond the frame spread
+
+
+def base_style(row):
+    """(colour, marker) of the series a row belongs to."""
+    layout = own_options(row).get("layout")
+    found = SERIES_STYLES.get((row["pipeline"], layout)) or SERIES_STYLES.get((row["pipeline"], None))
+    if found:
+        return found
+    slot = zlib.crc32(row["pipeline"].encode()) % len(OTHER_COLORS)
+    return OTHER_COLORS[slot], OTHER_MARKERS[slot]
+
+
+def series_style(series, key):
+    """{color, marker, linestyle} of a series key (sweep_rows.Series): the palette's colour and
+    marker, and a line style that tells apart the keys sharing them (memory budgets, other
+    options of one pipeline), solid for the first."""
+    color, marker = base_style(series.first[key])
+    same = [k for k in series.keys if base_style(series.first[k]) == (color, marker)]
+    return {"color": color, "marker": marker,
+            "linestyle": LINESTYLES[same.index(key) % len(LINESTYLES)]}
 
 
 def footer_text(meta):

@@ -14,8 +14,9 @@ Writes, next to the JSON unless --out says otherwise, each chart whose group the
   crossover.png            time over the best megakernel against material cost, a panel per
                            number of materials (charts_crossover.py, [crossover])
 A chart whose group the sweep lacks is not written (and one already in the folder, from another
-sweep of the same device, is left alone). The pipelines, their titles, colours and layouts come
-from the rows (sweep_rows.py). Every chart's footer names the device, driver, commit and timing.
+sweep of the same device, is left alone). The pipelines, their titles and layouts come from the
+rows (sweep_rows.py), their colours and markers from the one palette (chart_style.py), wins and
+ties from compare.py. Every chart's footer names the device, driver, commit and timing.
 Needs Debian's python3-matplotlib (scripts/setup), hence /usr/bin/python3.
 """
 import argparse
@@ -25,12 +26,14 @@ import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from chart_style import (DPI, MARKERS, figure, legend_height, legend_row, log_ticks,  # noqa: E402
-                         place_labels, plt, point_boxes, resolution_axis)
+from chart_style import (DPI, LINESTYLES, MARKERS, MISSING_MARKER, figure,  # noqa: E402
+                         legend_height, legend_row, log_ticks, place_labels, plt, point_boxes,
+                         resolution_axis, series_style)
+from compare import PARETO_RTOL, pareto, spread  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
 from matplotlib.patches import Patch  # noqa: E402
 from matplotlib.ticker import MaxNLocator  # noqa: E402
-from sweep_rows import PALETTE, Series, failure, in_group  # noqa: E402
+from sweep_rows import Series, failure, in_group  # noqa: E402
 
 KERNEL_COLORS = {"megakernel": "#1f77b4", "centers": "#6baed6", "edges": "#08519c",
                  "trace": "#d62728", "image": "#ff9896", "reset": "#7f7f7f"}
@@ -72,36 +75,61 @@ def varying(rows, keys):
 
 
 def line_chart(meta, rows, title, axis_key, ylabel):
-    """Device ms against the bounce limit or the resolution, a panel per scene; the settings a
-    scene keeps fixed are in its title, those that vary get a marker each."""
+    """Device ms against the bounce limit or the resolution, a panel per scene, each point's
+    frame spread as an error bar; the settings a scene keeps fixed are in its title, those that
+    vary get a line style each. A cell some series did not measure where the others did breaks
+    its line and is marked on the bottom edge, so that a line that stops is not read as a
+    trend."""
     scenes, series = scenes_of(rows), Series(rows)
-    fig, panels, legend_ax = figure(meta, title, len(scenes))
+    guess = [series.label(k) for k in series.keys] + ["× on the bottom edge: not measured (the "
+                                                      "series' colour)"] * 2
+    fig, panels, legend_ax = figure(meta, title, len(scenes), legend_rows=legend_height(
+        max(4.6 * min(3, len(scenes)), 9), guess, 4))
     other = [k for k in SETTING_KEYS if k != axis_key]
-    handles, labels = [], []
+    handles, labels, any_missing = [], [], False
+    xof = (lambda r: r["bounces"]) if axis_key == "bounces" else \
+        (lambda r: r["width"] * r["height"] / 1e6)
     for ax, scene in zip(panels, scenes):
         srows = [r for r in rows if r["scene"] == scene]
         vary = varying(srows, other)
         variants = sorted({setting_text(r, vary) for r in srows})
-        for key in series.keys:
-            for n, variant in enumerate(variants):
-                pts = sorted((r for r in srows if series.key(r) == key and
-                              setting_text(r, vary) == variant),
-                             key=lambda r: value(r, axis_key) if axis_key != "size"
-                             else r["width"] * r["height"])
+        keys = [k for k in series.keys if any(series.key(r) == k for r in srows)]
+        missing = []  # (series index, [x], colour)
+        for n, variant in enumerate(variants):
+            vrows = [r for r in srows if setting_text(r, vary) == variant]
+            xs = sorted({xof(r) for r in vrows})
+            for j, key in enumerate(keys):
+                pts = {xof(r): r for r in vrows if series.key(r) == key}
                 if not pts:
                     continue
-                xs = [r["bounces"] if axis_key == "bounces" else r["width"] * r["height"] / 1e6
-                      for r in pts]
+                st = series_style(series, key)
+                style = st["linestyle"] if len(variants) == 1 else LINESTYLES[n % len(LINESTYLES)]
+                ys = [pts[x]["device_ms"] if x in pts else float("nan") for x in xs]
+                lo = [pts[x]["device_ms"] - spread(pts[x])[0] if x in pts else 0 for x in xs]
+                hi = [spread(pts[x])[1] - pts[x]["device_ms"] if x in pts else 0 for x in xs]
                 label = f"{series.label(key)} {variant}".strip()
-                line, = ax.plot(xs, [r["device_ms"] for r in pts], marker=MARKERS[n % 10], ms=4,
-                                color=series.color(key), linestyle=series.linestyle(key),
-                                label=label)
+                line = ax.errorbar(xs, ys, yerr=[lo, hi], marker=st["marker"], ms=4,
+                                   color=st["color"], linestyle=style, elinewidth=0.8,
+                                   capsize=2, label=label)
                 handles.append(line)
                 labels.append(label)
+                gaps = [x for x in xs if x not in pts]
+                if gaps:
+                    missing.append((j, gaps, st["color"]))
         fixed = setting_text(srows[0], [k for k in other if k not in vary])
         ax.set_title(f"{scene}" + (f" ({fixed})" if fixed else ""), fontsize=9)
         ax.set_ylabel(ylabel)
         ax.set_yscale("log")
+        if missing:
+            any_missing = True
+            # A strip under the data, a row of crosses per series that missed cells there.
+            rows_needed = len({j for j, _, _ in missing})
+            lo, hi = ax.get_ylim()
+            ax.set_ylim(lo / (hi / lo) ** (0.08 * rows_needed + 0.04), hi)
+            edge = ax.get_xaxis_transform()
+            for row_n, (j, gaps, color) in enumerate(sorted(missing)):
+                ax.plot(gaps, [0.035 + 0.06 * row_n] * len(gaps), MISSING_MARKER,
+                        transform=edge, color=color, ms=6, mew=1.6)
         ax.grid(True, which="both", alpha=0.3)
         if axis_key == "size":
             resolution_axis(ax, srows)
@@ -109,6 +137,12 @@ def line_chart(meta, rows, title, axis_key, ylabel):
             ax.set_xlabel("bounce limit B")
             ax.xaxis.set_major_locator(MaxNLocator(integer=True))
         log_ticks(ax)
+    if any_missing:
+        handles.append(Line2D([], [], linestyle="none", marker=MISSING_MARKER, color="#555555",
+                              mew=1.6))
+        labels.append("not measured (in the series' colour, in a strip at the bottom)")
+    handles.append(Line2D([], [], color="#555555", marker="|", linestyle="none", ms=8))
+    labels.append("bar: fastest to slowest timed frame")
     legend_row(legend_ax, handles, labels)
     return fig
 
@@ -171,8 +205,8 @@ def memory_vs_bounces(meta, rows):
     for ax, (what, unit, _), found in zip(axes, panels, lines):
         handles = []
         for n, (xs, ys, keys, scenes) in enumerate(found):
-            color = series.color(keys[0]) if len(keys) == 1 else "#333333"
-            style = series.linestyle(keys[0]) if len(keys) == 1 else "-"
+            color = series_style(series, keys[0])["color"] if len(keys) == 1 else "#333333"
+            style = series_style(series, keys[0])["linestyle"] if len(keys) == 1 else "-"
             label = f"{', '.join(series.label(k) for k in keys)}: {scene_list(scenes, every)}"
             handles += ax.plot(xs, ys, color=color, linestyle=style, marker=MARKERS[n % 10],
                                ms=3.5, label=label)
@@ -191,26 +225,23 @@ def memory_vs_bounces(meta, rows):
     return fig
 
 
-# Colours for kernels without one of their own: matplotlib's tab20 less the hues KERNEL_COLORS
-# holds, so that no two kernels of a chart share a colour (a queue frame has about a dozen).
-OTHER_KERNEL_COLORS = [c for c in
-                       ["#2ca02c", "#98df8a", "#ff7f0e", "#ffbb78", "#9467bd", "#c5b0d5",
-                        "#8c564b", "#c49c94", "#e377c2", "#f7b6d2", "#bcbd22", "#dbdb8d",
-                        "#17becf", "#9edae5", "#393b79", "#637939", "#8c6d31", "#843c39",
-                        "#7b4173", "#5254a3"]
-                       if c not in KERNEL_COLORS.values()]
+# Kernel colours: a panel shows one series' kernels, each series has its own legend, so the
+# colours restart for every series and the kernels of one frame are as far apart as they can be
+# (a queue frame has about a dozen). Dark hues first, their light partners after.
+KERNEL_PALETTE = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2",
+                  "#7f7f7f", "#bcbd22", "#17becf", "#aec7e8", "#ffbb78", "#98df8a", "#ff9896",
+                  "#c5b0d5", "#c49c94", "#f7b6d2", "#dbdb8d"]
 
 
-def kernel_colors(names):
-    unknown = sorted(n for n in names if n not in KERNEL_COLORS)
-    return {**{n: OTHER_KERNEL_COLORS[i % len(OTHER_KERNEL_COLORS)] for i, n in enumerate(unknown)},
-            **KERNEL_COLORS}
+def kernel_names(rows):
+    """The kernels of these rows, in the order the frames ran them."""
+    return list(dict.fromkeys(k for r in rows for k in r["kernel_ms"]))
 
 
 def kernel_breakdown(meta, rows):
-    """Per scene: each kernel's share of the frame as stacked bars (one bar per series at each
-    bounce limit), and the frame's device ms on a log axis beside, so that small B stays
-    readable next to B=8."""
+    """A panel per scene (rows of the grid) and series (columns): each kernel's share of the
+    frame as a stacked bar at each bounce limit, the frame's device ms printed above its bar.
+    One series a panel, so bars are wide and no second axis lies over them."""
     chosen, axis = in_group(rows, "bounces"), "bounces"
     if not chosen:
         chosen, axis = in_group(rows, "resolution"), "size"
@@ -218,79 +249,68 @@ def kernel_breakdown(meta, rows):
     if not chosen:
         return None
     series, scenes = Series(chosen), scenes_of(chosen)
-    colors = kernel_colors({k for r in chosen for k in r["kernel_ms"]})
-    # The legend's row sized for every kernel and every series' frame-time line it will hold.
-    entries = sorted(colors.keys() & {k for r in chosen for k in r["kernel_ms"]}) + \
-        [f"{series.label(k)}: frame ms" for k in series.keys]
-    cols = min(len(scenes), 3)
-    rows_needed = legend_height(max(4.6 * cols, 9), entries, 5)
-    fig, panels, legend_ax = figure(meta, "Device time per kernel: share of the frame (bars) "
-                                    "and frame time (points, right axis)", len(scenes),
-                                    legend_rows=rows_needed)
-    width = 0.8 / len(series.keys)
-    handles, labels = [], []
-    for ax, scene in zip(panels, scenes):
+    keys = series.keys
+    names = {k: kernel_names([r for r in chosen if series.key(r) == k]) for k in keys}
+    colors = {k: {n: KERNEL_PALETTE[i % len(KERNEL_PALETTE)] for i, n in enumerate(v)}
+              for k, v in names.items()}
+    lines = max(math.ceil(len(v) / 2) for v in names.values())
+    fig, panels, legend_ax = figure(
+        meta, "Device time per kernel: each kernel's share of the frame, the frame's device ms "
+        "above its bar", len(scenes) * len(keys), cols=len(keys), panel=(3.6, 2.6),
+        legend_rows=(0.2 * lines + 0.45) / 0.45)
+    xkey = (lambda r: r["bounces"]) if axis == "bounces" else (lambda r: r["width"] * r["height"])
+    any_missing = False
+    for i, scene in enumerate(scenes):
         srows = [r for r in chosen if r["scene"] == scene]
-        xkey = (lambda r: r["bounces"]) if axis == "bounces" else \
-            (lambda r: r["width"] * r["height"])
         xs = sorted({xkey(r) for r in srows})
-        total_ax = ax.twinx()
-        for j, key in enumerate(series.keys):
-            offset = (j - (len(series.keys) - 1) / 2) * width
+        for j, key in enumerate(keys):
+            ax = panels[i * len(keys) + j]
             pts = {xkey(r): r for r in srows if series.key(r) == key}
-            for i, x in enumerate(xs):
+            for n, x in enumerate(xs):
                 r = pts.get(x)
                 if not r:
+                    any_missing = True
+                    ax.plot([n], [50], MISSING_MARKER, color="#777777", ms=7, mew=1.6)
                     continue
                 total, bottom = sum(r["kernel_ms"].values()) or 1.0, 0.0
-                for name, t in r["kernel_ms"].items():
-                    share = 100 * t / total
-                    ax.bar(i + offset, share, width * 0.95, bottom=bottom, color=colors[name],
-                           edgecolor="white", linewidth=0.4)
+                for name in names[key]:
+                    share = 100 * r["kernel_ms"].get(name, 0.0) / total
+                    ax.bar(n, share, 0.8, bottom=bottom, color=colors[key][name],
+                           edgecolor="white", linewidth=0.3)
                     bottom += share
-                    if name not in labels:
-                        handles.append(Patch(color=colors[name]))
-                        labels.append(name)
-            at = [i + offset for i, x in enumerate(xs) if x in pts]
-            # Black on white: the bars behind already use the series' hues for kernels.
-            line, = total_ax.plot(at, [pts[x]["device_ms"] for x in xs if x in pts],
-                                  marker=MARKERS[j % len(MARKERS)], ms=4.5, color="black",
-                                  markerfacecolor="white", linestyle=series.linestyle(key),
-                                  linewidth=0.9)
-            label = f"{series.label(key)}: frame ms"
-            if label not in labels:
-                handles.append(line)
-                labels.append(label)
-        total_ax.set_yscale("log")
-        total_ax.set_ylabel("device ms per frame (log)", fontsize=8)
-        log_ticks(total_ax)
-        ax.set_ylim(0, 100)
-        ax.set_xticks(range(len(xs)))
-        first = srows[0]
-        if axis == "bounces":
-            ax.set_xticklabels([str(x) for x in xs], fontsize=8)
-            ax.set_xlabel("bounce limit B", fontsize=8)
-        else:
-            sizes = {r["width"] * r["height"]: f"{r['width']}×{r['height']}" for r in srows}
-            ax.set_xticklabels([sizes[x] for x in xs], fontsize=7, rotation=30)
-            ax.set_xlabel("resolution", fontsize=8)
-        fixed = [k for k in SETTING_KEYS if k != axis and k not in varying(srows, SETTING_KEYS)]
-        ax.set_title(f"{scene} ({setting_text(first, fixed)})", fontsize=9)
-        ax.set_ylabel("% of the frame's device time")
-    order = ", ".join(series.label(k) for k in series.keys)
-    legend_row(legend_ax, handles, labels, ncol=min(len(labels), 5))
-    legend_ax.set_title(f"bars at each x, left to right: {order}", fontsize=8)
+                ax.text(n, 102, ms_text(r["device_ms"]), ha="center", va="bottom",
+                        fontsize=6, rotation=90)
+            ax.set_ylim(0, 125)
+            ax.set_yticks([0, 25, 50, 75, 100])
+            ax.set_xlim(-0.6, len(xs) - 0.4)
+            ax.set_xticks(range(len(xs)))
+            if axis == "bounces":
+                ax.set_xticklabels([str(x) for x in xs], fontsize=7)
+                ax.set_xlabel("bounce limit B", fontsize=7)
+            else:
+                sizes = {r["width"] * r["height"]: f"{r['width']}×{r['height']}" for r in srows}
+                ax.set_xticklabels([sizes[x] for x in xs], fontsize=6, rotation=30)
+                ax.set_xlabel("resolution", fontsize=7)
+            ax.tick_params(axis="y", labelsize=7)
+            if j == 0:
+                ax.set_ylabel("% of device time", fontsize=7)
+            fixed = [k for k in SETTING_KEYS if k != axis and k not in varying(srows, SETTING_KEYS)]
+            ax.set_title(f"{scene} ({setting_text(srows[0], fixed)})\n{series.label(key)}",
+                         fontsize=7.5, color=series_style(series, key)["color"])
+    for j, key in enumerate(keys):
+        handles = [Patch(color=colors[key][n]) for n in names[key]]
+        legend = legend_ax.legend(handles, names[key], loc="upper center", ncol=2, fontsize=7,
+                                  bbox_to_anchor=((j + 0.5) / len(keys), 1.0), frameon=False,
+                                  title=series.label(key), title_fontsize=7.5)
+        legend_ax.add_artist(legend)
+    if any_missing:
+        legend_ax.text(0.5, 0.0, "× : not measured at that setting", ha="center", va="bottom",
+                       fontsize=7, transform=legend_ax.transAxes)
     return fig
 
 
-def pareto(points):
-    """Points (time, error, row) not beaten on both axes, by increasing time."""
-    front, best = [], float("inf")
-    for p in sorted(points, key=lambda p: (p[0], p[1])):
-        if p[1] < best:
-            front.append(p)
-            best = p[1]
-    return front
+def ms_text(v):
+    return f"{v:.3g} ms" if v < 100 else f"{v:.0f} ms"
 
 
 def shared_error(rows):
@@ -304,16 +324,21 @@ def shared_error(rows):
     return sum(1 for v in multi if max(v) == min(v)), len(multi)
 
 
-def size_of(s):
-    return 14 + 8 * math.log2(s)
-
-
 def speed_vs_accuracy(meta, rows):
+    """Device ms against RMSE, a panel per scene, a point per cell in its series' colour and
+    marker (one size: the front's labels say B, shadow samples and AA). The Pareto front joins
+    points only where the error drops by more than compare.PARETO_RTOL, so two pipelines
+    rendering the same image do not split it. A series of the sweep without accuracy cells is
+    named in the legend as missing."""
+    every = Series(rows)
     rows = [r for r in in_group(rows, "accuracy") if r.get("rmse") is not None]
     if not rows:
         return None
     ref = rows[0].get("reference", {})
-    series, scenes = Series(rows), scenes_of(rows)
+    # Keyed as in the whole sweep, so that a layout without accuracy cells is named, not lost.
+    series, scenes = every, scenes_of(rows)
+    present = {series.key(r) for r in rows}
+    absent = [series.label(k) for k in series.keys if k not in present]
     same, multi = shared_error(rows)
     note = (f"\nthe error is the same on every pipeline at {same} of the {multi} settings run on "
             "more than one (the same image): their points share a height, only the time differs"
@@ -322,18 +347,16 @@ def speed_vs_accuracy(meta, rows):
         meta, "Speed against accuracy (error from the converged CPU reference, log-log)\n"
         f"reference: CPU double, B={ref.get('bounces')}, {ref.get('shadow_samples')} shadow "
         f"samples, aa={ref.get('aa')}" + note, len(scenes), legend_rows=2.2)
-    aas = sorted({r["aa"] for r in rows})
-    shadows = sorted({r["shadow_samples"] for r in rows})
     labelled = []
     for ax, scene in zip(panels, scenes):
         srows = [r for r in rows if r["scene"] == scene]
         for key in series.keys:
-            for n, aa in enumerate(aas):
-                pts = [r for r in srows if series.key(r) == key and r["aa"] == aa]
-                if pts:
-                    ax.scatter([r["device_ms"] for r in pts], [max(r["rmse"], 1e-6) for r in pts],
-                               s=[size_of(r["shadow_samples"]) for r in pts],
-                               marker=MARKERS[n % 10], color=series.color(key), alpha=0.55)
+            pts = [r for r in srows if series.key(r) == key]
+            if pts:
+                st = series_style(series, key)
+                ax.scatter([r["device_ms"] for r in pts], [max(r["rmse"], 1e-6) for r in pts],
+                           s=22, marker=st["marker"], color=st["color"], alpha=0.6,
+                           linewidths=0)
         front = pareto([(r["device_ms"], max(r["rmse"], 1e-6), r) for r in srows])
         ax.step([p[0] for p in front], [p[1] for p in front], where="post", color="black",
                 linewidth=1.1)
@@ -348,18 +371,18 @@ def speed_vs_accuracy(meta, rows):
         log_ticks(ax, "x")
         log_ticks(ax)
         labelled.append((ax, front))
-    handles = [Line2D([], [], linestyle="none", marker="o", color=series.color(k), alpha=0.7)
-               for k in series.keys]
-    labels = [series.label(k) for k in series.keys]
-    handles += [Line2D([], [], linestyle="none", marker=MARKERS[n % 10], color="#777777")
-                for n in range(len(aas))]
-    labels += [f"aa={aa} ({aa}×{aa} samples)" for aa in aas]
-    handles += [Line2D([], [], linestyle="none", marker="o", color="#777777",
-                       markersize=math.sqrt(size_of(s))) for s in shadows]
-    labels += [f"{s} shadow sample{'s' if s > 1 else ''}" for s in shadows]
+    handles, labels = [], []
+    for k in (k for k in series.keys if k in present):
+        st = series_style(series, k)
+        handles.append(Line2D([], [], linestyle="none", marker=st["marker"], color=st["color"]))
+        labels.append(series.label(k))
+    for name in absent:
+        handles.append(Line2D([], [], linestyle="none", marker=MISSING_MARKER, color="#777777"))
+        labels.append(f"{name}: not measured in this sweep's accuracy cells")
     handles.append(Line2D([], [], color="black", marker="o", markerfacecolor="none"))
-    labels.append("Pareto front (labelled: B bounce limit, s shadow samples, aa)")
-    legend_row(legend_ax, handles, labels, ncol=min(len(labels), 5))
+    labels.append(f"Pareto front (errors within {PARETO_RTOL:.0%} are one level; labelled: B "
+                  "bounce limit, s shadow samples, aa)")
+    legend_row(legend_ax, handles, labels, ncol=min(len(labels), 3))
     for ax, front in labelled:
         label_front(fig, ax, front)
     return fig

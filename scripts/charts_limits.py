@@ -6,10 +6,11 @@ squares ran with the global ray tree in K row tiles (K beside the memory point w
 room), a dotted line and a cross on the top edge mark each series' first failure or first
 setting not run. Everything a reader must decode (series, failures, the device's largest
 allocation, the memory budget, max-launch-ms) is in the legend under each column, not on the
-data. Series, colours and failure kinds come from the rows (sweep_rows.limit_series).
+data. Series and failure kinds come from the rows (sweep_rows.limit_series), colours from
+the palette in chart_style.py.
 """
 from chart_style import (DPI, footer_text, log_ticks, place_labels, plt,  # noqa: F401
-                         point_boxes, resolution_axis)
+                         point_boxes, resolution_axis, series_style)
 from matplotlib.lines import Line2D
 from matplotlib.ticker import MaxNLocator
 from matplotlib.transforms import offset_copy
@@ -99,6 +100,7 @@ def limits_chart(meta, all_rows):
         return None
     for s in series:
         s["budget"] = s["rows"][0].get("memory_budget") or 0
+        s.update(series_style(s["series"], s["key"]))  # the palette's colour, marker and line
     scenes = list(dict.fromkeys(s["scene"] for s in series))
     kinds = [k for k in ("bounces", "size") if any(s["axis"] == k for s in series)]
     ncol = len(kinds) * len(scenes)

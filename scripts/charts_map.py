@@ -2,8 +2,9 @@
 """Draws the crossover map of a `map` sweep (bench/sweeps/map, scenes of scripts/make-map.py):
 which design is fastest at each (sphere size on screen, share of mirrors and glass), one panel per
 shading cost, the cell coloured by the winner and labelled with its margin over the runner-up.
-A margin inside the two designs' measured frame spread (their ranges of timed frames overlap)
-is a tie, drawn hatched and labelled "tie". A setting where some design did not run is marked
+A margin inside the measured frame spread (compare.py's tie rule: the medians no further apart
+than the larger of the two cells' spreads) is a tie, drawn hatched and labelled "tie". A
+setting where some design did not run is marked
 missing: wins are counted only where every design ran. Also writes a Markdown table beside the
 chart with every time, the winner, the margin and the megakernel's busy lanes per warp where
 the rows carry them.
@@ -20,6 +21,7 @@ import re
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from compare import Verdict  # noqa: E402
 from sweep_rows import Series  # noqa: E402
 
 NAME = re.compile(r"map-s(\d+)-x(\d+)-o(\d+)-m(\d+)(?:-f\d+x\d+)?$")
@@ -49,24 +51,22 @@ def cells(rows):
 
 
 def verdict(by_key, keys):
-    """(winner, runner-up, margin, tie) among rows that ran, or None when one did not."""
+    """(fastest, runner-up, margin, tie) among rows that ran, or None when one did not. tie:
+    the fastest ties another design by compare.py's rule (medians no further apart than the
+    larger frame spread)."""
     ran = {k: r for k, r in by_key.items() if r.get("status") == "ok"}
     if any(k not in ran for k in keys):
         return None
-    order = sorted(ran, key=lambda k: ran[k]["device_ms"])
-    w, u = ran[order[0]], ran[order[1]]
-    margin = u["device_ms"] / w["device_ms"]
-    # A tie when the winner's slowest frame is no faster than the runner-up's fastest.
-    tie = w.get("device_ms_max", w["device_ms"]) >= u.get("device_ms_min", u["device_ms"])
-    return order[0], order[1], margin, tie
+    v = Verdict(ran)
+    return v.fastest, v.runner, v.margin, v.is_tie
 
 
 def table(meta, series, grid, keys, path):
     lines = [f"# Crossover map: {meta.get('device', '?')} (driver {meta.get('driver', '?')}, "
              f"commit {meta.get('commit', '?')})", "",
              "Device time of a frame (median of the timed frames, ms); the "
-             "winner's margin is the runner-up's time over the winner's, a tie when their frame "
-             "ranges overlap. Lanes: the megakernel's mean busy lanes of a 32-lane warp over the "
+             "winner's margin is the runner-up's time over the winner's, a tie when the medians "
+             "differ by no more than the larger of the two cells' frame spreads (scripts/compare.py). Lanes: the megakernel's mean busy lanes of a 32-lane warp over the "
              "steps of its ray loop (counted on NVIDIA only).", ""]
     head = "| size px | mirrors+glass | octaves | " + " | ".join(series.label(k) for k in keys) + \
            " | winner | margin | lanes (tree / weighted) |"
@@ -106,7 +106,7 @@ def chart(meta, series, grid, keys, path):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from matplotlib.patches import Patch
-    from chart_style import figure, legend_row
+    from chart_style import TIE_COLOR, figure, legend_row, series_style
 
     octaves = sorted({g[2] for g in grid})
     r0 = next(iter(next(iter(grid.values())).values()))
@@ -130,7 +130,8 @@ def chart(meta, series, grid, keys, path):
                     continue
                 winner, runner, margin, tie = v
                 ax.add_patch(plt.Rectangle((i - 0.5, j - 0.5), 1, 1,
-                                           facecolor="#dddddd" if tie else series.color(winner),
+                                           facecolor=TIE_COLOR if tie else
+                                           series_style(series, winner)["color"],
                                            edgecolor="white", hatch="//" if tie else None))
                 text = "tie" if tie else f"{margin:.2f}x"
                 ax.text(i, j, text, ha="center", va="center", fontsize=9,
@@ -140,8 +141,9 @@ def chart(meta, series, grid, keys, path):
         ax.set_xlabel("sphere size on screen")
         ax.set_ylabel("mirrors and glass")
         ax.set_title(f"{o} noise octaves", fontsize=10)
-    handles = [Patch(facecolor=series.color(k), label=series.label(k)) for k in keys]
-    handles.append(Patch(facecolor="#dddddd", hatch="//", label="tie (inside the frame spread)"))
+    handles = [Patch(facecolor=series_style(series, k)["color"], label=series.label(k))
+               for k in keys]
+    handles.append(Patch(facecolor=TIE_COLOR, hatch="//", label="tie (inside the frame spread)"))
     legend_row(legend_ax, handles, [h.get_label() for h in handles], ncol=len(handles))
     fig.savefig(path)
     plt.close(fig)

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """How often `rtlab predict` names the winner: reads the predictions (`rtlab predict --json`, one
 object a scene) and measured sweep rows, finds the fastest design of every scene where every
-design ran (a tie when the two fastest designs' frame ranges overlap: charts_map.verdict), fits the
+design ran (a tie by compare.py's rule, through charts_map.verdict), fits the
 busy-lane threshold on the FIT rows, and scores the rule on them and on the TEST rows, which it
 was not fitted to. The question scored is the one the rule answers: does the queue wavefront win,
 or a design that gives each work-item a whole ray tree (the megakernel in either layout, or the
@@ -51,8 +51,9 @@ def settings(files):
             ran = [k for k, r in by_key.items() if r.get("status") == "ok"]
             if "queue" in ran and len(ran) >= 2:
                 v = verdict({k: by_key[k] for k in ran}, ran)
-                if v and v[0] != "queue" and not v[3]:
-                    out.append((scene, v[0], v[1], v[2], False, series, by_key, "partial"))
+                # A tie between two designs of the other kind still settles it.
+                if v and not is_queue(v[0]) and not undecided(v[0], v[1], v[3]):
+                    out.append((scene, v[0], v[1], v[2], v[3], series, by_key, "partial"))
     return meta, out
 
 

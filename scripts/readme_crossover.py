@@ -1,14 +1,77 @@
 """The generated README's Crossover section (bench/sweeps/crossover): per pipeline its
 time over the best megakernel against material cost and material count, where it first wins,
 and why, measured: the kernels' registers and spills (NVIDIA build log) or private bytes per
-work-item, and each wavefront stage's share of device time. Used by results-readme.py.
+work-item, and each wavefront stage's share of device time. Used by results-readme.py; the
+ratios and crossings are also what charts_crossover.py draws.
+
+The sweep's scenes are divergence-o<K>-m<M> (scripts/make-divergence.py): K noise octaves in
+every procedural material, M distinct materials interleaved. Per setting (scene, size, bounce
+limit) each other pipeline's device time is divided by the best megakernel's (the faster of its
+layouts that ran). A ratio under 1 is a win only when the two cells do not tie (compare.py):
+a crossover is the first measured octave count with a win beyond the frame spread, never a
+point interpolated between two measurements.
+Standard library only.
 """
 import math
+import re
 from collections import defaultdict
 
-from charts_crossover import crossing, crossover_rows, parse, ratios
+from compare import relative_spread, tied
 from readme_format import table
-from sweep_rows import Series, family
+from sweep_rows import Series, failure, family, in_group
+
+SCENE = re.compile(r"divergence-o(\d+)-m(\d+)$")
+MEGA = "megakernel"  # the family every other series is divided by
+
+
+def parse(r):
+    """(octaves, materials) of a crossover row's scene, or None."""
+    m = SCENE.search(r["scene"])
+    return (int(m.group(1)), int(m.group(2))) if m else None
+
+
+def crossover_rows(all_rows):
+    return [r for r in in_group(all_rows, "crossover") if failure(r) == "" and parse(r)]
+
+
+def ratios(rows):
+    """{(series key, M, (w, h), B): [(K, ratio, row, best mega row)]} sorted by K, for every
+    series that is not a megakernel, against the best megakernel at the same setting."""
+    series = Series(rows)
+    cells = defaultdict(dict)
+    for r in rows:
+        k, m = parse(r)
+        cells[(m, (r["width"], r["height"]), r["bounces"], k)][series.key(r)] = r
+    out = defaultdict(list)
+    for (m, size, b, k), by in cells.items():
+        megas = [r for key, r in by.items() if family(r) == MEGA]
+        if not megas:
+            continue
+        best = min(megas, key=lambda r: r["device_ms"])
+        for key, r in by.items():
+            if family(r) != MEGA:
+                out[(key, m, size, b)].append((k, r["device_ms"] / best["device_ms"], r, best))
+    for v in out.values():
+        v.sort(key=lambda t: t[0])
+    return series, out
+
+
+def outcome(point):
+    """'win', 'tie' or 'loss' of one (K, ratio, row, best mega row) against the best megakernel."""
+    _, q, r, best = point
+    if tied(r, best):
+        return "tie"
+    return "win" if q < 1 else "loss"
+
+
+def crossing(points):
+    """The first measured octave count at which the series wins beyond the frame spread
+    (compare.py), None when it never does. No interpolation: between two measurements nothing
+    was measured, and a point inside the spread is a tie, not a crossover."""
+    for p in points:
+        if outcome(p) == "win":
+            return p[0]
+    return None
 
 
 # The kernels whose cost the question turns on: the megakernel, the tree wavefront's trace, the
@@ -41,25 +104,30 @@ def ratio_table(series, data):
 
 
 def crossing_lines(series, data):
-    """One line per series: where it first gets under the best megakernel, or that it never does."""
+    """One line per series: how often it beats, ties and loses to the best megakernel, its best
+    ratio, and where it first wins beyond the spread, or that it never does."""
     lines = []
     top = max(p[0] for pts in data.values() for p in pts)
     for key in sorted({k[0] for k in data}):
         mine = {k: v for k, v in data.items() if k[0] == key}
-        best = min(((p[1], k, p[0]) for k, pts in mine.items() for p in pts), key=lambda t: t[0])
+        best = min(((p[1], k, p) for k, pts in mine.items() for p in pts), key=lambda t: t[0])
         found = []
         for (_, m, size, b), pts in sorted(mine.items(), key=lambda t: t[0][1:]):
             c = crossing(pts)
             if c is not None:
                 found.append(f"M={m} {size_text(size)} B={b}: "
-                             + ("under 1 from K=0" if c == 0 else f"K≈{c:.1f}"))
-        wins = sum(1 for pts in mine.values() for p in pts if p[1] < 1)
-        cells = sum(len(pts) for pts in mine.values())
-        text = (f"- **{series.label(key)}**: faster than the best megakernel in {wins} of {cells} "
-                f"settings; lowest ratio {best[0]:.2f} (M={best[1][1]}, K={best[2]}, "
-                f"{size_text(best[1][2])}, B={best[1][3]}). ")
-        text += ("Crossovers: " + "; ".join(found) + "." if found else
-                 f"No crossover found up to the largest cost tried (K = {top} octaves).")
+                             + ("wins from K=0" if c == pts[0][0] else f"first wins at K={c}"))
+        every = [p for pts in mine.values() for p in pts]
+        count = {o: sum(1 for p in every if outcome(p) == o) for o in ("win", "tie", "loss")}
+        ratio, where, point = best
+        level = " (a tie: within the frame spread)" if outcome(point) == "tie" else ""
+        text = (f"- **{series.label(key)}**: faster than the best megakernel beyond the frame "
+                f"spread in {count['win']} of {len(every)} settings, tied in {count['tie']}, "
+                f"slower in {count['loss']}; lowest ratio {ratio:.2f}{level} (M={where[1]}, "
+                f"K={point[0]}, {size_text(where[2])}, B={where[3]}). ")
+        text += ("Crossovers (first measured octave count with a win beyond the spread): "
+                 + "; ".join(found) + "." if found else
+                 f"No crossover up to the largest cost tried (K = {top} octaves).")
         lines.append(text)
     return lines
 
@@ -133,15 +201,14 @@ def mega_cost_line(rows):
 
 
 def noise_line(rows):
-    """How far one cell's timed frames spread: ratios closer to 1 than this are a draw."""
-    spreads = sorted((r["device_ms_max"] - r["device_ms_min"]) / r["device_ms"] for r in rows
-                     if r.get("device_ms_max") is not None and r.get("device_ms"))
+    """How far one cell's timed frames spread, as a reminder of what the ties above mean."""
+    spreads = sorted(relative_spread(r) for r in rows if r.get("device_ms"))
     if not spreads:
         return ""
     mid = spreads[len(spreads) // 2]
     return (f"Noise: the timed frames of one cell spread by {100 * mid:.0f}% of its median "
-            f"(median over the cells; max − min), so a ratio within about that of 1 is a draw, "
-            "not a win.")
+            f"(median over the cells; max − min); a ratio whose two cells differ by less than "
+            "the larger of their spreads is counted as a tie above, not a win.")
 
 
 def crossover_section(data, json_rel, chart_exists):
@@ -150,7 +217,7 @@ def crossover_section(data, json_rel, chart_exists):
     if not rows:
         return []
     series, ratio = ratios(rows)
-    doc = ["## Crossover: where does the wavefront win? (issue 15)",
+    doc = ["## Crossover: where does the wavefront win?",
            "",
            f"From [`{json_rel}`]({json_rel}) (sweep `{meta.get('config_file')}`, commit "
            f"`{meta.get('commit')}`). Scenes `divergence-o<K>-m<M>` (scripts/make-divergence.py): "

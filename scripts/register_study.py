@@ -2,15 +2,19 @@
 """rtlab — the register study's table (scripts/register-study): for each build variant of the
 weighted megakernel, the registers and spills NVIDIA's build log gives for Megakernel_Render, the
 occupancy they allow, and the device time on each scene against the plain build. A time whose
-[min, max] over the timed frames overlaps the plain build's is a tie.
+median is within the frame spread of the plain build's is a tie (scripts/compare.py).
 
   scripts/register_study.py DIR      (DIR holds one folder of sweep rows per variant)
 Standard library only.
 """
 import json
 import math
+import os
 import pathlib
 import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from compare import tied  # noqa: E402
 
 ORDER = ["plain", "packed-stack", "outline-query", "outline-surface", "outline-shadows",
          "outline-step", "outline-pattern", "cap-128", "cap-96", "cap-64", "query-cap-128"]
@@ -49,7 +53,7 @@ def main():
           f"{first.get('repeats')} frames after {first.get('warmup')} warm-up frames; registers "
           f"from the build log; occupancy derived (65,536 registers a multiprocessor, 64 warps, "
           f"8 registers a lane at a time, work-groups of 4 warps). Times in ms; ×: against the "
-          f"plain build, *tie* where the frames' ranges overlap.\n")
+          f"plain build, *tie* where the medians differ by no more than the larger frame spread (scripts/compare.py).\n")
     head = ["variant", "options", "registers", "spills st/ld", "warps/SM", "occupancy"] + scenes
     print("| " + " | ".join(head) + " |")
     print("|" + "---|" * len(head))
@@ -72,7 +76,7 @@ def main():
                 cells.append(f"{(r or {}).get('status', 'not run')}")
                 continue
             ratio = r["device_ms"] / p["device_ms"]
-            overlap = r["device_ms_min"] <= p["device_ms_max"] and p["device_ms_min"] <= r["device_ms_max"]
+            overlap = tied(r, p)
             text = f"{r['device_ms']:.3f}"
             if name != "plain":
                 text += " (tie)" if overlap else f" ({ratio:.2f}×)"

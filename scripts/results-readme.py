@@ -18,8 +18,9 @@ Every figure comes from the JSON; the header says which device, driver, commit a
 
 The pipelines, their titles and layouts come from the rows (sweep_rows.py), so a new pipeline
 needs no change here. With --index, results/README.md (the tracked index of every result set:
-device, commit, which pipeline wins on each scene, the speed-against-accuracy chart) is rewritten
-too; only committing a result set should ask for that, never a user's own sweep.
+device, commit, which pipeline wins on each scene, the speed-against-accuracy chart, and every
+folder under results/ with the commits its data records) is rewritten too; only committing a
+result set should ask for that, never a user's own sweep.
 Standard library only.
 """
 import argparse
@@ -28,12 +29,14 @@ import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from readme_format import (accel_label, clean_meta, geomean, ms, size_label,  # noqa: E402
-                           table, tree_text)
+from compare import PARETO_RTOL, pareto  # noqa: E402
+from readme_format import accel_label, clean_meta, ms, size_label, table, tree_text  # noqa: E402
 from readme_crossover import crossover_section  # noqa: E402
 from readme_floor import floor_section  # noqa: E402
 from readme_limits import limits_section, limits_summary  # noqa: E402
-from sweep_rows import Series, by_setting, failure, fastest, in_group  # noqa: E402
+from readme_winners import fastest_text, winner_table  # noqa: E402
+import results_index  # noqa: E402
+from sweep_rows import Series, by_setting, failure, in_group  # noqa: E402
 
 CHARTS = [("time-vs-resolution.png", "Frame time against resolution"),
           ("time-vs-bounces.png", "Frame time against bounce limit"),
@@ -42,17 +45,12 @@ CHARTS = [("time-vs-resolution.png", "Frame time against resolution"),
           ("speed-vs-accuracy.png", "Speed against accuracy, Pareto front marked")]
 RATIO_TEXT = ("Times are compared per setting with the fastest series (pipeline, and layout where "
               "one pipeline ran several) measured at that setting: 1.00 is the fastest, 2.00 "
-              "twice its time. A scene's winner has the lowest geometric mean of that ratio, which "
-              "need not be the series fastest in most settings (small losses, large wins).")
-
-
-def fastest_text(cells, series):
-    """'megakernel (wavefront 3.04×)': the fastest series, and the others' time over its time."""
-    best = fastest(cells)
-    t = cells[best]["device_ms"]
-    others = ", ".join(f"{series.label(k)} {cells[k]['device_ms'] / t:.2f}×"
-                       for k in series.keys if k in cells and k != best)
-    return f"{series.label(best)} ({others})" if others else series.label(best)
+              "twice its time. Only settings where every series ran are counted; where one ran in "
+              "fewer, the text says in how many. Two times whose medians differ by no more than "
+              "the larger of their frame spreads (slowest minus fastest timed frame) are a tie, "
+              "not a win (scripts/compare.py). A scene's winner has the lowest geometric mean of "
+              "the ratio, which need not be the series fastest in most settings (small losses, "
+              "large wins); means within the cells' median frame spread of it are level with it.")
 
 
 def scene_table(rows):
@@ -72,41 +70,6 @@ def scene_table(rows):
                   "Resolution", "Settings"] + [f"{series.label(s)} ms" for s in series.keys]
                  + ["Fastest (others: time / fastest)"], body)
 
-
-def winners(rows):
-    """Per scene: {series key: [time / fastest per setting]} and {series key: settings won}."""
-    series = Series(rows)
-    out = {}
-    for k, cells in by_setting(rows, series):
-        ratios, wins = out.setdefault(k[0], ({}, {}))
-        best = fastest(cells)
-        wins[best] = wins.get(best, 0) + 1
-        for key, r in cells.items():
-            ratios.setdefault(key, []).append(r["device_ms"] / cells[best]["device_ms"])
-    return series, out
-
-
-def winner_table(rows):
-    series, by_scene = winners(rows)
-    body, notes = [], []
-    for scene, (ratios, wins) in by_scene.items():
-        n = max(len(v) for v in ratios.values())
-        g = {k: geomean(v) for k, v in ratios.items()}
-        best = min(g, key=g.get)
-        cols = []
-        for k in series.keys:
-            v = ratios.get(k)
-            cols.append(f"{g[k]:.2f} ({min(v):.2f} – {max(v):.2f}), fastest in "
-                        f"{wins.get(k, 0)}" if v else "—")
-        body.append([scene, n] + cols + [series.label(best)])
-        others = "; ".join(f"{series.label(k)} {g[k]:.2f}× the fastest time" for k in series.keys
-                           if k in g and k != best)
-        notes.append(f"- **{scene}**: {series.label(best)}, fastest in {wins.get(best, 0)} of {n} "
-                     f"settings" + (f"; {others} (geometric mean)" if others else "") + ".")
-    head = (["Scene", "Settings compared"]
-            + [f"{series.label(k)}: time / fastest (geometric mean, range)" for k in series.keys]
-            + ["Winner"])
-    return table(head, body), notes
 
 def bounce_table(rows):
     chosen = in_group(rows, "bounces")
@@ -152,14 +115,11 @@ def pareto_table(rows):
     series = Series(scored) if scored else None
     body = []
     for scene in dict.fromkeys(r["scene"] for r in scored):
-        best = float("inf")
-        for r in sorted((r for r in scored if r["scene"] == scene),
-                        key=lambda r: (r["device_ms"], r["rmse"])):
-            if r["rmse"] < best:
-                best = r["rmse"]
-                body.append([scene, series.label(series.key(r)), r["bounces"],
-                             r["shadow_samples"], r["aa"], ms(r["device_ms"]),
-                             f"{r['rmse']:.4f}", f"{r['psnr_db']:.1f}"])
+        points = [(r["device_ms"], r["rmse"], r) for r in scored if r["scene"] == scene]
+        for _, _, r in pareto(points):
+            body.append([scene, series.label(series.key(r)), r["bounces"],
+                         r["shadow_samples"], r["aa"], ms(r["device_ms"]),
+                         f"{r['rmse']:.4f}", f"{r['psnr_db']:.1f}"])
     out = table(["Scene", "Pipeline", "B", "Shadow samples", "AA", "Device ms", "RMSE",
                  "PSNR dB"], body)
     # A frame with a NaN or infinite pixel has no error score (rmse is null): name each one.
@@ -225,10 +185,9 @@ def write_index(results):
            "the full tables. " + RATIO_TEXT + " A `limits` "
            "sweep (bench/sweeps/limits) says how far each pipeline goes on that device.",
            ""]
-    for slug in sorted(os.listdir(results)):
+    # Every folder that holds a sweep JSON, sub-folders too (a re-measured set of its own).
+    for slug in results_index.folders(results):
         folder = os.path.join(results, slug)
-        if not os.path.isdir(folder):
-            continue
         for name, data in sweep_files(folder):
             meta = clean_meta(data["meta"], data["rows"])
             rows = [r for r in data["rows"] if failure(r) == ""]
@@ -247,12 +206,42 @@ def write_index(results):
             if is_limits:
                 if os.path.exists(os.path.join(folder, "limits.png")):
                     doc += [f"![Limits on {meta.get('device')}]({slug}/limits.png)", ""]
-            elif os.path.exists(os.path.join(folder, "speed-vs-accuracy.png")):
+            # A folder's charts are drawn from one sweep each: show a chart only under the
+            # sweep that has its cells.
+            elif in_group(data["rows"], "crossover") and \
+                    os.path.exists(os.path.join(folder, "crossover.png")):
+                doc += [f"![Crossover on {meta.get('device')}]({slug}/crossover.png)", ""]
+            elif in_group(data["rows"], "accuracy") and \
+                    os.path.exists(os.path.join(folder, "speed-vs-accuracy.png")):
                 doc += [f"![Speed against accuracy on {meta.get('device')}]"
                         f"({slug}/speed-vs-accuracy.png)", ""]
+    doc += folder_table(results)
     with open(os.path.join(results, "README.md"), "w") as f:
         f.write("\n".join(doc))
     print(f"results-readme: wrote {os.path.join(results, 'README.md')}")
+
+
+def folder_table(results):
+    """Every folder under results/, its README (or the nearest one above it that describes it),
+    its title and the commits its own data files carry (results_index.py)."""
+    body = []
+    for rel in results_index.folders(results):
+        own = os.path.exists(os.path.join(results, rel, "README.md"))
+        readme = results_index.readme_of(results, rel)
+        commits = sorted({c[:7] for c in results_index.data_commits(
+            os.path.join(results, rel), recursive=False)})
+        body.append([f"[`{rel}`]({rel}/README.md)" if own else f"`{rel}`",
+                     results_index.title_of(results, rel).replace("|", "/")
+                     or f"described in [`{readme}`]({readme})",
+                     ", ".join(f"`{c}`" for c in commits) or "—"])
+    return ["## Every result folder",
+            "",
+            "Each folder under results/, with the title of its README (a folder without one is "
+            "described by the README above it) and the commits its own data files record "
+            "(rows, sweep metadata, the tools' logs; sub-folders apart).",
+            "",
+            table(["Folder", "What", "Commits in its data"], body),
+            ""]
 
 
 def header_table(meta, json_rel):
@@ -295,8 +284,8 @@ def full_doc(main_path, data, here, limit_docs):
            "",
            "## Which pipeline wins",
            "",
-           RATIO_TEXT + " Geometric mean over every setting the sweep measured on more than "
-           "one series.",
+           RATIO_TEXT + " Won / tied: settings where the series was fastest beyond the frame "
+           "spread / tied for fastest within it; Tied: settings with no clear winner.",
            "",
            winners,
            ""] + notes
@@ -321,7 +310,8 @@ def full_doc(main_path, data, here, limit_docs):
             "",
             "## Speed against accuracy: the Pareto front",
             "",
-            "Settings no other setting beats on both device time and error.",
+            "Settings no other setting beats on both device time and error; an error within "
+            f"{PARETO_RTOL:.0%} of a faster point's is the same accuracy (scripts/compare.py).",
             "",
             pareto_table(rows),
             "",

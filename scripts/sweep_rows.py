@@ -2,18 +2,11 @@
 
 Nothing here knows which pipelines exist: a series is whatever `pipeline` values the rows hold,
 split by `layout` where one pipeline ran several, and by `memory_budget`. A series is titled by
-the rows' `pipeline_title` (else the short name) and coloured from a fixed palette by a stable
-hash of its pipeline's name, so that adding a pipeline does not recolour the others. Times are
-compared with the fastest series at the same setting. Failures are read from the rows' `failure`
-field only.
+the rows' `pipeline_title` (else the short name); its colour and marker come from the one
+palette in chart_style.py. How two series' times compare (ties, wins) is compare.py's.
+Failures are read from the rows' `failure` field only.
 Standard library only.
 """
-import zlib
-
-# A fixed palette; a series takes the slot its key hashes to, or the next free one.
-PALETTE = ["#9467bd", "#2ca02c", "#8c564b", "#1f77b4", "#17becf",
-           "#ff7f0e", "#e377c2", "#d62728", "#bcbd22", "#7f7f7f"]
-LINESTYLES = ["-", "--", "-.", ":"]
 FAILURES = {"private_tree": "private ray tree over rtlab's 256 KiB cap",
             "tree_row": "one row of the wavefront ray tree over the memory budget",
             "out_of_memory": "out of device memory",
@@ -81,14 +74,12 @@ class Series:
         self.titles = {}
         for r in rows:
             self.titles.setdefault(r["pipeline"], r.get("pipeline_title") or r["pipeline"])
-        self.keys = sorted({self.key(r) for r in rows})
-        self.colors = {}
-        for k in self.keys:
-            # Hashed by the pipeline alone: its layouts and budgets take the next free slots.
-            slot = zlib.crc32(k.split("/")[0].encode()) % len(PALETTE)
-            while PALETTE[slot] in self.colors.values() and len(self.colors) < len(PALETTE):
-                slot = (slot + 1) % len(PALETTE)
-            self.colors[k] = PALETTE[slot]
+        # A row of each series: its pipeline and own options pick the series' colour even where
+        # an option takes one value in these rows and so is not part of the key.
+        self.first = {}
+        for r in rows:
+            self.first.setdefault(self.key(r), r)
+        self.keys = sorted(self.first)
 
     def key(self, r):
         k = r["pipeline"]
@@ -110,11 +101,6 @@ class Series:
             text += f", {budget[0].replace('MiB', ' MiB').replace('GiB', ' GiB')} budget"
         return text
 
-    def color(self, key):
-        return self.colors.get(key, PALETTE[-1])
-
-    def linestyle(self, key):
-        return LINESTYLES[self.keys.index(key) % len(LINESTYLES)] if key in self.keys else "-"
 
 
 def setting(r):
@@ -194,8 +180,7 @@ def limit_series(all_rows):
             skipped = [r for r in pts if failure(r) == "skipped"]
             tiled = [r for r in ran if memory_tiles(r) > 1]
             stop = failed[0] if failed else (skipped[0] if skipped else None)
-            out.append({"scene": scene, "key": key, "label": series.label(key),
-                        "color": series.color(key), "linestyle": series.linestyle(key),
+            out.append({"scene": scene, "key": key, "label": series.label(key), "series": series,
                         "axis": axis, "fixed": fixed, "rows": pts, "ran": ran,
                         "last": ran[-1] if ran else None, "tiled": tiled[0] if tiled else None,
                         "stop": stop, "how": failure(stop) if stop else None,

@@ -81,19 +81,32 @@ def crossover_fixture():
 
 
 class CrossoverTest(unittest.TestCase):
-    def test_crossing_is_interpolated_and_absent_when_never_under_one(self):
-        import charts_crossover as cc
-        pts = [(0, 1.5, None, None), (2, 1.2, None, None), (4, 0.8, None, None)]
-        self.assertAlmostEqual(cc.crossing(pts), 3.0)
-        self.assertEqual(cc.crossing([(0, 0.9, None, None)]), 0.0)
-        self.assertIsNone(cc.crossing([(0, 2.0, None, None), (8, 1.1, None, None)]))
+    def test_crossing_is_the_first_win_beyond_the_spread_never_interpolated(self):
+        import readme_crossover as rc
+        mega = {"device_ms": 10.0, "device_ms_min": 9.9, "device_ms_max": 10.1}
+
+        def point(k, ms, lo, hi):
+            return (k, ms / 10.0, {"device_ms": ms, "device_ms_min": lo, "device_ms_max": hi}, mega)
+        # K=2 is under 1 but within the queue's own spread (9.7 vs 10, spread 0.6): a tie, not
+        # a crossover; K=4 wins beyond it. Nothing is interpolated between the two.
+        pts = [point(0, 15.0, 14.9, 15.1), point(2, 9.7, 9.4, 10.0), point(4, 8.0, 7.9, 8.1)]
+        self.assertEqual([rc.outcome(p) for p in pts], ["loss", "tie", "win"])
+        self.assertEqual(rc.crossing(pts), 4)
+        self.assertEqual(rc.crossing([point(0, 9.0, 8.9, 9.1)]), 0)
+        # Two identical medians are a tie even with no spread recorded.
+        same = (8, 1.0, {"device_ms": 10.0}, {"device_ms": 10.0})
+        self.assertEqual(rc.outcome(same), "tie")
+        self.assertIsNone(rc.crossing([point(0, 20.0, 19, 21), same]))
 
     def test_section_states_the_crossover_and_the_registers(self):
         import readme_crossover
         doc = "\n".join(readme_crossover.crossover_section(
             {"meta": META, "rows": crossover_fixture()}, "x.json", False))
-        self.assertIn("K≈3.0", doc)
-        self.assertIn("No crossover found up to the largest cost tried (K = 4", doc)
+        # The fixture's rows carry no frame spread: only equal medians tie, so the queue's 0.8
+        # at K = 4 is its first win.
+        self.assertIn("M=1 320×180 B=4: first wins at K=4", doc)
+        self.assertIn("in 2 of 6 settings, tied in 0, slower in 4", doc)
+        self.assertIn("No crossover up to the largest cost tried (K = 4", doc)
         self.assertIn("| 122 |", doc)
 
     @unittest.skipUnless(HAVE_MPL, "needs matplotlib")
@@ -107,12 +120,11 @@ class CrossoverTest(unittest.TestCase):
 
 
 class RowsTest(unittest.TestCase):
-    def test_series_come_from_the_rows_with_distinct_colours(self):
+    def test_series_come_from_the_rows(self):
         series = sweep_rows.Series(sweep_rows_fixture())
         self.assertEqual(series.keys, ["mega/tree", "mega/weighted", "queue", "wave"])
         self.assertEqual(series.label("queue"), "queue wavefront")
         self.assertEqual(series.label("mega/weighted"), "megakernel (weighted)")
-        self.assertEqual(len(set(series.colors.values())), 4)
 
     def test_a_new_pipelines_family_and_options_need_no_script_change(self):
         # Rows of today carry the pipeline's family and its own options: a design the scripts
@@ -132,11 +144,6 @@ class RowsTest(unittest.TestCase):
         old = row("wave", "wavefront", "weighted", "s", 2)
         self.assertEqual(sweep_rows.own_options(old), {})
         self.assertEqual(sweep_rows.family(old), "wavefront")
-
-    def test_colour_of_a_pipeline_does_not_change_when_another_is_added(self):
-        two = sweep_rows.Series([r for r in sweep_rows_fixture() if r["pipeline"] != "queue"])
-        three = sweep_rows.Series(sweep_rows_fixture())
-        self.assertEqual(two.color("wave"), three.color("wave"))
 
     def test_failure_is_read_from_the_field_not_the_message(self):
         rows = [row("mega", "megakernel", "tree", "s", b, group="limits") for b in range(3)]
@@ -296,6 +303,65 @@ class ChartsTest(unittest.TestCase):
         # Same scenes, same values: each pipeline is one line, not one per scene.
         self.assertLessEqual(lines, 2 * 4)
 
+    def test_one_palette_a_fixed_colour_per_pipeline_and_layout(self):
+        series = sweep_rows.Series(sweep_rows_fixture())
+        styles = {k: chart_style.series_style(series, k) for k in series.keys}
+        self.assertEqual(len({s["color"] for s in styles.values()}), 4)
+        self.assertEqual(len({s["marker"] for s in styles.values()}), 4)
+        # The same series keeps its colour whatever else the sweep ran, even where its layout
+        # is not part of the key (a sweep of the tree megakernel alone has the key "mega").
+        alone = sweep_rows.Series([r for r in sweep_rows_fixture() if r["layout"] == "tree"
+                                   and r["pipeline"] == "mega"])
+        self.assertEqual(alone.keys, ["mega"])
+        self.assertEqual(chart_style.series_style(alone, "mega")["color"],
+                         styles["mega/tree"]["color"])
+        two = sweep_rows.Series([r for r in sweep_rows_fixture() if r["pipeline"] != "queue"])
+        self.assertEqual(chart_style.series_style(two, "wave"), styles["wave"])
+        # A memory budget keeps its pipeline's colour and gets a line style of its own.
+        budget = sweep_rows.Series(sweep_rows_fixture() + [
+            row("wave", "wavefront", "tree", "spheres", 2, memory_budget=32 * 2**20)])
+        plain, small = (chart_style.series_style(budget, k) for k in ("wave", "wave/32MiB"))
+        self.assertEqual(plain["color"], small["color"])
+        self.assertNotEqual(plain["linestyle"], small["linestyle"])
+
+    def test_a_cell_not_measured_is_marked_not_left_as_a_line_that_stops(self):
+        rows = [r for r in sweep_rows_fixture(("bounces",))
+                if not (r["layout"] == "weighted" and r["bounces"] >= 3)]
+        fig = charts.time_vs_bounces(META, rows)
+        crosses = [line for ax in fig.axes for line in ax.lines
+                   if line.get_marker() == chart_style.MISSING_MARKER]
+        # The weighted layout missed B = 3 and 4 in both scenes: one row of crosses a panel.
+        self.assertEqual(sorted(len(c.get_xdata()) for c in crosses), [2, 2])
+        self.assertEqual({c.get_color() for c in crosses},
+                         {chart_style.SERIES_STYLES[("mega", "weighted")][0]})
+
+    def test_kernel_breakdown_has_a_panel_per_series_and_no_second_axis(self):
+        fig = charts.kernel_breakdown(META, sweep_rows_fixture(("bounces",)))
+        panels = [ax for ax in fig.axes if ax.patches]
+        self.assertEqual(len(panels), 2 * 4)  # two scenes, four series
+        self.assertEqual([ax for ax in fig.axes if ax.get_ylabel().endswith("(log)")], [])
+
+    def test_speed_chart_names_a_layout_without_accuracy_cells(self):
+        rows = sweep_rows_fixture(("bounces",))
+        rows += [row(p, t, lay, "spheres", b, group="accuracy", rmse=0.1 / (1 + b), psnr_db=20,
+                     reference={"bounces": 8}) for p, t, lay in PIPES if lay != "weighted"
+                 for b in range(3)]
+        fig = charts.speed_vs_accuracy(META, rows)
+        texts = [t.get_text() for t in fig.axes[-1].get_legend().get_texts()]
+        self.assertIn("megakernel (weighted): not measured in this sweep's accuracy cells", texts)
+
+    def test_crossover_star_only_at_a_win_beyond_the_spread(self):
+        import charts_crossover
+        rows = crossover_fixture()
+        for r in rows:  # every cell's frames spread by 30%: the queue's 0.8 is a tie
+            r.update(device_ms_min=r["device_ms"] * 0.85, device_ms_max=r["device_ms"] * 1.15)
+        fig = charts_crossover.crossover_chart(META, rows)
+        stars = [line for ax in fig.axes[:2] for line in ax.lines if line.get_marker() == "*"]
+        self.assertEqual(stars, [])
+        fig = charts_crossover.crossover_chart(META, crossover_fixture())
+        stars = [line for ax in fig.axes[:2] for line in ax.lines if line.get_marker() == "*"]
+        self.assertEqual([tuple(s.get_xdata()) for s in stars], [(4,), (4,)])
+
     def test_pipelines_have_distinct_colours_in_line_charts(self):
         fig = charts.time_vs_bounces(META, sweep_rows_fixture())
         colours = {line.get_color() for line in fig.axes[0].lines}
@@ -439,6 +505,22 @@ class PredictEvalTest(unittest.TestCase):
         self.assertEqual((hits, count, ties, missing), (1, 2, 0, 0))
         self.assertAlmostEqual(worst, 1.2)  # map/e: the best tree design (wave, 1.2) over 1.0
         self.assertIn("**no** (1.20x slower)", "\n".join(lines))
+
+    def test_a_partial_setting_tied_within_one_kind_is_still_scored(self):
+        # The weighted megakernel did not run; the tree megakernel and the tree wavefront tie
+        # (2.00 and 2.01, spreads 0.04) and both beat the queue: a tree design wins either way.
+        m = self.load()
+        rows = self.rows({"map/p": {"mega": 2.0, "wave": 2.01, "queue": 3.0}})
+        rows.append(dict(row("mega", "mega", "weighted", "map/p", 4, 1920, 1080, group="map"),
+                         status="error", failure="timeout"))
+        with tempfile.TemporaryDirectory() as d:
+            with open(os.path.join(d, "p.jsonl"), "w") as f:
+                f.writelines(json.dumps(r) + "\n" for r in rows)
+            _, found = m.settings([os.path.join(d, "p.jsonl")])
+        self.assertEqual(len(found), 1)
+        scene, winner, runner, _, tie, *_, partial = found[0]
+        self.assertEqual((scene, tie, partial), ("map/p", True, "partial"))
+        self.assertFalse(m.undecided(winner, runner, tie))
 
 
 class RegisterStudyTest(unittest.TestCase):
