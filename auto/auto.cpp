@@ -2,6 +2,7 @@
 #include "auto/auto.h"
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <limits>
 #include <utility>
@@ -105,6 +106,19 @@ AutoKind chooseKind(const LaneEstimate& e, const AutoContext& c) {
         return {{{"mega", fitting, ""}},
                 "a CPU runs work-items without lock-step lanes: the queue wavefront never won "
                 "the CPU map, where the megakernel ties with or beats the others"};
+    if (std::abs(e.busyLanes - kQueueBelowLanes) < kUncertainLanes) {
+        // Too close to the threshold to call: every design in one piece is timed, the
+        // predictor's side first (the one `lanes` takes without trial frames).
+        const bool queueSide = e.busyLanes < kQueueBelowLanes;
+        AutoKind k{{},
+                   lanes + format(" (within %.1f of %.1f): too close to call", kUncertainLanes,
+                                  kQueueBelowLanes)};
+        if (queueSide) k.designs.push_back({"queue", MegaLayout::Weighted, ""});
+        k.designs.push_back({"mega", MegaLayout::Weighted, ""});
+        if (c.waveFits) k.designs.push_back({"wave", MegaLayout::Weighted, ""});
+        if (!queueSide) k.designs.push_back({"queue", MegaLayout::Weighted, ""});
+        return k;
+    }
     if (e.busyLanes < kQueueBelowLanes)
         return {{{"queue", MegaLayout::Weighted, ""}},
                 lanes + format(" (below %.1f): neighbouring pixels' trees disagree, so "

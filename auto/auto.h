@@ -34,6 +34,9 @@ struct AutoContext {
 
 // The kind of design the predictor names, as the designs of that kind auto may render with
 // (first: the one to take without trial frames) and why.
+// Busy lanes either side of kQueueBelowLanes inside which auto times the queue too.
+inline constexpr double kUncertainLanes = 1.0;
+
 struct AutoKind {
     std::vector<AutoDesign> designs;
     std::string reason;
@@ -46,6 +49,9 @@ struct AutoKind {
 // On a CPU, whose work-items run without lock-step lanes: the megakernel (the queue never won the
 // CPU map), in the tree layout when it fits. Adaptive anti-aliasing: the megakernel, the only
 // design that has it.
+// Within kUncertainLanes of the threshold the lanes do not decide (on the H200's map, the walls
+// at 27.8 busy lanes went to the queue once and to the tree wavefront once), so every design
+// that renders the frame in one piece is timed.
 AutoKind chooseKind(const LaneEstimate& estimate, const AutoContext& context);
 
 class AutoPipeline : public Pipeline {
