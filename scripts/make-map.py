@@ -197,7 +197,8 @@ def scene(size, special, octaves, materials, frame=(WIDTH, HEIGHT), triangles=No
         objects = {"meshes": [{"file": mesh_file(triangles), "material": o["material"],
                                "transform": {"translate": o["center"], "scale": o["radius"]}}
                               for o in spheres]}
-        what = f"{len(spheres)} icospheres of {triangles} triangles ({len(spheres) * triangles:,} in all)"
+        what = (f"{len(spheres)} icospheres of {triangles} triangles "
+                f"({len(spheres) * triangles:,} in all)")
     return {
         "description": f"crossover map: a wall of {what} of about {size} px at "
                        f"{width}x{height}, {round(special * 100)}% mirrors and glass, {materials} other "
