@@ -84,7 +84,8 @@ prepare() {
         path=$(lib_path "$BUILD/build/bin/rtlab-bench" "$lib")
         [ -z "$path" ] || cp -L "$path" "$CARRY/bin/$lib"
     done
-    missing=$(ldd "$CARRY/bin/rtlab-bench" | grep -v -e libc.so -e libm.so -e libstdc++ \
+    # As run.sh loads it: the carried libraries' own dependencies (libassimp's) are found there too.
+    missing=$(LD_LIBRARY_PATH=$ROOT/$CARRY/bin ldd "$CARRY/bin/rtlab-bench" | grep -v -e libc.so -e libm.so -e libstdc++ \
               -e libgcc_s -e ld-linux -e vdso -e libOpenCL.so.1 -e libz.so.1 \
               -e "=> $ROOT/$CARRY/bin/" || true)
     [ -z "$missing" ] || echo "gpu-sweep: rtlab-bench also needs (not carried): $missing" >&2
