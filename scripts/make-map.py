@@ -10,9 +10,9 @@ knobs are the axes that decide whether a warp's lanes agree:
            random: how much the shapes of neighbouring ray trees differ
   octaves  noise octaves of the procedural materials (0 .. 64): the shading cost
   materials  how many distinct materials the other spheres take at random (1 .. 16)
-  triangles  with --shape mesh: each object is an icosphere of 20, 80, 320 or 1280 triangles
-           (0 to 3 subdivisions) in place of the sphere: the primitive count, and how many
-           primitives a warp's rays meet
+  triangles  with --shape mesh: each object is an icosphere of 20, 80, 320, 1280 or 5120
+           triangles (0 to 4 subdivisions) in place of the sphere: the primitive count, and
+           how many primitives a warp's rays meet
 
 The object count follows from the size: (1920 / size) x (1080 / size), 129,600 objects at 4 px.
 A fixed seed per scene, so the same arguments give the same bytes; a mesh wall draws the same
