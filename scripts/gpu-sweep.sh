@@ -85,9 +85,9 @@ prepare() {
         [ -z "$path" ] || cp -L "$path" "$CARRY/bin/$lib"
     done
     # As run.sh loads it: the carried libraries' own dependencies (libassimp's) are found there too.
-    missing=$(LD_LIBRARY_PATH=$ROOT/$CARRY/bin ldd "$CARRY/bin/rtlab-bench" | grep -v -e libc.so -e libm.so -e libstdc++ \
-              -e libgcc_s -e ld-linux -e vdso -e libOpenCL.so.1 -e libz.so.1 \
-              -e "=> $ROOT/$CARRY/bin/" || true)
+    missing=$(LD_LIBRARY_PATH=$ROOT/$CARRY/bin ldd "$CARRY/bin/rtlab-bench" |
+              grep -v -e libc.so -e libm.so -e libstdc++ -e libgcc_s -e ld-linux -e vdso \
+                  -e libOpenCL.so.1 -e libz.so.1 -e "=> $ROOT/$CARRY/bin/" || true)
     [ -z "$missing" ] || echo "gpu-sweep: rtlab-bench also needs (not carried): $missing" >&2
     (cd "$BUILD/src" && "$BUILD/build/bin/rtlab" sweep --export-scenes "$ROOT/$CARRY/scenes") >/dev/null
     cp "$BUILD/src/bench/sweeps/$sweep" "$CARRY/sweeps/"
