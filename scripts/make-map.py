@@ -144,6 +144,12 @@ def icosphere_obj(triangles):
     return "\n".join(lines) + "\n"
 
 
+def check_triangles(triangles):
+    if triangles not in ICOSPHERE_TRIANGLES:
+        raise SystemExit(f"--triangles {triangles}: must be one of "
+                         f"{', '.join(map(str, ICOSPHERE_TRIANGLES))}")
+
+
 def mesh_file(triangles):
     return f"models/icosphere-t{triangles}.obj"
 
@@ -161,9 +167,8 @@ def material(entry, octaves):
 def scene(size, special, octaves, materials, frame=(WIDTH, HEIGHT), triangles=None):
     """The scene's JSON: spheres, or with `triangles` one icosphere mesh of that many triangles
     in each sphere's place (the same centre, material and radius)."""
-    if triangles is not None and triangles not in ICOSPHERE_TRIANGLES:
-        raise SystemExit(f"--triangles {triangles}: must be one of "
-                         f"{', '.join(map(str, ICOSPHERE_TRIANGLES))}")
+    if triangles is not None:
+        check_triangles(triangles)
     if not 1 <= materials <= len(PLAIN):
         raise SystemExit(f"--materials {materials}: must be in 1..{len(PLAIN)}")
     if not 0 <= special <= 1:
@@ -313,7 +318,7 @@ def main():
         triangles = a.triangles if a.shape == "mesh" else None
         combos = [(a.size, a.special, a.octaves, a.materials, frame, triangles)]
     for t in sorted({c[5] for c in combos if c[5]}):
-        scene(64, 0, 0, 1, (WIDTH, HEIGHT), t)  # refuses a bad count before anything is written
+        check_triangles(t)  # before anything is written
         write(os.path.join(a.out, mesh_file(t)), icosphere_obj(t))
     for combo in combos:
         path = os.path.join(a.out, name_of(*combo) + ".json")
