@@ -291,7 +291,14 @@ std::string formatDuration(double s) {
 
 fs::path scenePath(const std::string& name, const fs::path& sceneDir) {
     fs::path p(name);
-    if (p.has_extension()) return p;
+    if (p.has_extension()) {
+        // A file named inside the scene folder (real/2CylinderEngine.glb, a model that must not
+        // be wrapped in a scene file, which would replace its materials) is found there, so that
+        // a sweep reads the same on a GPU host's --scene-dir as in the checkout.
+        const fs::path dir = sceneDir.empty() ? fs::path("scenes") : sceneDir;
+        if (p.is_relative() && !fs::exists(p) && fs::exists(dir / p)) return dir / p;
+        return p;
+    }
     if (!sceneDir.empty()) return sceneDir / (name + ".json");
     if (fs::exists(fs::path("scenes") / (name + ".json")))
         return fs::path("scenes") / (name + ".json");

@@ -37,7 +37,8 @@ using Json = nlohmann::json;
 
 constexpr std::size_t kMaxSpheres = 1'000'000;
 constexpr std::size_t kMaxPlanes = 1'000;
-constexpr std::size_t kMaxMeshes = 100'000;
+// As many as spheres: a wall of small meshes places one per object (scripts/make-map.py).
+constexpr std::size_t kMaxMeshes = 1'000'000;
 constexpr std::size_t kMaxTriangles = 50'000'000;
 constexpr int kMaxCubemapSize = 4096;
 constexpr std::size_t kAny = ~std::size_t(0);  // no size limit for Node::array

@@ -1,16 +1,17 @@
 #!/usr/bin/env python3
 """Draws the crossover map of a `map` sweep (bench/sweeps/map, scenes of scripts/make-map.py):
 which design is fastest at each (sphere size on screen, share of mirrors and glass), one panel per
-shading cost, the cell coloured by the winner and labelled with its margin over the runner-up.
-A margin inside the measured frame spread (compare.py's tie rule: the medians no further apart
-than the larger of the two cells' spreads) is a tie, drawn hatched and labelled "tie". A
-setting where some design did not run is marked
+shading cost (and per triangle count of the mesh walls of bench/sweeps/map-mesh), the cell
+coloured by the winner and labelled with its margin over the runner-up. A margin inside the
+measured frame spread (compare.py's tie rule: the medians no further apart than the larger of the
+two cells' spreads) is a tie, drawn hatched and labelled "tie". A setting where some design did
+not run is marked
 missing: wins are counted only where every design ran. Also writes a Markdown table beside the
 chart with every time, the winner, the margin and the megakernel's busy lanes per warp where
 the rows carry them.
 
 Usage: scripts/charts_map.py ROWS.jsonl|SWEEP.json... [--out DIR]
-  (the rows of `rtlab-bench --sweep map` or `map-dense`, or the JSON `rtlab sweep` writes; several
+  (the rows of `rtlab-bench --sweep map`, `map-dense` or `map-mesh`, or the JSON `rtlab sweep` writes; several
   files are drawn as one map, the first one's meta naming device, driver and commit)
 Needs Debian's python3-matplotlib for the chart; the table needs nothing.
 """
@@ -24,7 +25,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from compare import Verdict  # noqa: E402
 from sweep_rows import Series  # noqa: E402
 
-NAME = re.compile(r"map-s(\d+)-x(\d+)-o(\d+)-m(\d+)(?:-f\d+x\d+)?$")
+NAME = re.compile(r"map-s(\d+)(?:-t(\d+))?-x(\d+)-o(\d+)-m(\d+)(?:-f\d+x\d+)?$")
 
 
 def load(path):
@@ -39,14 +40,16 @@ def load(path):
 
 
 def cells(rows):
-    """{(size, special, octaves, materials): {series key: row}} for the map's scenes."""
+    """{(size, special, octaves, materials, triangles): {series key: row}} for the map's scenes;
+    triangles is the mesh walls' count an object, 0 for spheres."""
     series = Series(rows)
     out = {}
     for r in rows:
         m = NAME.search(r["scene"])
         if not m:
             continue
-        out.setdefault(tuple(int(g) for g in m.groups()), {})[series.key(r)] = r
+        size, triangles, special, octaves, materials = (int(g or 0) for g in m.groups())
+        out.setdefault((size, special, octaves, materials, triangles), {})[series.key(r)] = r
     return series, out
 
 
@@ -68,12 +71,13 @@ def table(meta, series, grid, keys, path):
              "winner's margin is the runner-up's time over the winner's, a tie when the medians "
              "differ by no more than the larger of the two cells' frame spreads (scripts/compare.py). Lanes: the megakernel's mean busy lanes of a 32-lane warp over the "
              "steps of its ray loop (counted on NVIDIA only).", ""]
-    head = "| size px | mirrors+glass | octaves | " + " | ".join(series.label(k) for k in keys) + \
-           " | winner | margin | lanes (tree / weighted) |"
+    mesh = any(g[4] for g in grid)  # a triangles column only for mesh walls
+    head = "| size px | " + ("triangles | " if mesh else "") + "mirrors+glass | octaves | " + \
+           " | ".join(series.label(k) for k in keys) + " | winner | margin | lanes (tree / weighted) |"
     lines += [head, "|" + "---|" * (head.count("|") - 1)]
     wins, settings = {}, 0
-    for (size, special, octaves, materials) in sorted(grid):
-        by_key = grid[(size, special, octaves, materials)]
+    for (size, special, octaves, materials, triangles) in sorted(grid):
+        by_key = grid[(size, special, octaves, materials, triangles)]
         v = verdict(by_key, keys)
         times = []
         for k in keys:
@@ -92,7 +96,8 @@ def table(meta, series, grid, keys, path):
             who, by = ("tie", f"{margin:.2f} (in spread)") if tie else (series.label(winner), f"{margin:.2f}x")
         else:
             who, by = "not all ran", "-"
-        lines.append(f"| {size} | {special}% | {octaves} | " + " | ".join(times) +
+        lines.append(f"| {size} | " + (f"{triangles} | " if mesh else "") +
+                     f"{special}% | {octaves} | " + " | ".join(times) +
                      f" | {who} | {by} | {' / '.join(lanes) or '-'} |")
     lines += ["", f"Settings where every design ran: {settings}. Wins there: " +
               ", ".join(f"{series.label(k) if k != 'tie' else 'ties'} {n}"
@@ -108,20 +113,21 @@ def chart(meta, series, grid, keys, path):
     from matplotlib.patches import Patch
     from chart_style import TIE_COLOR, figure, legend_row, series_style
 
-    octaves = sorted({g[2] for g in grid})
+    # A panel per (triangles an object, octaves): one per shading cost on the sphere map.
+    kinds = sorted({(g[4], g[2]) for g in grid})
     r0 = next(iter(next(iter(grid.values())).values()))
     fig, panels, legend_ax = figure(meta, "Fastest design per setting and its margin over the "
                                     f"runner-up ({r0['width']}x{r0['height']}, B = {r0['bounces']})",
-                                    len(octaves), cols=len(octaves), panel=(4.8, 3.9))
-    for ax, o in zip(panels, octaves):
-        # Each panel spans the sizes and shares measured at its cost.
-        sizes = sorted({g[0] for g in grid if g[2] == o})
-        specials = sorted({g[1] for g in grid if g[2] == o})
+                                    len(kinds), cols=len(kinds), panel=(4.8, 3.9))
+    for ax, (t, o) in zip(panels, kinds):
+        # Each panel spans the sizes and shares measured at its cost and triangle count.
+        sizes = sorted({g[0] for g in grid if (g[4], g[2]) == (t, o)})
+        specials = sorted({g[1] for g in grid if (g[4], g[2]) == (t, o)})
         ax.set_xlim(-0.5, len(sizes) - 0.5)
         ax.set_ylim(-0.5, len(specials) - 0.5)
         for i, s in enumerate(sizes):
             for j, x in enumerate(specials):
-                found = [g for g in grid if g[0] == s and g[1] == x and g[2] == o]
+                found = [g for g in grid if g[:3] == (s, x, o) and g[4] == t]
                 v = verdict(grid[found[0]], keys) if found else None
                 if v is None:
                     ax.add_patch(plt.Rectangle((i - 0.5, j - 0.5), 1, 1, facecolor="white",
@@ -138,9 +144,10 @@ def chart(meta, series, grid, keys, path):
                         color="black" if tie else "white", fontweight="bold")
         ax.set_xticks(range(len(sizes)), [f"{s} px" for s in sizes])
         ax.set_yticks(range(len(specials)), [f"{x}%" for x in specials])
-        ax.set_xlabel("sphere size on screen")
+        ax.set_xlabel("icosphere size on screen" if t else "sphere size on screen")
         ax.set_ylabel("mirrors and glass")
-        ax.set_title(f"{o} noise octaves", fontsize=10)
+        ax.set_title(f"{t} triangles an object, {o} octaves" if t else f"{o} noise octaves",
+                     fontsize=10)
     handles = [Patch(facecolor=series_style(series, k)["color"], label=series.label(k))
                for k in keys]
     handles.append(Patch(facecolor=TIE_COLOR, hatch="//", label="tie (inside the frame spread)"))
@@ -159,7 +166,8 @@ def main():
         rows += load(more)[1]
     series, grid = cells(rows)
     if not grid:
-        sys.exit(f"{' '.join(a.rows)}: no rows of map scenes (map-s<size>-x<share>-o<octaves>-m<materials>)")
+        sys.exit(f"{' '.join(a.rows)}: no rows of map scenes "
+                 "(map-s<size>[-t<triangles>]-x<share>-o<octaves>-m<materials>)")
     keys = series.keys
     out = a.out or os.path.dirname(os.path.abspath(a.rows[0]))
     os.makedirs(out, exist_ok=True)

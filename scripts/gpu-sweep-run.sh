@@ -1,10 +1,12 @@
 #!/usr/bin/env bash
 # Runs on the GPU host as carry/gpu-sweep/run.sh (made by `scripts/gpu-sweep.sh prepare` beside
-# rtlab-bench, its libraries, the scenes and the sweep; copied there with them). Finds NVIDIA's
-# OpenCL, runs the sweep under a time limit, packs the kept frames, and runs a few Google
-# Benchmark cells. It writes to $OUT (default ./out), which goes back for `scripts/gpu-sweep.sh
-# import`; log.txt holds its output. RTLAB_GPU_DEVICES=all (or a list) runs the cells on several
-# GPUs at once; RTLAB_SHARD=i/N runs one share of the sweep (one machine or array task of N).
+# rtlab-bench, its libraries, the scenes and the sweep; copied there with them). Writes the
+# generated scenes the sweep names (map walls, stress scenes) with the carried generators, finds
+# NVIDIA's OpenCL, runs the sweep under a time limit, packs the kept frames, and runs a few
+# Google Benchmark cells. It writes to $OUT (default ./out), which goes back for
+# `scripts/gpu-sweep.sh import`; log.txt holds its output. RTLAB_GPU_DEVICES=all (or a list)
+# runs the cells on several GPUs at once; RTLAB_SHARD=i/N runs one share of the sweep (one
+# machine or array task of N).
 set -uo pipefail
 C=$(cd "$(dirname "$0")" && pwd)
 OUT=${OUT:-$PWD/out}
@@ -33,10 +35,33 @@ pack_frames() {
     fi
 }
 
+# The generated scenes the sweep names, written into the carried scene folder: too large to
+# carry, seconds to make (Python's standard library only).
+make_scenes() {
+    local sweep=$C/sweeps/$SWEEP names want=() only
+    names=$(sed -n 's/#.*//; s/^[[:space:]]*scenes[[:space:]]*=//p' "$sweep" | tr ' ,' '\n\n')
+    grep -q '^map/' <<<"$names" && want+=(map)
+    grep -qx 'stress/many-spheres' <<<"$names" && want+=(spheres)
+    grep -qx 'stress/big-mesh' <<<"$names" && want+=(mesh)
+    [ ${#want[@]} -gt 0 ] || return 0
+    command -v python3 >/dev/null || { echo "no python3 to write the generated scenes"; return 1; }
+    echo "== generated scenes (${want[*]})"
+    local start=$SECONDS
+    for only in "${want[@]}"; do
+        case $only in
+            map) python3 "$C/scripts/make-map.py" --sweep "$sweep" --out "$C/scenes/map" | wc -l |
+                     sed 's/$/ map scenes/' ;;
+            *) python3 "$C/scripts/make-stress.py" --out "$C/scenes/stress" --only "$only" ;;
+        esac || return 1
+    done
+    echo "generated in $((SECONDS - start)) s ($(du -sh "$C/scenes" | cut -f1) of scenes)"
+}
+
 main() {
     echo "== machine"
     uname -a
     nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv 2>&1 | head -3
+    make_scenes || return 4
     find_nvidia_opencl
     echo "== devices"
     "$C/bin/rtlab-bench" --list-devices | tee /tmp/rtlab-devices.txt

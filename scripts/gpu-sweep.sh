@@ -12,6 +12,10 @@
 #       the scenes with .pfm cubemap faces, the sweep file, run.sh and smoke.sh (scripts/gpu-smoke,
 #       the check to pass before any GPU result is called done). --resume DIR (a folder
 #       copied back from an earlier run) makes the new run skip the cells that one measured.
+#       Generated scenes are too large to carry (the map's walls, the stress scenes): the
+#       generators travel instead (scripts/make-map.py, make-stress.py; Python's standard
+#       library only) and run.sh writes the scenes the sweep names on the host, before the
+#       sweep. The real models a sweep names (real/...) are copied in by scripts/copy-models.sh.
 #   scripts/gpu-sweep.sh command
 #       Prints the steps below.
 #   scripts/gpu-sweep.sh import DIR [DIR...]
@@ -55,6 +59,9 @@ build_clean() {
     cmake --build "$BUILD/build" -j"$(nproc)" --target rtlab rtlab-bench
 }
 
+# The scene names of a sweep file's scenes lines, one a line.
+sweep_scenes() { sed -n 's/#.*//; s/^[[:space:]]*scenes[[:space:]]*=//p' "$1" | tr ' ,' '\n\n'; }
+
 # The file an executable's dependency `name` resolves to here.
 lib_path() { ldd "$1" | awk -v n="$2" '$1 == n { print $3 }'; }
 
@@ -77,12 +84,19 @@ prepare() {
         path=$(lib_path "$BUILD/build/bin/rtlab-bench" "$lib")
         [ -z "$path" ] || cp -L "$path" "$CARRY/bin/$lib"
     done
-    missing=$(ldd "$CARRY/bin/rtlab-bench" | grep -v -e libc.so -e libm.so -e libstdc++ \
-              -e libgcc_s -e ld-linux -e vdso -e libOpenCL.so.1 -e libz.so.1 \
-              -e "=> $ROOT/$CARRY/bin/" || true)
+    # As run.sh loads it: the carried libraries' own dependencies (libassimp's) are found there too.
+    missing=$(LD_LIBRARY_PATH=$ROOT/$CARRY/bin ldd "$CARRY/bin/rtlab-bench" |
+              grep -v -e libc.so -e libm.so -e libstdc++ -e libgcc_s -e ld-linux -e vdso \
+                  -e libOpenCL.so.1 -e libz.so.1 -e "=> $ROOT/$CARRY/bin/" || true)
     [ -z "$missing" ] || echo "gpu-sweep: rtlab-bench also needs (not carried): $missing" >&2
     (cd "$BUILD/src" && "$BUILD/build/bin/rtlab" sweep --export-scenes "$ROOT/$CARRY/scenes") >/dev/null
     cp "$BUILD/src/bench/sweeps/$sweep" "$CARRY/sweeps/"
+    mkdir -p "$CARRY/scripts"
+    cp "$BUILD/src/scripts/make-map.py" "$BUILD/src/scripts/make-stress.py" "$CARRY/scripts/"
+    # The shared models sit beside this checkout, not the clean clone: copy from here.
+    if sweep_scenes "$CARRY/sweeps/$sweep" | grep -q '^real/'; then
+        "$ROOT/scripts/copy-models.sh" "$ROOT/$CARRY/scenes/real" >/dev/null
+    fi
     echo "$sweep" >"$CARRY/SWEEP"
     for dir in "${resumes[@]+"${resumes[@]}"}"; do
         [ -f "$dir/rows.jsonl" ] || die "--resume $dir: no rows.jsonl there"
@@ -94,6 +108,9 @@ prepare() {
     cp "$BUILD/src/scripts/gpu-env.sh" "$CARRY/gpu-env.sh"
     echo "gpu-sweep: $CARRY ready ($(du -sh "$CARRY" | cut -f1)), commit" \
          "$(git -C "$BUILD/src" rev-parse --short=12 HEAD), sweep $sweep"
+    if [ "$(du -sm "$CARRY" | cut -f1)" -gt 64 ]; then
+        echo "gpu-sweep: note: $CARRY is over 64 MiB, more than some GPU sessions carry" >&2
+    fi
     command_help
 }
 

@@ -371,6 +371,29 @@ TEST(SceneLoader, MaterialLimitIs65535) {
     EXPECT_EQ(loadError(p), p.string() + ": /materials: too many materials: 65536 (at most 65535)");
 }
 
+// A 4 px mesh wall of the crossover map (scripts/make-map.py --shape mesh) places 129,600 meshes,
+// each with its own material; the model file is parsed once.
+TEST(SceneLoader, AWallOfSmallMeshesKeepsEachObjectsMaterial) {
+    writeTemp("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    const int n = 129'600;
+    std::ostringstream json;
+    json << R"({"camera": {"position": [0, 0, -5]}, "materials": {"a": {}, "b": {}, "c": {}},)"
+         << R"("meshes": [)";
+    for (int i = 0; i < n; ++i)
+        json << (i ? "," : "") << R"({"file": "tri.obj", "material": ")"
+             << "abc"[i % 3] << R"(", "transform": {"translate": [)" << i % 480 << ", " << i / 480
+             << R"(, 0], "scale": 0.5}})";
+    json << "]}";
+    Scene s = loadScene(writeTemp("wall.json", json.str()));
+    ASSERT_EQ(s.meshes.size(), std::size_t(n));
+    ASSERT_EQ(s.triangles.size(), std::size_t(n));
+    for (int i : {0, 1, 2, 12'345, n - 1}) {
+        EXPECT_EQ(s.materialNames[s.triangles[i].material], std::string(1, "abc"[i % 3])) << i;
+        EXPECT_EQ(s.triangles[i].mesh, i);
+        EXPECT_FLOAT_EQ(s.triangles[i].v1.x, float(i % 480) + 0.5f) << i;
+    }
+}
+
 TEST(SceneLoader, ReadmeExampleLoads) {
     std::ifstream in("scenes/README.md");
     std::string readme((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());

@@ -449,17 +449,37 @@ class MapTest(unittest.TestCase):
         spec.loader.exec_module(m)
         series, grid = m.cells(self.rows())
         keys = series.keys
-        self.assertEqual(sorted(grid), [(4, 50, 8, 16), (64, 0, 8, 16), (256, 0, 8, 16)])
-        winner, runner, margin, tie = m.verdict(grid[(4, 50, 8, 16)], keys)
+        self.assertEqual(sorted(grid), [(4, 50, 8, 16, 0), (64, 0, 8, 16, 0), (256, 0, 8, 16, 0)])
+        winner, runner, margin, tie = m.verdict(grid[(4, 50, 8, 16, 0)], keys)
         self.assertEqual((winner, runner, tie), ("queue", "mega", False))
         self.assertAlmostEqual(margin, 3.0)
-        self.assertTrue(m.verdict(grid[(64, 0, 8, 16)], keys)[3])  # 2.0 vs 2.05, ranges overlap
-        self.assertIsNone(m.verdict(grid[(256, 0, 8, 16)], keys))  # the queue timed out
+        self.assertTrue(m.verdict(grid[(64, 0, 8, 16, 0)], keys)[3])  # 2.0 vs 2.05, ranges overlap
+        self.assertIsNone(m.verdict(grid[(256, 0, 8, 16, 0)], keys))  # the queue timed out
         with tempfile.TemporaryDirectory() as d:
             m.table(META, series, grid, keys, os.path.join(d, "map.md"))
             text = open(os.path.join(d, "map.md")).read()
         self.assertIn("Settings where every design ran: 2. Wins there: queue 1, ties 1.", text)
         self.assertIn("| 256 | 0% | 8 | 1.000 | missing | not all ran | - |", text)
+
+    def test_mesh_walls_are_their_own_settings_with_a_triangles_column(self):
+        spec = importlib.util.spec_from_file_location("charts_map", os.path.join(SCRIPTS, "charts_map.py"))
+        m = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(m)
+        rows = []
+        for scene, times in [("map/map-s16-t20-x50-o8-m16", {"mega": 9.0, "queue": 3.0}),
+                             ("map/map-s16-t320-x50-o8-m16", {"mega": 4.0, "queue": 5.0})]:
+            for pipe, ms in times.items():
+                r = row(pipe, pipe, "tree", scene, 4, 1920, 1080, group="map-mesh")
+                r.update(device_ms=ms, device_ms_min=ms, device_ms_max=ms)
+                rows.append(r)
+        series, grid = m.cells(rows)
+        self.assertEqual(sorted(grid), [(16, 50, 8, 16, 20), (16, 50, 8, 16, 320)])
+        self.assertEqual(m.verdict(grid[(16, 50, 8, 16, 320)], series.keys)[0], "mega")
+        with tempfile.TemporaryDirectory() as d:
+            m.table(META, series, grid, series.keys, os.path.join(d, "map.md"))
+            text = open(os.path.join(d, "map.md")).read()
+        self.assertIn("| size px | triangles | mirrors+glass |", text)
+        self.assertIn("| 16 | 320 | 50% | 8 | 4.000 | 5.000 | mega | 1.25x | - |", text)
 
 
 class PredictEvalTest(unittest.TestCase):
