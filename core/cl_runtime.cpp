@@ -302,8 +302,8 @@ static std::filesystem::path cacheDir() {
     return {};
 }
 
-cl::Program ClContext::program(const std::string& mainFile,
-                               const std::vector<std::string>& defines) {
+cl::Program ClContext::program(const std::string& mainFile, const std::vector<std::string>& defines,
+                               const std::vector<std::string>& extraOptions) {
     // Argument names (rt::Kernel sets arguments by name); they change no generated code.
     std::string options = "-cl-std=CL1.2 -cl-kernel-arg-info";
     // OpenCL lets float division and sqrt be 2.5-3 ulp; NVIDIA's compiler then picks different
@@ -312,6 +312,7 @@ cl::Program ClContext::program(const std::string& mainFile,
     // cost.
     if (device_.correctlyRoundedDivSqrt) options += " -cl-fp32-correctly-rounded-divide-sqrt";
     for (const std::string& d : defines) options += " -D" + d;
+    for (const std::string& x : extraOptions) options += " " + x;
     // Kernels pick the cheaper form of a few operations per kind of device (core/cl/accel.cl).
     if (device_.type == "CPU") options += " -DRT_DEVICE_CPU";
     // Registers and spills per kernel in the build log (core/kernel_resources.h).

@@ -60,8 +60,10 @@ class ClContext {
     // ($RTLAB_CACHE_DIR, else ~/.cache/rtlab) keyed by device, driver, source text and options,
     // so a repeat run does not rebuild; on a device that caches its own builds
     // (DeviceInfo::cachesBuilds) the driver's cache stands in for the disk. On failure throws
-    // rt::Error carrying the build log.
-    cl::Program program(const std::string& mainFile, const std::vector<std::string>& defines);
+    // rt::Error carrying the build log. `options` are further compiler options, passed as given
+    // (a device's own, such as NVIDIA's -cl-nv-maxrregcount=N) and part of the cache key.
+    cl::Program program(const std::string& mainFile, const std::vector<std::string>& defines,
+                        const std::vector<std::string>& options = {});
     // How the last program() call was satisfied: "memory", "disk" or "built".
     const std::string& lastProgramSource() const { return lastSource_; }
     // Every program() call so far, by how it was satisfied, and the wall time spent in builds

@@ -34,8 +34,9 @@ Image DevicePipeline::render(const Scene& scene, const RenderOptions& options) {
 }
 
 cl::Program DevicePipeline::program(const std::string& file,
-                                    const std::vector<std::string>& defines) {
-    cl::Program p = cl_.program(file, defines);
+                                    const std::vector<std::string>& defines,
+                                    const std::vector<std::string>& options) {
+    cl::Program p = cl_.program(file, defines, options);
     stats_.kernelResources = kernelResources(p, cl_.device().device);
     stats_.program = cl_.lastProgramSource();
     return p;

@@ -46,7 +46,8 @@ class DevicePipeline : public Pipeline {
 
     // The program of `file` with these defines (ClContext::program), with how it was obtained
     // and its kernels' resources recorded in the frame's statistics.
-    cl::Program program(const std::string& file, const std::vector<std::string>& defines);
+    cl::Program program(const std::string& file, const std::vector<std::string>& defines,
+                        const std::vector<std::string>& options = {});
     // The scene's device copy with the structure of `accel`, made again only when either
     // changed; its structure's statistics go into the frame's.
     DeviceScene& deviceScene(const Scene& scene, RenderOptions::Accel accel);

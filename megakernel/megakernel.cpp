@@ -29,6 +29,12 @@ std::vector<std::string> MegakernelPipeline::defines(const Scene& scene, const R
     return d;
 }
 
+std::vector<std::string> MegakernelPipeline::buildOptions(const RenderOptions& o) const {
+    const int registers = megaMaxRegisters(o);
+    if (registers == 0 || cl_.device().vendor.find("NVIDIA") == std::string::npos) return {};
+    return {"-cl-nv-maxrregcount=" + std::to_string(registers)};
+}
+
 size_t MegakernelPipeline::privateBytes(const Scene& scene, const RenderOptions& o) {
     if (megaLayout(o) == MegaLayout::Tree) return treePrivateBytes(scene.branching(), o.bounces);
     // Pending entries: a ray (2 x float3), a weight (float3) and a depth, 64 bytes.
@@ -50,12 +56,12 @@ Image MegakernelPipeline::renderFrame(const Scene& scene, const RenderOptions& o
         std::vector<std::string> d = defines(scene, o);
         d.push_back("RT_COUNT_LANES");
         try {
-            program = this->program("megakernel.cl", d);
+            program = this->program("megakernel.cl", d, buildOptions(o));
             countLanes = true;
         } catch (const Error&) {
         }
     }
-    if (!countLanes) program = this->program("megakernel.cl", defines(scene, o));
+    if (!countLanes) program = this->program("megakernel.cl", defines(scene, o), buildOptions(o));
     DeviceScene& deviceScene = this->deviceScene(scene, o.accel);
     size_t bytes = size_t(o.width) * o.height * 3 * sizeof(float);
     const bool adaptive = o.adaptiveAa && o.aa > 1;
@@ -70,6 +76,7 @@ Image MegakernelPipeline::renderFrame(const Scene& scene, const RenderOptions& o
     Image out(o.width, o.height);
     std::string key = std::to_string(o.width) + "x" + std::to_string(o.height);
     for (const std::string& d : defines(scene, o)) key += " " + d;
+    for (const std::string& x : buildOptions(o)) key += " " + x;
     key += " b" + std::to_string(o.bounces);  // one program may serve several B; costs differ
     // A row window has a profile of its own: the planner's is by row from the first one rendered.
     const int first = o.rowBegin, last = o.lastRow();

@@ -15,6 +15,8 @@ class MegakernelPipeline : public DevicePipeline {
 
     // The defines the program is built with (tests check them).
     static std::vector<std::string> defines(const Scene& scene, const RenderOptions& options);
+    // The compiler options beside them: the register cap (--max-registers), on NVIDIA only.
+    std::vector<std::string> buildOptions(const RenderOptions& options) const;
     // Private ray storage per work-item in the layout `options` asks for: the whole tree, or
     // the weighted stack's pending rays (64 bytes each).
     static size_t privateBytes(const Scene& scene, const RenderOptions& options);

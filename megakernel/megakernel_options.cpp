@@ -22,9 +22,29 @@ const PipelineOption& layoutOption() {
     return o;
 }
 
+// A cap on the registers a work-item, for NVIDIA's compiler: fewer registers let more warps share
+// a multiprocessor, at the cost of spills to local memory.
+const PipelineOption& registersOption() {
+    static const PipelineOption o{
+        .name = "max-registers",
+        .type = PipelineOption::Type::Integer,
+        .help =
+            "Megakernel on NVIDIA: at most this many registers a work-item, 16..255 "
+            "(-cl-nv-maxrregcount); more warps fit a multiprocessor, at the cost of spills. "
+            "Other devices ignore it [0: the compiler's choice]",
+        .defaultValue = 0ll,
+        .min = 16,
+        .max = 255,
+        .sweepKey = "max-registers",
+        .cellTag = "Y",
+        .label = "at most {} registers",
+    };
+    return o;
+}
+
 }  // namespace
 
-std::vector<PipelineOption> megakernelOptions() { return {layoutOption()}; }
+std::vector<PipelineOption> megakernelOptions() { return {layoutOption(), registersOption()}; }
 
 std::vector<PipelineVariant> megakernelVariants() {
     std::vector<PipelineVariant> out;
@@ -42,6 +62,14 @@ MegaLayout megaLayout(const RenderOptions& o) {
 
 void setMegaLayout(RenderOptions& o, MegaLayout layout) {
     layoutOption().set(o.pipelineOptions, megaLayoutName(layout));
+}
+
+int megaMaxRegisters(const RenderOptions& o) {
+    return int(registersOption().integer(o.pipelineOptions));
+}
+
+void setMegaMaxRegisters(RenderOptions& o, int registers) {
+    registersOption().set(o.pipelineOptions, (long long)registers);
 }
 
 const char* megaLayoutName(MegaLayout layout) {

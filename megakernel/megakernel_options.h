@@ -21,6 +21,9 @@ std::vector<PipelineVariant> megakernelVariants();
 
 MegaLayout megaLayout(const RenderOptions& options);
 void setMegaLayout(RenderOptions& options, MegaLayout layout);
+// --max-registers: 0 for the compiler's choice.
+int megaMaxRegisters(const RenderOptions& options);
+void setMegaMaxRegisters(RenderOptions& options, int registers);
 // The name as --layout takes it: tree, weighted.
 const char* megaLayoutName(MegaLayout layout);
 

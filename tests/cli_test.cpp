@@ -116,6 +116,8 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"render scenes/spheres.json --offset tiny -o /tmp/x.png", "--offset tiny"},
         BadCase{"render scenes/spheres.json --offset scaled --fixed-offset -o /tmp/x.png",
                 "--fixed-offset contradicts --offset scaled"},
+        BadCase{"render scenes/spheres.json --max-registers 8 -o /tmp/x.png",
+                "--max-registers 8: must be in 16..255"},
         BadCase{"render scenes/spheres.json --pipeline queue --pool 0 -o /tmp/x.png",
                 "--pool 0: must be in 1..67108864"},
         BadCase{"render scenes/spheres.json --pipeline queue --pool 8 --bounces 6 -o /tmp/x.png",

@@ -16,6 +16,7 @@
 #include "image/image_io.h"
 #include "megakernel/megakernel_options.h"
 #include "test_device.h"
+#include "test_images.h"
 #include "test_scenes.h"
 
 namespace rt {
@@ -75,6 +76,24 @@ TEST(Megakernel, WeightedLayoutMatchesTree) {
         ImageDiff d = compareImages(tree, weighted, 1e-4, false);
         EXPECT_LE(d.maxAbs, 1e-4) << name;
     }
+}
+
+// The register cap is NVIDIA's compiler option: it reaches that compiler and no other, and it
+// changes how the kernel is compiled, never what it computes.
+TEST(Megakernel, RegisterCapIsNvidiaOnlyAndKeepsTheImage) {
+    Scene scene = load("cornell");
+    RenderOptions o = small(scene, 4);
+    setMegaLayout(o, MegaLayout::Weighted);
+    MegakernelPipeline mega(test::device());
+    EXPECT_TRUE(mega.buildOptions(o).empty());
+    const Image plain = mega.render(scene, o);
+    setMegaMaxRegisters(o, 64);
+    EXPECT_EQ(megaMaxRegisters(o), 64);
+    const bool nvidia = test::device().device().vendor.find("NVIDIA") != std::string::npos;
+    EXPECT_EQ(mega.buildOptions(o), nvidia ? std::vector<std::string>{"-cl-nv-maxrregcount=64"}
+                                           : std::vector<std::string>{});
+    const Image capped = mega.render(scene, o);
+    EXPECT_TRUE(test::sameBits(plain, capped));
 }
 
 TEST(Megakernel, RejectsTreeTooBigForPrivateMemory) {
