@@ -1,0 +1,117 @@
+#!/usr/bin/env python3
+"""How `--pipeline auto` does against the designs it chooses from (bench/sweeps/auto): for each
+scene, auto's device time against the better of the megakernel (either layout) and the queue
+wavefront, the bar the designs-at-their-best question sets (within 5% of it everywhere, faster
+than both somewhere), with the design auto chose, why, and the busy lanes it predicted.
+
+A gap inside the measured frame spread is no gap (compare.py's tie rule): auto "within 5%" means
+its time is at most 1.05 times the better one's or ties it, and "faster than both" means faster
+than each beyond the spread.
+
+Usage: scripts/auto_eval.py ROWS.jsonl [ROWS.jsonl...] [--out FILE.md]
+Rows of one scene from several files are pooled (a later file's cell replaces an earlier one's),
+so that auto measured again at a later commit can be set against the designs measured before;
+the table names each row's commit. Standard library only.
+"""
+import argparse
+import json
+import os
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from compare import tied  # noqa: E402
+from sweep_rows import own_options  # noqa: E402
+
+BAR = 1.05
+
+
+def design(r):
+    """mega-tree, mega-weighted, wave, queue, persist, auto: the series a row belongs to."""
+    if r["pipeline"] == "mega":
+        return "mega-" + own_options(r).get("layout", "tree")
+    return r["pipeline"]
+
+
+def load(paths):
+    cells = {}
+    for path in paths:
+        with open(path) as f:
+            for line in f:
+                if not line.strip():
+                    continue
+                r = json.loads(line)
+                if r.get("status") == "ok":
+                    cells.setdefault(r["scene"], {})[design(r)] = r
+    return cells
+
+
+def evaluate(cells):
+    """[(scene, row dict, auto, best, ratio, within, faster)] for scenes where auto, the queue and
+    a megakernel ran."""
+    out = []
+    for scene, d in cells.items():
+        megas = [d[k] for k in ("mega-weighted", "mega-tree") if k in d]
+        if "auto" not in d or "queue" not in d or not megas:
+            continue
+        mega = min(megas, key=lambda r: r["device_ms"])
+        best = min((mega, d["queue"]), key=lambda r: r["device_ms"])
+        a = d["auto"]
+        ratio = a["device_ms"] / best["device_ms"]
+        within = ratio <= BAR or tied(a, best)
+        faster = all(a["device_ms"] < r["device_ms"] and not tied(a, r) for r in (mega, d["queue"]))
+        out.append((scene, d, a, best, ratio, within, faster))
+    return out
+
+
+def table(results):
+    cols = ["mega-weighted", "mega-tree", "wave", "queue", "persist"]
+    first = results[0][2] if results else {}
+    commits = sorted({r.get("commit", "?")[:12] for _, d, *_ in results for r in d.values()})
+    lines = [f"# `--pipeline auto` against the designs it chooses from",
+             "",
+             f"{first.get('device', '?')}, driver {first.get('driver', '?')}, "
+             f"commit{'s' if len(commits) > 1 else ''} {', '.join(f'`{c}`' for c in commits)}; "
+             f"{first.get('width')}x{first.get('height')}, B = {first.get('bounces')}, accel "
+             f"{first.get('accel')}; device ms, median of {first.get('repeats')} frames after "
+             f"{first.get('warmup')} warm-up frames. Ratio: auto over the better of the megakernel "
+             f"(either layout) and the queue; *tie* where the gap is inside the frame spread.",
+             "",
+             "| scene | auto | " + " | ".join(cols) + " | ratio | auto chose | busy lanes |",
+             "|" + "---|" * (len(cols) + 5)]
+    for scene, d, a, best, ratio, within, faster in sorted(results):
+        x = a.get("extras") or {}
+        cells = [f"{d[c]['device_ms']:.3f}" if c in d else "—" for c in cols]
+        verdict = f"{ratio:.3f}" + ("" if within else " **over 5%**") + \
+            (" **faster than both**" if faster else "") + \
+            (" (tie)" if tied(a, best) and not faster else "")
+        lanes = x.get("auto_busy_lanes")
+        lines.append(f"| `{scene}` | {a['device_ms']:.3f} | " + " | ".join(cells) +
+                     f" | {verdict} | {x.get('auto_design', '?')} | "
+                     f"{'' if lanes is None else f'{lanes:.1f}'} |")
+    n = len(results)
+    over = [s for s, *_, w, f in results if not w]
+    faster = [s for s, *_, f in results if f]
+    worst = max(results, key=lambda t: t[4]) if results else None
+    lines += ["",
+              f"Within 5% of the better of mega and queue (or tied with it) on {n - len(over)} of "
+              f"{n} scenes; faster than both beyond the spread on {len(faster)}."
+              + (f" Over 5%: {', '.join(f'`{s}`' for s in over)}." if over else "")
+              + (f" Worst ratio {worst[4]:.3f} (`{worst[0]}`)." if worst else "")]
+    return "\n".join(lines) + "\n"
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("rows", nargs="+", help="sweep rows (rows.jsonl) of bench/sweeps/auto")
+    ap.add_argument("--out", help="write the Markdown table here (default: stdout)")
+    args = ap.parse_args()
+    text = table(evaluate(load(args.rows)))
+    if args.out:
+        with open(args.out, "w") as f:
+            f.write(text)
+    else:
+        sys.stdout.write(text)
+
+
+if __name__ == "__main__":
+    main()
