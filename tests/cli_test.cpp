@@ -127,6 +127,8 @@ INSTANTIATE_TEST_SUITE_P(
                 "--queue-launch device does not go with --max-launch-ms"},
         BadCase{"render scenes/mesh.json --pipeline queue --queue-packets often -o /tmp/x.png",
                 "--queue-packets often: must be auto, on or off"},
+        BadCase{"render scenes/cornell.json --pipeline queue --queue-shade foo -o /tmp/x.png",
+                "--queue-shade foo: must be class, pattern or sort"},
         BadCase{"render scenes/mesh.json --pipeline queue --accel bvh --queue-packets on "
                 "-o /tmp/x.png",
                 "--queue-packets on: packets traverse the wide BVH only (use --accel wide)"},
