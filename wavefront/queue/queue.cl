@@ -2,8 +2,9 @@
 // structure of arrays, and every stage is a kernel over a compacted queue of them:
 //   generate  -> camera rays into free pool slots (new pixels, or pixels cut for room)
 //   extend    -> closest hit of every queued ray; sorts rays into one queue per shading class
+//                (--queue-shade: or per pattern, or all hits in one queue for a sort)
 //   shadow    -> any-hit shadow rays of every ray that hit a surface
-//   shade_*   -> one kernel per class: the local term, and the children into a staging area
+//   shade_*   -> one kernel per queue: the local term, and the children into a staging area
 //   scan      -> exclusive prefix sum of the children per ray (stable: order is kept)
 //   accumulate-> each path's contributions of this bounce, added to its pixel in queue order
 //   compact   -> children from the staging area to the front of the pool, without holes
