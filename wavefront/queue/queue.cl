@@ -197,10 +197,10 @@ kernel void Queue_Shadow(RT_SCENE_PARAMS, global Node* nodes, global const int* 
     for (int j = 0; j < settings.lightCount; ++j) nodes[i].occluded[j] = node.occluded[j];
 }
 
-// One ray of class `cls` whose material has pattern `pattern` (constants in the kernels of one
-// queue each, so that each compiles to one code path; Queue_ShadeSorted passes the ray's own,
-// and RT_PATTERN_ANY, which reads the material's): its contribution to contrib[i], its children
-// to staging slots [C i, C i + children). The arithmetic is the same whoever passes what.
+// One ray of class `cls` whose material has pattern `pattern`: its contribution to contrib[i],
+// its children to staging slots [C i, C i + children). The kernel of a queue whose rays share
+// both passes them as constants, so that it compiles to one code path; Queue_ShadeSorted passes
+// the ray's class and RT_PATTERN_ANY (the material's pattern). The arithmetic is the same.
 inline void Queue_Shade(const SceneData* sc, int cls, int pattern, int i, const QueueRays* rays,
                         global const Node* nodes, const QueueRays* staging, global float* contrib,
                         global int* children) {
@@ -243,9 +243,11 @@ inline void Queue_Shade(const SceneData* sc, int cls, int pattern, int i, const 
 
 // From: class queue / To: contrib, children, staging.
 QUEUE_SHADE_KERNEL(Queue_ShadeMiss, RT_Q_MISS, RT_Q_MISS, RT_PATTERN_NONE)
+#if RT_QUEUE_SHADE != RT_Q_SHADE_SORT
 QUEUE_SHADE_KERNEL(Queue_ShadeDiffuse, RT_Q_DIFFUSE, RT_Q_DIFFUSE, RT_PATTERN_NONE)
 QUEUE_SHADE_KERNEL(Queue_ShadeMirror, RT_Q_MIRROR, RT_Q_MIRROR, RT_PATTERN_ANY)
 QUEUE_SHADE_KERNEL(Queue_ShadeGlass, RT_Q_GLASS, RT_Q_GLASS, RT_PATTERN_ANY)
+#endif
 #if RT_QUEUE_SHADE == RT_Q_SHADE_CLASS
 QUEUE_SHADE_KERNEL(Queue_ShadeProcedural, RT_Q_PROCEDURAL, RT_Q_PROCEDURAL, RT_PATTERN_ANY)
 #elif RT_QUEUE_SHADE == RT_Q_SHADE_PATTERN

@@ -67,6 +67,9 @@ struct ShadeLaunch {
 const char* const kShadeKernels[RT_Q_CLASSES] = {"Queue_ShadeMiss", "Queue_ShadeDiffuse",
                                                  "Queue_ShadeMirror", "Queue_ShadeGlass",
                                                  "Queue_ShadeProcedural"};
+static_assert(std::tuple_size_v<decltype(QueueStats::shadeQueueRays)> == RT_Q_QUEUES);
+static_assert(RT_Q_PATTERNS == RT_PATTERN_BUMP - RT_PATTERN_CHECKER + 1);
+
 // --queue-shade pattern: the procedural class's kernel per pattern, RT_PATTERN_CHECKER first.
 const char* const kPatternKernels[RT_Q_PATTERNS] = {"Queue_ShadeChecker", "Queue_ShadeMarble",
                                                     "Queue_ShadeWood", "Queue_ShadeGranite",

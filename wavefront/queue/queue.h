@@ -72,7 +72,7 @@ struct QueueStats {
     // The rays each shade queue held, summed over the frame's bounces, as --queue-shade numbers
     // the queues (queue_layout.h; cut paths' rays too). Read with the counts each bounce reads
     // back: --queue-launch readback only, zero on the device.
-    std::array<long long, 9> shadeQueueRays{};  // RT_Q_QUEUES
+    std::array<long long, 9> shadeQueueRays{};  // RT_Q_QUEUES (static_assert in queue.cpp)
 };
 
 class QueuePipeline : public DevicePipeline {
