@@ -5,7 +5,9 @@
 // for a queue no material can fill.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdlib>
+#include <map>
 #include <numeric>
 #include <string>
 
@@ -159,6 +161,27 @@ TEST(QueueShade, EachModeRunsTheQueuesItClaims) {
     EXPECT_EQ(srt.stats.launches, cls.stats.launches);
     EXPECT_EQ(srt.stats.extras.at("queue_shade"), "sort");
     EXPECT_GT(srt.stats.extras.at("shade_ms").get<double>(), 0.0);
+}
+
+// The sort mode's hit queue runs material by material: the ids never decrease along it, and it
+// holds every hit of the bounce once. One bounce (B = 0), so that the queue left on the device is
+// that of the camera rays, which the class mode counts by class.
+TEST(QueueShade, SortedHitQueueRunsMaterialByMaterial) {
+    Scene scene = mapWall();
+    RenderOptions o = small(scene);
+    o.bounces = 0;
+    const Frame cls = render(scene, o, QueueShadeMode::Class);
+    QueuePipeline queue(test::device());
+    setQueueShade(o, QueueShadeMode::Sort);
+    queue.render(scene, o);
+    const std::vector<int> materials = queue.sortedMaterialsForTest();
+    const auto& c = cls.queue.shadeQueueRays;
+    EXPECT_EQ((long long)(materials.size()),
+              c[RT_Q_DIFFUSE] + c[RT_Q_MIRROR] + c[RT_Q_GLASS] + c[RT_Q_PROCEDURAL]);
+    EXPECT_TRUE(std::is_sorted(materials.begin(), materials.end()));
+    std::vector<int> distinct = materials;
+    distinct.erase(std::unique(distinct.begin(), distinct.end()), distinct.end());
+    EXPECT_GE(distinct.size(), 8u) << "the wall's camera rays hit most of its 16 materials";
 }
 
 // A queue that no material of the scene can fill costs no launch: the standard scenes have no

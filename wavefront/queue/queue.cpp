@@ -742,6 +742,21 @@ Image QueuePipeline::renderFrame(const Scene& scene, const RenderOptions& o) {
     return out;
 }
 
+std::vector<int> QueuePipeline::sortedMaterialsForTest() {
+    cl::CommandQueue& q = cl_.queue();
+    cl_int hits = 0;
+    q.enqueueReadBuffer(buf_.counters, CL_TRUE, (RT_Q_COUNT + RT_Q_HITS) * 4, 4, &hits);
+    std::vector<cl_int> order(size_t(std::max(hits, 0)));
+    if (order.empty()) return {};
+    q.enqueueReadBuffer(buf_.shadeQueues, CL_TRUE, RT_Q_SORTED * buf_.pool * 4, order.size() * 4,
+                        order.data());
+    std::vector<dev::Node> nodes(buf_.pool);
+    q.enqueueReadBuffer(buf_.nodes, CL_TRUE, 0, nodes.size() * sizeof(dev::Node), nodes.data());
+    std::vector<int> materials;
+    for (cl_int i : order) materials.push_back(nodes.at(size_t(i)).material);
+    return materials;
+}
+
 std::string QueuePipeline::packetRefusal(const DeviceInfo& device, const Scene& scene,
                                          const RenderOptions& o) {
     if (o.accel != RenderOptions::Accel::Wide)

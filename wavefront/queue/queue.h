@@ -111,6 +111,9 @@ class QueuePipeline : public DevicePipeline {
     // Tests only: price every launch at its items times `ms` instead of its profiling event, so
     // that --max-launch-ms splits the stages the same way on any device (0: real timings).
     void setFakeItemMsForTest(double ms) { fakeItemMs_ = ms; }
+    // Tests only: the material id of each entry of the last bounce's sorted hit queue
+    // (--queue-shade sort), in queue order, read from the device after a frame.
+    std::vector<int> sortedMaterialsForTest();
 
   private:
     Image renderFrame(const Scene& scene, const RenderOptions& options) override;
