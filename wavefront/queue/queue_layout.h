@@ -1,6 +1,7 @@
-// rtlab — the queue wavefront's shading classes and the layout of its counter buffer, shared by
-// the host (wavefront/queue/*.cpp) and the kernels (queue.cl): plain #defines, valid C++ and
-// OpenCL C alike, so both sides index the same words and classify materials alike.
+// rtlab — the queue wavefront's shading classes, its shade queues (--queue-shade) and the layout
+// of its counter buffer, shared by the host (wavefront/queue/*.cpp) and the kernels (queue.cl):
+// plain #defines, valid C++ and OpenCL C alike, so both sides index the same words and classify
+// materials alike.
 #ifndef RTLAB_QUEUE_LAYOUT_H
 #define RTLAB_QUEUE_LAYOUT_H
 
@@ -28,11 +29,11 @@
 // --queue-shade pattern: the queues of the classes before the procedural one, then one queue per
 // pattern (RT_PATTERN_CHECKER..RT_PATTERN_BUMP, core/types.h) in place of the procedural queue.
 #define RT_Q_PATTERNS 5
-#define RT_Q_PATTERN_QUEUE(pattern) (RT_Q_PROCEDURAL + (pattern)-RT_PATTERN_CHECKER)
+#define RT_Q_PATTERN_QUEUE(pattern) (RT_Q_PROCEDURAL - RT_PATTERN_CHECKER + (pattern))
 // --queue-shade sort: the miss queue, every hit in extend's order, and the hits again in the
 // order of their material ids (Queue_SortCount, Queue_SortBuckets, Queue_SortScatter).
 #define RT_Q_HITS 1
-#define RT_Q_SORTED 2
+#define RT_Q_SORTED 2  // as long as the hit queue: its length is RT_Q_HITS's word
 // The most queues a mode has (pattern's), and so the queue lengths the counters hold.
 #define RT_Q_QUEUES (RT_Q_PROCEDURAL + RT_Q_PATTERNS)
 
