@@ -614,7 +614,13 @@ int benchmarkCommand(const Flags& f) {
                                std::to_string(o.width) + "x" + std::to_string(o.height) + "/b" +
                                std::to_string(o.bounces) + "/s" + std::to_string(o.shadowSamples) +
                                "/aa" + std::to_string(o.aa) + "/" +
-                               (c.accelApplies ? accelName(o.accel) : "-") + t.tag;
+                               (c.accelApplies ? accelName(o.accel) : "-");
+            // A pipeline's own options, where not at their defaults, tell apart cells that
+            // differ only in them (the megakernel's layouts, the queue's shade modes).
+            for (const PipelineOption* opt : pipelineRegistry().options())
+                if (!opt->isDefault(o.pipelineOptions))
+                    name += "/" + opt->sweepKey + "=" + opt->text(opt->value(o.pipelineOptions));
+            name += t.tag;
             // What the estimate knows of it: the frames of one repetition, and a scene name per
             // device, since each device has its own speed and its own built programs.
             Cell timed = c;

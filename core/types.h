@@ -76,6 +76,7 @@ typedef struct Material {
 #define RT_PATTERN_WOOD 3
 #define RT_PATTERN_GRANITE 4
 #define RT_PATTERN_BUMP 5
+#define RT_PATTERN_ANY (-1)  // a shading caller that does not know the pattern: read it
 #define RT_MAX_OCTAVES 64
 
 typedef struct Sphere {

@@ -77,7 +77,8 @@ inline float3 Megakernel_Sample(const SceneData* sc, int x, int y, int sample) {
         }
         Pending refl, refr;
         bool hasRefl, hasRefr;
-        color += PathState_Step(sc, &node, &p, true, true, &refl, &hasRefl, &refr, &hasRefr);
+        color += PathState_Step(sc, &node, &p, true, true, RT_PATTERN_ANY, &refl, &hasRefl, &refr,
+                                &hasRefr);
         // Depth-first: at most one pending sibling per level, so B*(C-1)+1 entries suffice.
         if (hasRefr) stack[top++] = RT_STACK_PUSH(refr);
         if (hasRefl) stack[top++] = RT_STACK_PUSH(refl);

@@ -129,6 +129,8 @@ INSTANTIATE_TEST_SUITE_P(
                 "--queue-launch device does not go with --max-launch-ms"},
         BadCase{"render scenes/mesh.json --pipeline queue --queue-packets often -o /tmp/x.png",
                 "--queue-packets often: must be auto, on or off"},
+        BadCase{"render scenes/cornell.json --pipeline queue --queue-shade foo -o /tmp/x.png",
+                "--queue-shade foo: must be class, pattern or sort"},
         BadCase{"render scenes/mesh.json --pipeline queue --accel bvh --queue-packets on "
                 "-o /tmp/x.png",
                 "--queue-packets on: packets traverse the wide BVH only (use --accel wide)"},
@@ -201,13 +203,15 @@ TEST(Cli, QueueFlagsReachThePipeline) {
     const std::string out = rt::test::scratchPath("queue-flags.png");
     Result r =
         run("render scenes/shadows.json --size 32x24 --pipeline queue --pool 4096 "
-            "--queue-launch device --queue-packets off --stats-json - -o " +
+            "--queue-launch device --queue-packets off --queue-shade sort --stats-json - -o " +
             out);
     ASSERT_EQ(r.status, 0) << r.err;
     const nlohmann::json j = nlohmann::json::parse(r.out);
     EXPECT_EQ(j.at("extras").at("pool_rays"), 4096);
     EXPECT_EQ(j.at("extras").at("queue_launch"), "device");
     EXPECT_EQ(j.at("extras").at("queue_packets"), 0);
+    EXPECT_EQ(j.at("extras").at("queue_shade"), "sort");
+    EXPECT_TRUE(j.at("kernel_ms").contains("shade sorted")) << j.at("kernel_ms");
     EXPECT_EQ(j.at("max_launch_ms"), 0) << "the default cap gives way to device sizing";
     std::remove(out.c_str());
 }

@@ -38,9 +38,10 @@ inline float3 PathState_Miss(const SceneData* sc, const Pending* p) {
 // The forward-weight step of a ray that hit `node`: returns the node's local term
 // w (1 - F) o base, and the children with weights w F (reflection) and w (1 - F)(1 - o)
 // (refraction). mayReflect / mayRefract let a caller that knows the material class skip a
-// child that cannot exist (RayTree_ChildRay would say no anyway), so the result is the same.
+// child that cannot exist (RayTree_ChildRay would say no anyway), and `pattern` (Shade_BaseOf)
+// one that knows its procedural pattern skip the others' code, so the result is the same.
 RT_STEP_LINKAGE float3 PathState_Step(const SceneData* sc, const Node* node, const Pending* p,
-                                      bool mayReflect, bool mayRefract, Pending* refl,
+                                      bool mayReflect, bool mayRefract, int pattern, Pending* refl,
                                       bool* hasRefl, Pending* refr, bool* hasRefr) {
     Ray r0, r1;
     *hasRefl = mayReflect && RayTree_ChildRay(sc, node, p->depth, 0, &r0);
@@ -51,7 +52,7 @@ RT_STEP_LINKAGE float3 PathState_Step(const SceneData* sc, const Node* node, con
     if (*hasRefr)
         *refr = PathState_Make(r1, p->weight * ((1.0f - F) * (1.0f - o)), p->depth + 1,
                                RT_RAY_REFRACTION);
-    return p->weight * ((1.0f - F) * o) * Shade_Base(sc, node);
+    return p->weight * ((1.0f - F) * o) * Shade_BaseOf(sc, node, pattern);
 }
 
 #endif

@@ -99,14 +99,16 @@ inline float3 Procedural_Bump(float3 p, float3 n, int octaves, float strength) {
     return normalize(n - strength * g);
 }
 
-// Shade_Base's hook: the diffuse colour and shading normal of material m at hit point p.
-RT_PATTERN_LINKAGE void Procedural_Apply(const Material* m, float3 p, float3* diffuse, float3* n) {
+// Shade_Base's hook: the diffuse colour and shading normal of material m, whose pattern is
+// `pattern` (m->pattern, or the same as a constant), at hit point p.
+RT_PATTERN_LINKAGE void Procedural_Apply(const Material* m, int pattern, float3 p, float3* diffuse,
+                                         float3* n) {
     float3 q = p * m->patternScale;
-    if (m->pattern == RT_PATTERN_BUMP) {
+    if (pattern == RT_PATTERN_BUMP) {
         *n = Procedural_Bump(q, *n, m->octaves, m->bump);
         return;
     }
-    float t = Procedural_Pattern(m->pattern, q, m->octaves);
+    float t = Procedural_Pattern(pattern, q, m->octaves);
     *diffuse = *diffuse + t * (f3(m->diffuse2) - *diffuse);
 }
 

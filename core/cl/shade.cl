@@ -202,12 +202,15 @@ inline int Shade_Occlusion(const SceneData* sc, float3 p, float3 n, int j, uint 
 }
 
 // ---- Blinn-Phong (section 5) ----
-inline float3 Shade_Base(const SceneData* sc, const Node* node) {
+// `pattern`: the material's RT_PATTERN_* when the caller knows it (a constant in a kernel that
+// shades one pattern only, so that the others' code drops out), or RT_PATTERN_ANY: read it.
+inline float3 Shade_BaseOf(const SceneData* sc, const Node* node, int pattern) {
     Material m = sc->materials[node->material];
     float3 p = f3(node->point), n = f3(node->normal), d = f3(node->dir);
     float3 diffuse = f3(m.diffuse);
 #ifdef RT_HAS_PROCEDURAL
-    if (m.pattern != RT_PATTERN_NONE) Procedural_Apply(&m, p, &diffuse, &n);
+    if (pattern == RT_PATTERN_ANY) pattern = m.pattern;
+    if (pattern != RT_PATTERN_NONE) Procedural_Apply(&m, pattern, p, &diffuse, &n);
 #endif
     float3 c = f3(m.ambient);
     for (int j = 0; j < sc->settings.lightCount; ++j) {
@@ -222,6 +225,10 @@ inline float3 Shade_Base(const SceneData* sc, const Node* node) {
         c += vis * f3(light.color) * (diffuse * ndl + f3(m.specular) * spec);
     }
     return c;
+}
+
+inline float3 Shade_Base(const SceneData* sc, const Node* node) {
+    return Shade_BaseOf(sc, node, RT_PATTERN_ANY);
 }
 
 #endif

@@ -2,8 +2,9 @@
 // structure of arrays, and every stage is a kernel over a compacted queue of them:
 //   generate  -> camera rays into free pool slots (new pixels, or pixels cut for room)
 //   extend    -> closest hit of every queued ray; sorts rays into one queue per shading class
+//                (--queue-shade: or per pattern, or all hits in one queue for a sort)
 //   shadow    -> any-hit shadow rays of every ray that hit a surface
-//   shade_*   -> one kernel per class: the local term, and the children into a staging area
+//   shade_*   -> one kernel per queue: the local term, and the children into a staging area
 //   scan      -> exclusive prefix sum of the children per ray (stable: order is kept)
 //   accumulate-> each path's contributions of this bounce, added to its pixel in queue order
 //   compact   -> children from the staging area to the front of the pool, without holes
@@ -18,6 +19,11 @@
 // is written at the ray's own pool index, so their order changes no pixel.
 #include "pathstate.cl"
 #include "queue_layout.h"
+
+// --queue-shade (queue_layout.h): the host defines it for the pattern and sort modes only.
+#ifndef RT_QUEUE_SHADE
+#define RT_QUEUE_SHADE RT_Q_SHADE_CLASS
+#endif
 
 // The pool's fields, one array each (float3 fields as 3 floats, vload3/vstore3).
 typedef struct QueueRays {
@@ -107,11 +113,22 @@ inline int Queue_Class(const SceneData* sc, const Node* node) {
     return RT_Q_MATERIAL_CLASS(m);
 }
 
+// The shade queue extend puts a ray of class `cls` in (--queue-shade, RT_QUEUE_SHADE: the
+// class's own queue unless the program was built for another mode).
+inline int Queue_ShadeQueue(const SceneData* sc, const Node* node, int cls) {
+#if RT_QUEUE_SHADE == RT_Q_SHADE_PATTERN
+    if (cls == RT_Q_PROCEDURAL) return RT_Q_PATTERN_QUEUE(sc->materials[node->material].pattern);
+#elif RT_QUEUE_SHADE == RT_Q_SHADE_SORT
+    if (cls != RT_Q_MISS) return RT_Q_HITS;  // Queue_SortScatter orders them by material
+#endif
+    return cls;
+}
+
 // A work-group's pushes to the class queues, the shadow queue and the per-bounce histogram are
 // counted in local memory (count, histogram) and reserved in the global counters once per group
 // (base: the group's first slot in each queue). Every work-item of the group calls both.
 inline void Queue_GroupPushesBegin(local int* count, local int* histogram, int lid, int size) {
-    for (int k = lid; k < RT_Q_CLASSES + 1; k += size) count[k] = 0;
+    for (int k = lid; k < RT_Q_QUEUES + 1; k += size) count[k] = 0;
     for (int k = lid; k < (RT_Q_MAX_DEPTH + 1) * RT_Q_CLASSES; k += size) histogram[k] = 0;
     barrier(CLK_LOCAL_MEM_FENCE);
 }
@@ -120,20 +137,20 @@ inline void Queue_GroupPushesReserve(local const int* count, local int* base,
                                      local const int* histogram, global int* counters, int lid,
                                      int size) {
     barrier(CLK_LOCAL_MEM_FENCE);
-    for (int k = lid; k < RT_Q_CLASSES + 1; k += size)
+    for (int k = lid; k < RT_Q_QUEUES + 1; k += size)
         base[k] = count[k] ? atomic_add(&counters[RT_Q_COUNT + k], count[k]) : 0;
     for (int k = lid; k < (RT_Q_MAX_DEPTH + 1) * RT_Q_CLASSES; k += size)
         if (histogram[k]) atomic_add(&counters[RT_Q_HISTOGRAM + k], histogram[k]);
     barrier(CLK_LOCAL_MEM_FENCE);
 }
 
-// From: pool [0, n) (n: see Queue_Length) / To: nodes[i], class queues, shadow queue, per-bounce
+// From: pool [0, n) (n: see Queue_Length) / To: nodes[i], shade queues, shadow queue, per-bounce
 // histogram. Pushes are aggregated per work-group in local memory: one global atomic per queue per
 // group.
 kernel void Queue_Extend(RT_SCENE_PARAMS, QUEUE_RAYS_PARAMS(rays), int n, global Node* nodes,
-                         global int* classQueues, int pool, global int* shadowQueue,
+                         global int* shadeQueues, int pool, global int* shadowQueue,
                          global int* counters, int nWord, global uint* rayTally) {
-    local int count[RT_Q_CLASSES + 1], base[RT_Q_CLASSES + 1];
+    local int count[RT_Q_QUEUES + 1], base[RT_Q_QUEUES + 1];
     local int histogram[(RT_Q_MAX_DEPTH + 1) * RT_Q_CLASSES];
     int lid = get_local_id(0), size = get_local_size(0), i = get_global_id(0);
     n = Queue_Length(n, nWord, counters);
@@ -142,7 +159,7 @@ kernel void Queue_Extend(RT_SCENE_PARAMS, QUEUE_RAYS_PARAMS(rays), int n, global
     // The group's first index counts the global offset of a launch split into pieces.
     if (i - lid >= n) return;
     Queue_GroupPushesBegin(count, histogram, lid, size);
-    int cls = -1, slot = 0, shadowSlot = -1;
+    int queue = -1, slot = 0, shadowSlot = -1;
     if (i < n) {
         RT_SCENE_INIT(sc);
         QUEUE_RAYS_INIT(rays);
@@ -150,15 +167,16 @@ kernel void Queue_Extend(RT_SCENE_PARAMS, QUEUE_RAYS_PARAMS(rays), int n, global
         QUEUE_COUNT_INTO_PIXEL(sc, rayTally, rays.pixel[i]);
         Node node = RayTree_TraceSurface(&sc, p.ray, p.type);  // shadow rays: Queue_Shadow
         nodes[i] = node;
-        cls = Queue_Class(&sc, &node);
-        slot = atomic_inc(&count[cls]);
+        int cls = Queue_Class(&sc, &node);
+        queue = Queue_ShadeQueue(&sc, &node, cls);
+        slot = atomic_inc(&count[queue]);
         atomic_inc(&histogram[p.depth * RT_Q_CLASSES + cls]);
         if (cls != RT_Q_MISS && settings.lightCount > 0)
-            shadowSlot = atomic_inc(&count[RT_Q_CLASSES]);
+            shadowSlot = atomic_inc(&count[RT_Q_QUEUES]);
     }
     Queue_GroupPushesReserve(count, base, histogram, counters, lid, size);
-    if (cls >= 0) classQueues[cls * pool + base[cls] + slot] = i;
-    if (shadowSlot >= 0) shadowQueue[base[RT_Q_CLASSES] + shadowSlot] = i;
+    if (queue >= 0) shadeQueues[queue * pool + base[queue] + slot] = i;
+    if (shadowSlot >= 0) shadowQueue[base[RT_Q_QUEUES] + shadowSlot] = i;
 }
 
 // From: shadow queue, pool [0, n) / To: nodes[i].occluded. The shadow stage the other
@@ -179,9 +197,11 @@ kernel void Queue_Shadow(RT_SCENE_PARAMS, global Node* nodes, global const int* 
     for (int j = 0; j < settings.lightCount; ++j) nodes[i].occluded[j] = node.occluded[j];
 }
 
-// One ray of class `cls` (a constant in each kernel below, so each compiles to one code path):
-// its contribution to contrib[i], its children to staging slots [C i, C i + children).
-inline void Queue_Shade(const SceneData* sc, int cls, int i, const QueueRays* rays,
+// One ray of class `cls` whose material has pattern `pattern`: its contribution to contrib[i],
+// its children to staging slots [C i, C i + children). The kernel of a queue whose rays share
+// both passes them as constants, so that it compiles to one code path; Queue_ShadeSorted passes
+// the ray's class and RT_PATTERN_ANY (the material's pattern). The arithmetic is the same.
+inline void Queue_Shade(const SceneData* sc, int cls, int pattern, int i, const QueueRays* rays,
                         global const Node* nodes, const QueueRays* staging, global float* contrib,
                         global int* children) {
     Pending p = Queue_Load(rays, i);
@@ -194,8 +214,8 @@ inline void Queue_Shade(const SceneData* sc, int cls, int i, const QueueRays* ra
         Pending refl, refr;
         bool hasRefl, hasRefr;
         bool reflects = cls == RT_Q_MIRROR || cls == RT_Q_GLASS;
-        term = PathState_Step(sc, &node, &p, reflects, cls == RT_Q_GLASS, &refl, &hasRefl, &refr,
-                              &hasRefr);
+        term = PathState_Step(sc, &node, &p, reflects, cls == RT_Q_GLASS, pattern, &refl, &hasRefl,
+                              &refr, &hasRefr);
         int pixel = rays->pixel[i];
         if (hasRefl) Queue_Store(staging, RT_BRANCH * i + c++, &refl, pixel);
         if (hasRefr) Queue_Store(staging, RT_BRANCH * i + c++, &refr, pixel);
@@ -204,27 +224,61 @@ inline void Queue_Shade(const SceneData* sc, int cls, int i, const QueueRays* ra
     children[i] = c;
 }
 
-#define QUEUE_SHADE_KERNEL(name, cls)                                                           \
-    kernel void name(RT_SCENE_PARAMS, QUEUE_RAYS_PARAMS(rays), global const Node* nodes,        \
-                     global const int* classQueues, int pool, global const int* counters,       \
-                     QUEUE_RAYS_PARAMS(staging), global float* contrib, global int* children) { \
-        int k = get_global_id(0);                                                               \
-        if (k >= counters[RT_Q_COUNT + cls]) return;                                            \
-        RT_SCENE_INIT(sc);                                                                      \
-        QUEUE_RAYS_INIT(rays);                                                                  \
-        QUEUE_RAYS_INIT(staging);                                                               \
-        Queue_Shade(&sc, cls, classQueues[cls * pool + k], &rays, nodes, &staging, contrib,     \
-                    children);                                                                  \
+#define QUEUE_SHADE_PARAMS                                                   \
+    RT_SCENE_PARAMS, QUEUE_RAYS_PARAMS(rays), global const Node *nodes,      \
+        global const int *shadeQueues, int pool, global const int *counters, \
+        QUEUE_RAYS_PARAMS(staging), global float *contrib, global int *children
+
+// The shade kernel of queue `queue`, whose rays are all of class `cls` and pattern `pattern`.
+#define QUEUE_SHADE_KERNEL(name, queue, cls, pattern)                                         \
+    kernel void name(QUEUE_SHADE_PARAMS) {                                                    \
+        int k = get_global_id(0);                                                             \
+        if (k >= counters[RT_Q_COUNT + queue]) return;                                        \
+        RT_SCENE_INIT(sc);                                                                    \
+        QUEUE_RAYS_INIT(rays);                                                                \
+        QUEUE_RAYS_INIT(staging);                                                             \
+        Queue_Shade(&sc, cls, pattern, shadeQueues[queue * pool + k], &rays, nodes, &staging, \
+                    contrib, children);                                                       \
     }
 
 // From: class queue / To: contrib, children, staging.
-QUEUE_SHADE_KERNEL(Queue_ShadeMiss, RT_Q_MISS)
-QUEUE_SHADE_KERNEL(Queue_ShadeDiffuse, RT_Q_DIFFUSE)
-QUEUE_SHADE_KERNEL(Queue_ShadeMirror, RT_Q_MIRROR)
-QUEUE_SHADE_KERNEL(Queue_ShadeGlass, RT_Q_GLASS)
-QUEUE_SHADE_KERNEL(Queue_ShadeProcedural, RT_Q_PROCEDURAL)
+QUEUE_SHADE_KERNEL(Queue_ShadeMiss, RT_Q_MISS, RT_Q_MISS, RT_PATTERN_NONE)
+#if RT_QUEUE_SHADE != RT_Q_SHADE_SORT
+QUEUE_SHADE_KERNEL(Queue_ShadeDiffuse, RT_Q_DIFFUSE, RT_Q_DIFFUSE, RT_PATTERN_NONE)
+QUEUE_SHADE_KERNEL(Queue_ShadeMirror, RT_Q_MIRROR, RT_Q_MIRROR, RT_PATTERN_ANY)
+QUEUE_SHADE_KERNEL(Queue_ShadeGlass, RT_Q_GLASS, RT_Q_GLASS, RT_PATTERN_ANY)
+#endif
+#if RT_QUEUE_SHADE == RT_Q_SHADE_CLASS
+QUEUE_SHADE_KERNEL(Queue_ShadeProcedural, RT_Q_PROCEDURAL, RT_Q_PROCEDURAL, RT_PATTERN_ANY)
+#elif RT_QUEUE_SHADE == RT_Q_SHADE_PATTERN
+// From: pattern queue / To: as above. One kernel per pattern: a launch runs that pattern only.
+#define QUEUE_SHADE_PATTERN_KERNEL(name, pattern) \
+    QUEUE_SHADE_KERNEL(name, RT_Q_PATTERN_QUEUE(pattern), RT_Q_PROCEDURAL, pattern)
+QUEUE_SHADE_PATTERN_KERNEL(Queue_ShadeChecker, RT_PATTERN_CHECKER)
+QUEUE_SHADE_PATTERN_KERNEL(Queue_ShadeMarble, RT_PATTERN_MARBLE)
+QUEUE_SHADE_PATTERN_KERNEL(Queue_ShadeWood, RT_PATTERN_WOOD)
+QUEUE_SHADE_PATTERN_KERNEL(Queue_ShadeGranite, RT_PATTERN_GRANITE)
+QUEUE_SHADE_PATTERN_KERNEL(Queue_ShadeBump, RT_PATTERN_BUMP)
+#elif RT_QUEUE_SHADE == RT_Q_SHADE_SORT
+// From: the hits sorted by material (queue_sort.cl) / To: as above. Every class and pattern in
+// one launch, the class read per ray: neighbouring work-items shade the same material.
+kernel void Queue_ShadeSorted(QUEUE_SHADE_PARAMS) {
+    int k = get_global_id(0);
+    if (k >= counters[RT_Q_COUNT + RT_Q_HITS]) return;
+    RT_SCENE_INIT(sc);
+    QUEUE_RAYS_INIT(rays);
+    QUEUE_RAYS_INIT(staging);
+    int i = shadeQueues[RT_Q_SORTED * pool + k];
+    Material m = sc.materials[nodes[i].material];
+    Queue_Shade(&sc, RT_Q_MATERIAL_CLASS(m), RT_PATTERN_ANY, i, &rays, nodes, &staging, contrib,
+                children);
+}
+#endif
 
 #include "queue_scan.cl"
+#if RT_QUEUE_SHADE == RT_Q_SHADE_SORT
+#include "queue_sort.cl"
+#endif
 
 #ifdef RT_QUEUE_PACKETS
 #include "accel_wide_packet.cl"

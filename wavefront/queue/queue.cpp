@@ -44,6 +44,11 @@ std::vector<std::string> programDefines(const Scene& scene, const RenderOptions&
                                         bool packets, int dropLane) {
     std::vector<std::string> d = featureDefines(scene, o);
     d.push_back("RT_QUEUE_GROUP=" + std::to_string(group));
+    // --queue-shade: the class mode's program is the one it always was.
+    if (const QueueShadeMode shade = queueShade(o); shade == QueueShadeMode::Pattern)
+        d.push_back("RT_QUEUE_SHADE=RT_Q_SHADE_PATTERN");
+    else if (shade == QueueShadeMode::Sort)
+        d.push_back("RT_QUEUE_SHADE=RT_Q_SHADE_SORT");
     if (packets) {
         d.push_back("RT_QUEUE_PACKETS");
         d.push_back("RT_PACKET=" + std::to_string(QueuePipeline::kPacket));
@@ -52,12 +57,63 @@ std::vector<std::string> programDefines(const Scene& scene, const RenderOptions&
     return d;
 }
 
-// The shading classes a scene's materials can produce: the others' kernels are not launched.
-std::array<bool, RT_Q_CLASSES> sceneClasses(const Scene& scene) {
-    std::array<bool, RT_Q_CLASSES> c{};
-    c[RT_Q_MISS] = true;
-    for (const dev::Material& m : scene.materials) c[RT_Q_MATERIAL_CLASS(m)] = true;
-    return c;
+// One launch of a bounce's shade stage: a kernel over a queue whose length the kernel reads from
+// counters[countWord] (-1: one work-group, the sort's scan of the per-material counts).
+struct ShadeLaunch {
+    const char* kernel;
+    int countWord;
+};
+
+const char* const kShadeKernels[RT_Q_CLASSES] = {"Queue_ShadeMiss", "Queue_ShadeDiffuse",
+                                                 "Queue_ShadeMirror", "Queue_ShadeGlass",
+                                                 "Queue_ShadeProcedural"};
+static_assert(std::tuple_size_v<decltype(QueueStats::shadeQueueRays)> == RT_Q_QUEUES);
+static_assert(RT_Q_PATTERNS == RT_PATTERN_BUMP - RT_PATTERN_CHECKER + 1);
+
+// --queue-shade pattern: the procedural class's kernel per pattern, RT_PATTERN_CHECKER first.
+const char* const kPatternKernels[RT_Q_PATTERNS] = {"Queue_ShadeChecker", "Queue_ShadeMarble",
+                                                    "Queue_ShadeWood", "Queue_ShadeGranite",
+                                                    "Queue_ShadeBump"};
+
+// The shade stage of a bounce in the order it is enqueued, as --queue-shade asks: one launch per
+// queue that the scene's materials can fill (the others never launch), and for sort the counting
+// sort of the hits before their one launch.
+std::vector<ShadeLaunch> shadeLaunches(const Scene& scene, QueueShadeMode mode) {
+    std::array<bool, RT_Q_CLASSES> classes{};
+    std::array<bool, RT_Q_PATTERNS> patterns{};
+    classes[RT_Q_MISS] = true;
+    for (const dev::Material& m : scene.materials) {
+        const int c = RT_Q_MATERIAL_CLASS(m);
+        classes[c] = true;
+        if (c == RT_Q_PROCEDURAL) patterns[m.pattern - RT_PATTERN_CHECKER] = true;
+    }
+    std::vector<ShadeLaunch> out = {{kShadeKernels[RT_Q_MISS], RT_Q_COUNT + RT_Q_MISS}};
+    if (mode == QueueShadeMode::Sort) {
+        if (scene.materials.empty()) return out;
+        const int hits = RT_Q_COUNT + RT_Q_HITS;
+        return {out[0],
+                {"Queue_SortCount", hits},
+                {"Queue_SortBuckets", -1},
+                {"Queue_SortScatter", hits},
+                {"Queue_ShadeSorted", hits}};
+    }
+    for (int c = RT_Q_MISS + 1; c < RT_Q_CLASSES; ++c) {
+        if (!classes[c]) continue;
+        if (c == RT_Q_PROCEDURAL && mode == QueueShadeMode::Pattern) {
+            for (int p = 0; p < RT_Q_PATTERNS; ++p)
+                if (patterns[p])
+                    out.push_back({kPatternKernels[p],
+                                   RT_Q_COUNT + RT_Q_PATTERN_QUEUE(RT_PATTERN_CHECKER + p)});
+        } else {
+            out.push_back({kShadeKernels[c], RT_Q_COUNT + c});
+        }
+    }
+    return out;
+}
+
+// Stages that belong to shading: the shade kernels and, for --queue-shade sort, the sort.
+bool isShadeStage(const std::string& kernel) {
+    return kernel.rfind("Queue_Shade", 0) == 0 || kernel.rfind("Queue_Sort", 0) == 0;
 }
 
 // One launch of a frame: the kernel, the part of its queue it covered (a global work offset),
@@ -106,7 +162,8 @@ class QueueFrame {
         Kernel k(program_, name);
         size_t most = k.get().getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(cl_.device().device);
         size_t local = size_t(group_);
-        bool scan = name.rfind("Queue_Scan", 0) == 0;  // their local arrays need the full group
+        // Their local arrays need the full group.
+        bool scan = name.rfind("Queue_Scan", 0) == 0 || name == "Queue_SortBuckets";
         if (scan && most < local)
             throw Error("queue pipeline: " + name + " runs at most " + std::to_string(most) +
                         " work-items per group on " + cl_.device().name + ", needs " +
@@ -215,10 +272,6 @@ class QueueFrame {
     size_t learned_ = 0;  // launches_ before it were learned from
 };
 
-const char* const kShadeKernels[RT_Q_CLASSES] = {"Queue_ShadeMiss", "Queue_ShadeDiffuse",
-                                                 "Queue_ShadeMirror", "Queue_ShadeGlass",
-                                                 "Queue_ShadeProcedural"};
-
 // The bounces of one AA sample: which pixels are still to start, and the pool's live rays.
 class QueuePass {
   public:
@@ -237,12 +290,17 @@ class QueuePass {
                                     : std::min(b.pool, kProbeRays)) {}
     size_t limit() const { return limit_; }
 
-    // classes: which shade kernels the scene can need (a class without a material never runs).
-    // started: called after each bounce with the pixels of the row window started so far.
-    void run(const dev::RenderSettings& settings, const std::array<bool, RT_Q_CLASSES>& classes,
-             const std::function<void(size_t started)>& started) {
+    // shade: the shade stage's launches (shadeLaunches); materials: the scene's count, the keys
+    // of --queue-shade sort. started: called after each bounce with the pixels of the row
+    // window started so far.
+    void run(const dev::RenderSettings& settings, const std::vector<ShadeLaunch>& shade,
+             int materials, const std::function<void(size_t started)>& started) {
         lights_ = settings.lightCount;
-        classes_ = classes;
+        shade_ = shade;
+        materials_ = materials;
+        sorts_ = std::any_of(shade.begin(), shade.end(), [](const ShadeLaunch& l) {
+            return l.kernel == std::string("Queue_SortCount");
+        });
         bindKernels(settings);
         next_ = firstPixel();
         retry_.clear();
@@ -268,7 +326,7 @@ class QueuePass {
         Kernel& ext = f_.sceneKernel(f_.extendKernel(), s);
         QueueFrame::setRays(ext, "rays", b_.rays)
             .set("nodes", b_.nodes)
-            .set("classQueues", b_.classQueues)
+            .set("shadeQueues", b_.shadeQueues)
             .set("pool", cl_int(b_.pool))
             .set("shadowQueue", b_.shadowQueue)
             .set("counters", b_.counters)
@@ -281,18 +339,34 @@ class QueuePass {
             .set("rayPixel", b_.rays.pixel)
             .set("rayMeta", b_.rays.meta)
             .set("rayTally", b_.rayTally);
-        for (const char* name : kShadeKernels) {
-            Kernel& k = f_.sceneKernel(name, s);
+        for (const ShadeLaunch& l : shade_) {
+            if (std::string(l.kernel).rfind("Queue_Shade", 0) != 0) continue;  // the sort's
+            Kernel& k = f_.sceneKernel(l.kernel, s);
             QueueFrame::setRays(k, "rays", b_.rays)
                 .set("nodes", b_.nodes)
-                .set("classQueues", b_.classQueues)
+                .set("shadeQueues", b_.shadeQueues)
                 .set("pool", cl_int(b_.pool))
                 .set("counters", b_.counters);
             QueueFrame::setRays(k, "staging", b_.staging)
                 .set("contrib", b_.contrib)
                 .set("children", b_.children);
         }
+        if (sorts_) bindSort();
         bindBookkeeping();
+    }
+
+    // --queue-shade sort's counting sort (queue_sort.cl): buffers only.
+    void bindSort() {
+        for (const char* name : {"Queue_SortCount", "Queue_SortScatter"})
+            f_.kernel(name)
+                .set("nodes", b_.nodes)
+                .set("shadeQueues", b_.shadeQueues)
+                .set("pool", cl_int(b_.pool))
+                .set("counters", b_.counters)
+                .set("keys", b_.sortKeys);
+        f_.kernel("Queue_SortBuckets")
+            .set("keys", b_.sortKeys)
+            .set("materials", cl_int(materials_));
     }
 
     // The scan, cut, accumulate and compact kernels: buffers only, no scene.
@@ -370,8 +444,8 @@ class QueuePass {
         // reads its queue's length. When one launch that long could run past --max-launch-ms,
         // the host reads the lengths first and launches each queue in pieces over them.
         bool split = !onDevice_ && lights_ > 0 && f_.wouldSplit(f_.shadowKernel(), n);
-        for (int c = 0; c < RT_Q_CLASSES; ++c)
-            split = split || (!onDevice_ && classes_[c] && f_.wouldSplit(kShadeKernels[c], n));
+        for (const ShadeLaunch& l : shade_)
+            split = split || (!onDevice_ && l.countWord >= 0 && f_.wouldSplit(l.kernel, n));
         cl_int len[RT_Q_PER_ITERATION] = {};
         if (split) {
             cl_.queue().enqueueReadBuffer(b_.counters, CL_TRUE, 0, sizeof len, len);
@@ -385,8 +459,14 @@ class QueuePass {
                 f_.launch(kernel, n, onDevice_ ? -1 : word);
         };
         if (lights_ > 0) queueLaunch(f_.shadowKernel(), RT_Q_SHADOW);
-        for (int c = 0; c < RT_Q_CLASSES; ++c)
-            if (classes_[c]) queueLaunch(kShadeKernels[c], RT_Q_COUNT + c);
+        if (sorts_)  // the per-material counts start from zero every bounce
+            cl_.queue().enqueueFillBuffer(b_.sortKeys, cl_int(0), 0, size_t(materials_) * 4);
+        for (const ShadeLaunch& l : shade_) {
+            if (l.countWord >= 0)
+                queueLaunch(l.kernel, l.countWord);
+            else
+                f_.launch(l.kernel, 1);  // one work-group
+        }
         size_t group = size_t(QueuePipeline::groupSize(cl_.device()));
         size_t blocks = (n + group - 1) / group;
         f_.kernel("Queue_ScanBlocks").set("n", cl_int(n));
@@ -430,6 +510,7 @@ class QueuePass {
         cl_int c[RT_Q_PER_ITERATION];
         q.enqueueReadBuffer(b_.counters, CL_TRUE, 0, sizeof c, c);
         ++stats_.readbacks;
+        for (int k = 0; k < RT_Q_QUEUES; ++k) stats_.shadeQueueRays[k] += c[RT_Q_COUNT + k];
         size_t doneEvents = f_.launches().size();  // complete now: their times can be read
         if (o_.maxLaunchMs > 0) f_.learn(c);
         size_t cut = n, kept = size_t(c[RT_Q_CHILDREN]);
@@ -485,8 +566,9 @@ class QueuePass {
     QueueStats& stats_;
     bool onDevice_;
     size_t limit_, next_ = 0;
-    int lights_ = 0;
-    std::array<bool, RT_Q_CLASSES> classes_{};
+    int lights_ = 0, materials_ = 0;
+    bool sorts_ = false;  // --queue-shade sort: the hits are sorted by material first
+    std::vector<ShadeLaunch> shade_;
     std::deque<cl_int> retry_;
 };
 
@@ -537,11 +619,15 @@ Image QueuePipeline::renderFrame(const Scene& scene, const RenderOptions& o) {
         return "the queue pipeline's pool of " + std::to_string(pool) + " rays takes " +
                std::to_string(pool * bytesPerRay(C) >> 20) + " MiB; lower it with --pool";
     };
+    const QueueShadeMode shade = queueShade(o);
     try {
-        prepareBuffers(pool, C, pixels);
+        prepareBuffers(pool, C, pixels, shadeQueues(shade));
         rayTally_.ensure(cl_, (o.countRays ? pixels + 1 : 1) * RT_RAY_TYPES * sizeof(cl_uint),
                          "the queue pipeline's per-pixel ray counts");
         buf_.rayTally = rayTally_.get();
+        sortKeys_.ensure(cl_, std::max<size_t>(scene.materials.size(), 1) * 4,
+                         "the queue pipeline's per-material sort keys");
+        buf_.sortKeys = sortKeys_.get();
     } catch (const cl::Error& e) {
         throwClError(e, "preparing queue-pipeline buffers", hint());
     }
@@ -582,9 +668,11 @@ Image QueuePipeline::renderFrame(const Scene& scene, const RenderOptions& o) {
         const long long total = (long long)(window)*o.aa * o.aa;
         for (int s = 0; s < o.aa * o.aa; ++s) {
             settings.sampleIndex = s;
-            pass.run(settings, sceneClasses(scene), [&](size_t started) {
-                reportProgress((long long)(s) * (long long)(window) + (long long)(started), total);
-            });
+            pass.run(settings, shadeLaunches(scene, shade), int(scene.materials.size()),
+                     [&](size_t started) {
+                         reportProgress((long long)(s) * (long long)(window) + (long long)(started),
+                                        total);
+                     });
             resolve.set("sample", cl_int(s));
             frame.launch("Queue_Resolve", pixels);
         }
@@ -609,8 +697,11 @@ Image QueuePipeline::renderFrame(const Scene& scene, const RenderOptions& o) {
             for (int t = 0; t < RT_RAY_TYPES; ++t) queue_.retracedRays[t] = retraced[t];
         }
         if (o.maxLaunchMs > 0) frame.learn(nullptr);  // the last bounce's and resolve's
-        for (const QueueLaunch& l : frame.launches())
+        queue_.shadeMs = 0;
+        for (const QueueLaunch& l : frame.launches()) {
             stats_.addKernel(stageName(l.kernel), frame.ms(l));
+            if (isShadeStage(l.kernel)) queue_.shadeMs += frame.ms(l);
+        }
         stats_.launches = int(frame.launches().size());
         std::tie(queue_.spanMs, queue_.idleMs) = spanAndIdleMs(frame.launches());
         queue_.fellBack = words[RT_Q_OVERFLOW] != 0;
@@ -641,10 +732,29 @@ Image QueuePipeline::renderFrame(const Scene& scene, const RenderOptions& o) {
     stats_.extras["queue_lengths"] = queue_.queueLengths;  // [depth][miss, diffuse, mirror, glass]
     stats_.extras["queue_launch"] = queueLaunchName(queueLaunch(o));
     stats_.extras["queue_packets"] = packets ? kPacket : 0;  // rays per extend/shadow work-item
+    stats_.extras["queue_shade"] = queueShadeName(shade);
+    // The shade stage, all its kernels (and the sort's) summed: what the modes differ in.
+    stats_.extras["shade_ms"] = queue_.shadeMs;
+    if (!onDevice) stats_.extras["shade_queue_rays"] = queue_.shadeQueueRays;
     stats_.extras["readbacks"] = queue_.readbacks;
     stats_.extras["span_ms"] = queue_.spanMs;
     stats_.extras["idle_ms"] = queue_.idleMs;
     return out;
+}
+
+std::vector<int> QueuePipeline::sortedMaterialsForTest() {
+    cl::CommandQueue& q = cl_.queue();
+    cl_int hits = 0;
+    q.enqueueReadBuffer(buf_.counters, CL_TRUE, (RT_Q_COUNT + RT_Q_HITS) * 4, 4, &hits);
+    std::vector<cl_int> order(size_t(std::max(hits, 0)));
+    if (order.empty()) return {};
+    q.enqueueReadBuffer(buf_.shadeQueues, CL_TRUE, RT_Q_SORTED * buf_.pool * 4, order.size() * 4,
+                        order.data());
+    std::vector<dev::Node> nodes(buf_.pool);
+    q.enqueueReadBuffer(buf_.nodes, CL_TRUE, 0, nodes.size() * sizeof(dev::Node), nodes.data());
+    std::vector<int> materials;
+    for (cl_int i : order) materials.push_back(nodes.at(size_t(i)).material);
+    return materials;
 }
 
 std::string QueuePipeline::packetRefusal(const DeviceInfo& device, const Scene& scene,

@@ -1,6 +1,7 @@
 // rtlab — host driver of the queue wavefront (wavefront/queue/queue.cl): a pool of ray
 // records sized by --pool, not by pixels x tree nodes, refilled with camera rays as paths end;
-// each bounce runs extend, shadow, one shade kernel per material class, a prefix-sum compaction
+// each bounce runs extend, shadow, the shade kernels (one per material class, or per pattern, or
+// one over the hits sorted by material: --queue-shade), a prefix-sum compaction
 // and the per-pixel sums. See wavefront/queue/README.md for the design and its measurements.
 #pragma once
 
@@ -24,10 +25,14 @@ struct QueueBuffers {
         cl::Buffer origin, dir, weight, pixel, meta;
     };
     Rays rays, staging;
-    cl::Buffer nodes, contrib, children, offsets, blockSums, classQueues, shadowQueue, retry,
+    cl::Buffer nodes, contrib, children, offsets, blockSums, shadeQueues, shadowQueue, retry,
         counters, sums, image;
     size_t pool = 0, pixels = 0;
     int branching = 0;
+    int queues = 0;  // shade queues of `pool` slots each: RT_Q_CLASSES, or as --queue-shade has
+    // --queue-shade sort: a word per material, its hits and then its next slot in the sorted
+    // queue (queue_sort.cl). QueuePipeline keeps it (a DeviceBuffer); this is its handle.
+    cl::Buffer sortKeys;
     size_t poolBytes = 0, imageBytes = 0;  // as tallied in the ClContext
     // Ray counts (RenderOptions::countRays): the retraced rays by type, then each pixel's rays
     // of its current path by type (queue.cl, Queue_PixelRays); one stub of 4 words otherwise.
@@ -62,7 +67,12 @@ struct QueueStats {
     double spanMs = 0, idleMs = 0;
     bool fellBack = false;  // device sizing overflowed the pool: rendered again with read-backs
     bool packets = false;   // extend and shadow traced packets (--queue-packets)
+    double shadeMs = 0;     // the shade stage's kernels (with --queue-shade sort's sort)
     std::vector<std::array<long long, 5>> queueLengths;  // RT_Q_CLASSES (queue_layout.h)
+    // The rays each shade queue held, summed over the frame's bounces, as --queue-shade numbers
+    // the queues (queue_layout.h; cut paths' rays too). Read with the counts each bounce reads
+    // back: --queue-launch readback only, zero on the device.
+    std::array<long long, 9> shadeQueueRays{};  // RT_Q_QUEUES (static_assert in queue.cpp)
 };
 
 class QueuePipeline : public DevicePipeline {
@@ -79,7 +89,10 @@ class QueuePipeline : public DevicePipeline {
                            const RenderOptions& options);
     // Device bytes per pool slot: ray fields, staging, node, queues (independent of B). A pool
     // takes pool * bytesPerRay + 4 + RT_Q_WORDS * 4 bytes (QueueStats::poolBytes).
-    static size_t bytesPerRay(int branching);
+    static size_t bytesPerRay(int branching, QueueShadeMode shade = QueueShadeMode::Class);
+    // The shade queues a mode keeps, each as long as the pool: the classes', the pattern mode's
+    // (the procedural one split), or sort's (misses, hits, hits sorted).
+    static int shadeQueues(QueueShadeMode shade);
     // A ray's record in the pool: origin, direction, weight (3 floats each), pixel and meta.
     static constexpr size_t kRayRecordBytes = 3 * 12 + 2 * 4;
     // Work-group size of the scan (and the most any queue kernel uses): a power of two.
@@ -98,14 +111,17 @@ class QueuePipeline : public DevicePipeline {
     // Tests only: price every launch at its items times `ms` instead of its profiling event, so
     // that --max-launch-ms splits the stages the same way on any device (0: real timings).
     void setFakeItemMsForTest(double ms) { fakeItemMs_ = ms; }
+    // Tests only: the material id of each entry of the last bounce's sorted hit queue
+    // (--queue-shade sort), in queue order, read from the device after a frame.
+    std::vector<int> sortedMaterialsForTest();
 
   private:
     Image renderFrame(const Scene& scene, const RenderOptions& options) override;
-    void prepareBuffers(size_t pool, int branching, size_t pixels);
+    void prepareBuffers(size_t pool, int branching, size_t pixels, int queues);
     void releaseBuffers();
 
     QueueBuffers buf_;
-    DeviceBuffer rayTally_;
+    DeviceBuffer rayTally_, sortKeys_;
     QueueKernels kernels_;
     QueueStats queue_;
     // --max-launch-ms: the rays a bounce may admit and what an item of each stage costs (for

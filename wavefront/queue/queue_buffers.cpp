@@ -14,12 +14,24 @@ namespace {
 constexpr size_t kMaxPool = size_t(1) << 26;  // keeps every index of C * pool in an int
 }  // namespace
 
-size_t QueuePipeline::bytesPerRay(int branching) {
+int QueuePipeline::shadeQueues(QueueShadeMode shade) {
+    switch (shade) {
+        case QueueShadeMode::Pattern:
+            return RT_Q_QUEUES;
+        case QueueShadeMode::Sort:
+            return RT_Q_SORTED + 1;
+        case QueueShadeMode::Class:
+            break;
+    }
+    return RT_Q_CLASSES;
+}
+
+size_t QueuePipeline::bytesPerRay(int branching, QueueShadeMode shade) {
     return kRayRecordBytes * size_t(1 + branching)  // the queue and its C staging slots
            + sizeof(dev::Node)                      // extend's hit record, read by shade
            + 12                                     // contribution
            + 4 * 4                                  // children, offsets, block sums, retry
-           + 4 * (RT_Q_CLASSES + 1);                // class queues and shadow queue
+           + 4 * size_t(shadeQueues(shade) + 1);    // shade queues and shadow queue
 }
 
 int QueuePipeline::groupSize(const DeviceInfo& device) {
@@ -52,7 +64,7 @@ size_t QueuePipeline::poolSize(const DeviceInfo& device, int branching, int boun
     size_t pool = device.isGpu() ? size_t(1) << 21 : size_t(1) << 16;
     size_t budget = size_t(device.globalMem / 4);
     if (o.memoryBudget) budget = std::min(budget, o.memoryBudget);
-    while (pool > 1024 && (pool * bytesPerRay(branching) > budget ||
+    while (pool > 1024 && (pool * bytesPerRay(branching, queueShade(o)) > budget ||
                            pool * size_t(branching) * 12 > device.maxAlloc))
         pool /= 2;
     return std::max(pool, widest);
@@ -65,8 +77,10 @@ void QueuePipeline::releaseBuffers() {
 
 QueuePipeline::~QueuePipeline() { cl_.release(buf_.poolBytes + buf_.imageBytes); }
 
-void QueuePipeline::prepareBuffers(size_t pool, int branching, size_t pixels) {
-    if (buf_.pool == pool && buf_.branching == branching && buf_.pixels == pixels) return;
+void QueuePipeline::prepareBuffers(size_t pool, int branching, size_t pixels, int queues) {
+    if (buf_.pool == pool && buf_.branching == branching && buf_.pixels == pixels &&
+        buf_.queues == queues)
+        return;
     // Drop everything first: after a failed allocation no stale size names a buffer that is gone.
     releaseBuffers();
     QueueBuffers b;
@@ -91,7 +105,7 @@ void QueuePipeline::prepareBuffers(size_t pool, int branching, size_t pixels) {
         b.children = make(pool * 4, "the queue pipeline's child counts");
         b.offsets = make(pool * 4, "the queue pipeline's prefix sums");
         b.retry = make(pool * 4, "the queue pipeline's retry list");
-        b.classQueues = make(pool * 4 * RT_Q_CLASSES, "the queue pipeline's class queues");
+        b.shadeQueues = make(pool * 4 * size_t(queues), "the queue pipeline's shade queues");
         b.shadowQueue = make(pool * 4, "the queue pipeline's shadow queue");
         b.blockSums = make((pool + 1) * 4, "the queue pipeline's block sums");
         b.counters = make(RT_Q_WORDS * 4, "the queue pipeline's counters");
@@ -107,6 +121,7 @@ void QueuePipeline::prepareBuffers(size_t pool, int branching, size_t pixels) {
     b.pool = pool;
     b.branching = branching;
     b.pixels = pixels;
+    b.queues = queues;
     buf_ = std::move(b);
 }
 

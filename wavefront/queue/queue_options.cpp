@@ -58,10 +58,27 @@ const PipelineOption& packetsOption() {
     return o;
 }
 
+const PipelineOption& shadeOption() {
+    static const PipelineOption o{
+        .name = "queue-shade",
+        .type = PipelineOption::Type::Choice,
+        .help =
+            "Queue pipeline: which rays share a shade launch: class (one queue per material "
+            "class), pattern (one queue and kernel per procedural pattern too) or sort (every "
+            "hit in one launch, sorted by material) [class]",
+        .defaultValue = "class",
+        .choices = {"class", "pattern", "sort"},  // QueueShadeMode's order
+        .sweepKey = "queue-shade",
+        .cellTag = "S",
+        .label = "shade {}",
+    };
+    return o;
+}
+
 }  // namespace
 
 std::vector<PipelineOption> queueOptions() {
-    return {launchOption(), poolOption(), packetsOption()};
+    return {launchOption(), poolOption(), packetsOption(), shadeOption()};
 }
 
 QueueLaunchMode queueLaunch(const RenderOptions& o) {
@@ -103,6 +120,22 @@ QueuePacketMode parseQueuePackets(const std::string& name) {
 
 const char* queuePacketsName(QueuePacketMode mode) {
     return packetsOption().choices.at(size_t(mode)).c_str();
+}
+
+QueueShadeMode queueShade(const RenderOptions& o) {
+    return QueueShadeMode(shadeOption().index(o.pipelineOptions));
+}
+
+void setQueueShade(RenderOptions& o, QueueShadeMode mode) {
+    shadeOption().set(o.pipelineOptions, queueShadeName(mode));
+}
+
+QueueShadeMode parseQueueShade(const std::string& name) {
+    return QueueShadeMode(shadeOption().indexOf(name));
+}
+
+const char* queueShadeName(QueueShadeMode mode) {
+    return shadeOption().choices.at(size_t(mode)).c_str();
 }
 
 }  // namespace rt

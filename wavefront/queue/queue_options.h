@@ -1,4 +1,5 @@
-// rtlab — the queue wavefront's own options (--queue-launch, --pool, --queue-packets), declared
+// rtlab — the queue wavefront's own options (--queue-launch, --pool, --queue-packets,
+// --queue-shade), declared
 // in its registry entry (core/pipeline_options.h) and read back here, typed, from
 // RenderOptions::pipelineOptions. Front ends know them only through the declarations.
 #pragma once
@@ -20,6 +21,10 @@ enum class QueueLaunchMode { Readback, Device };
 // BVH, for CPU devices). Auto: when the device is a CPU, --accel wide and the scene has no
 // spheres outside the BVH's reach (wavefront/queue/README.md); On refuses otherwise.
 enum class QueuePacketMode { Auto, On, Off };
+// Which rays share a shade launch (queue_layout.h, RT_Q_SHADE_*; wavefront/queue/README.md):
+// one queue per material class (the default), the procedural class split further into one
+// queue and one kernel per pattern, or every hit in one launch after a sort by material.
+enum class QueueShadeMode { Class, Pattern, Sort };
 
 // The declarations, in the order cell keys list them.
 std::vector<PipelineOption> queueOptions();
@@ -31,12 +36,16 @@ size_t queuePool(const RenderOptions& options);
 void setQueuePool(RenderOptions& options, size_t rays);  // 0: back to the device's choice
 QueuePacketMode queuePackets(const RenderOptions& options);
 void setQueuePackets(RenderOptions& options, QueuePacketMode mode);
+QueueShadeMode queueShade(const RenderOptions& options);
+void setQueueShade(RenderOptions& options, QueueShadeMode mode);
 
-// Names as the flags take them: readback, device; auto, on, off. The parsers throw rt::Error
-// naming the flag ("--queue-launch up: must be readback or device").
+// Names as the flags take them: readback, device; auto, on, off; class, pattern, sort. The parsers
+// throw rt::Error naming the flag ("--queue-launch up: must be readback or device").
 QueueLaunchMode parseQueueLaunch(const std::string& name);
 const char* queueLaunchName(QueueLaunchMode mode);
 QueuePacketMode parseQueuePackets(const std::string& name);
 const char* queuePacketsName(QueuePacketMode mode);
+QueueShadeMode parseQueueShade(const std::string& name);
+const char* queueShadeName(QueueShadeMode mode);
 
 }  // namespace rt

@@ -88,9 +88,9 @@ inline Hit PacketLanes_Hit(const PacketLanes* l, int j) {
 
 // From: pool [RT_PACKET g, RT_PACKET (g + 1)) of [0, n) / To: as Queue_Extend, ray by ray.
 kernel void Queue_ExtendPacket(RT_SCENE_PARAMS, QUEUE_RAYS_PARAMS(rays), int n, global Node* nodes,
-                               global int* classQueues, int pool, global int* shadowQueue,
+                               global int* shadeQueues, int pool, global int* shadowQueue,
                                global int* counters, int nWord, global uint* rayTally) {
-    local int count[RT_Q_CLASSES + 1], base[RT_Q_CLASSES + 1];
+    local int count[RT_Q_QUEUES + 1], base[RT_Q_QUEUES + 1];
     local int histogram[(RT_Q_MAX_DEPTH + 1) * RT_Q_CLASSES];
     int lid = get_local_id(0), size = get_local_size(0), g = get_global_id(0);
     int first = g * RT_PACKET;
@@ -98,7 +98,7 @@ kernel void Queue_ExtendPacket(RT_SCENE_PARAMS, QUEUE_RAYS_PARAMS(rays), int n, 
     if ((g - lid) * RT_PACKET >= n) return;  // a whole group past the queue (Queue_Extend)
     Queue_GroupPushesBegin(count, histogram, lid, size);
     int lanes = clamp(n - first, 0, RT_PACKET);
-    int cls[RT_PACKET], slot[RT_PACKET], shadowSlot[RT_PACKET];
+    int queue[RT_PACKET], slot[RT_PACKET], shadowSlot[RT_PACKET];
     if (lanes > 0) {
         RT_SCENE_INIT(sc);
         QUEUE_RAYS_INIT(rays);
@@ -118,18 +118,18 @@ kernel void Queue_ExtendPacket(RT_SCENE_PARAMS, QUEUE_RAYS_PARAMS(rays), int n, 
             Pending p = Queue_Load(&rays, i);
             Node node = RayTree_Surface(&sc, p.ray, PacketLanes_Hit(&l, j));
             nodes[i] = node;
-            cls[j] = Queue_Class(&sc, &node);
-            slot[j] = atomic_inc(&count[cls[j]]);
-            atomic_inc(&histogram[p.depth * RT_Q_CLASSES + cls[j]]);
-            shadowSlot[j] = cls[j] != RT_Q_MISS && settings.lightCount > 0
-                                ? atomic_inc(&count[RT_Q_CLASSES])
-                                : -1;
+            int c = Queue_Class(&sc, &node);
+            queue[j] = Queue_ShadeQueue(&sc, &node, c);
+            slot[j] = atomic_inc(&count[queue[j]]);
+            atomic_inc(&histogram[p.depth * RT_Q_CLASSES + c]);
+            shadowSlot[j] =
+                c != RT_Q_MISS && settings.lightCount > 0 ? atomic_inc(&count[RT_Q_QUEUES]) : -1;
         }
     }
     Queue_GroupPushesReserve(count, base, histogram, counters, lid, size);
     for (int j = 0; j < lanes; ++j) {
-        classQueues[cls[j] * pool + base[cls[j]] + slot[j]] = first + j;
-        if (shadowSlot[j] >= 0) shadowQueue[base[RT_Q_CLASSES] + shadowSlot[j]] = first + j;
+        shadeQueues[queue[j] * pool + base[queue[j]] + slot[j]] = first + j;
+        if (shadowSlot[j] >= 0) shadowQueue[base[RT_Q_QUEUES] + shadowSlot[j]] = first + j;
     }
 }
 

@@ -32,6 +32,21 @@ kernel void Queue_ScanBlocks(global const int* children, int n, global int* offs
     if (lid == RT_QUEUE_GROUP - 1) blockSums[block] = inclusive;
 }
 
+// One work-group (every work-item calls it): values[0, count) to their exclusive prefix sums,
+// in chunks of the group; returns the total.
+inline int Queue_ScanInPlace(local int* tmp, int lid, global int* values, int count) {
+    int carry = 0;
+    for (int b0 = 0; b0 < count; b0 += RT_QUEUE_GROUP) {
+        int b = b0 + lid;
+        int v = b < count ? values[b] : 0;
+        int inclusive = Queue_ScanLocal(tmp, lid, RT_QUEUE_GROUP, v);
+        if (b < count) values[b] = carry + inclusive - v;
+        carry += tmp[RT_QUEUE_GROUP - 1];
+        barrier(CLK_LOCAL_MEM_FENCE);  // tmp is rewritten by the next chunk
+    }
+    return carry;
+}
+
 // One work-group: block totals to exclusive block offsets, and the grand total to the counters.
 // liveWord >= 0 (launches sized on the device): the total also becomes the next bounce's length,
 // and the rays to accumulate and compact (RT_Q_CUT) are all of this bounce's, unless the children
@@ -39,18 +54,11 @@ kernel void Queue_ScanBlocks(global const int* children, int n, global int* offs
 kernel void Queue_ScanSums(global int* blockSums, int blocks, global int* counters, int liveWord,
                            int pool) {
     local int tmp[RT_QUEUE_GROUP];
-    int lid = get_local_id(0), carry = 0;
+    int lid = get_local_id(0);
     // Launches sized by a bound: the blocks past the queue's real length were not scanned.
     if (liveWord >= 0)
         blocks = min(blocks, (counters[liveWord] + RT_QUEUE_GROUP - 1) / RT_QUEUE_GROUP);
-    for (int b0 = 0; b0 < blocks; b0 += RT_QUEUE_GROUP) {
-        int b = b0 + lid;
-        int v = b < blocks ? blockSums[b] : 0;
-        int inclusive = Queue_ScanLocal(tmp, lid, RT_QUEUE_GROUP, v);
-        if (b < blocks) blockSums[b] = carry + inclusive - v;
-        carry += tmp[RT_QUEUE_GROUP - 1];
-        barrier(CLK_LOCAL_MEM_FENCE);  // tmp is rewritten by the next chunk
-    }
+    int carry = Queue_ScanInPlace(tmp, lid, blockSums, blocks);
     if (lid == 0) counters[RT_Q_CHILDREN] = carry;
     if (lid == 0 && liveWord >= 0) {
         bool fits = carry <= pool;
