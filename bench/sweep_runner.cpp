@@ -649,9 +649,10 @@ class SweepRun {
         }
     }
 
-    // The rows of a batch's cells (here: measured, run, or skipped by stop-after-failure), with
-    // their progress lines, in cell order; each cell gets its share of the batch's time for the
-    // estimate of the time left. Cells of stop-after-failure groups that failed or ran past
+    // The rows of a batch's cells, with their progress lines, in cell order: here are those
+    // --resume left, run those of them that were measured, skipWhy says why the others were not
+    // (stop-after-failure). Each measured cell gets its share of the batch's time for the
+    // estimate of the time left; cells of stop-after-failure groups that failed or ran past
     // max-frame-s go to stops. Then whatever rows are due go to the sink.
     void recordBatch(const Worker& self, const Cell& first, const std::vector<size_t>& here,
                      const std::vector<size_t>& run, std::map<size_t, std::string>& skipWhy,
