@@ -11,6 +11,7 @@
 //       compares the frames and draws the charts afterwards, elsewhere.
 #include <benchmark/benchmark.h>
 
+#include <CLI/CLI.hpp>
 #include <chrono>
 #include <csignal>
 #include <cstdio>
@@ -31,6 +32,7 @@
 #include "bench/sweep_eta.h"
 #include "bench/sweep_runner.h"
 #include "bench/watchdog.h"
+#include "cli/parse_error.h"
 #include "core/accel.h"
 #include "core/error.h"
 #include "core/scene_loader.h"
@@ -42,66 +44,24 @@ using namespace rt::bench;
 
 namespace {
 
-const char* kUsage = R"(rtlab-bench: the registered pipelines, timed by OpenCL profiling events.
+// What rtlab-bench --help says above and below the flags.
+const char* kDescription =
+    R"(rtlab-bench: the registered pipelines, timed by OpenCL profiling events. Three modes:
+  Google Benchmark mode (the default): one benchmark per scene x pipeline x size x bounce limit
+      x structure x device, selected by the flags of its group below; every --benchmark_* flag
+      works, e.g. --benchmark_filter=REGEX, --benchmark_out=FILE.json, --benchmark_min_time=0.1
+  Sweep mode, --sweep=SWEEP --out=DIR: a sweep file's cells, rows to DIR/rows.jsonl and kept
+      frames to DIR/images (what `rtlab sweep --import` reads; no Google Benchmark)
+  Smoke check, --smoke: one frame of every scene x size x pipeline (both megakernel layouts) x
+      structure, a PASS or FAIL line each (scripts/gpu-smoke runs it on a GPU host before any
+      GPU result is called done))";
 
-Google Benchmark mode (every --benchmark_* flag works, e.g. --benchmark_filter=REGEX,
---benchmark_out=FILE.json, --benchmark_min_time=0.1):
-  --scenes=a,b,...      scene names in the scene folder [empty,spheres,shadows,cornell,mesh,envmap]
-  --pipelines=a,b,...   any registered pipelines (listed below) [all]
-  --sizes=WxH,...       [640x360,1280x720,1920x1080,3840x2160]
-  --bounces=0..8        list and/or ranges [0..8]
-  --accels=bvh,...      none, bv, grid, bvh, wide, cwbvh [each scene's default]
-  --cells=SWEEP         instead of the lists above: the cells of a sweep file (every cell:
-                        stop-after-failure applies in sweep mode only)
-  --devices=SPEC,...    OpenCL devices by index or name, or all (every GPU)
-                        [$RTLAB_DEVICE, else first GPU]
-  --repeats=N           repetitions per benchmark; the median is reported [5]
-  --frames=N            timed frames per repetition (fixed, so that sub-millisecond cells do
-                        not auto-iterate for minutes) [5]
-  --warmup=N            untimed frames before timing [2]
-  --count-rays=yes|no   one untimed frame with device ray counters [yes]
-  --cell-timeout=SECONDS  a benchmark repetition or sweep cell (program builds included) that
-                        has not finished by then fails with "timeout"; 0 = no limit [600].
-                        Google Benchmark mode: the later benchmarks are then not run. Sweep
-                        mode: after a stuck compiler the sweep goes on in a fresh context; after
-                        a stuck device it stops with every row so far written, and --resume
-                        goes on past the cell. Either way the exit status is 1
-Sweep mode (no Google Benchmark; what `rtlab sweep --import` reads):
-  --sweep=SWEEP --out=DIR [--time-limit=SECONDS] [--device=SPEC | --devices=SPEC]
-        [--shard=i/N] [--resume=ROWS,...]
-                        --devices=all (every GPU) or a list of indices and names runs the
-                        cells on those devices at once, one context each, rows in cell order;
-                        --shard=i/N runs only work units u with u % N == i, for N machines
-                        (merge: `rtlab sweep CONFIG --import DIR0 DIR1 ...`).
-                        --resume skips the cells an earlier run's rows.jsonl measured; give
-                        `rtlab sweep --import` both output folders afterwards. Groups with
-                        stop-after-failure (bench/sweeps/limits) skip the settings no smaller
-                        than one that failed and write them as rows with status "skipped"
-Smoke check (scripts/gpu-smoke runs it on a GPU host before any GPU result is called done):
-  --smoke [--scenes=...] [--sizes=...] [--pipelines=...] [--accels=...] [--shard=i/N]
-                        one frame of every scene x size x pipeline (both megakernel layouts) x
-                        structure, one line each: PASS when it ran, every pixel is finite and
-                        it agrees with the megakernel's frame (tree layout, the scene's own
-                        structure) as two structures must; FAIL and why otherwise. Defaults:
-                        empty,spheres,shadows,cornell,mesh,envmap,divergence at 160x90 and
-                        1920x1080, every pipeline and structure. Exit status 1 when a cell fails
-Both:
-  --scene-dir=DIR       where <scene>.json are [scenes/ of the checkout]; cubemap faces must be
-                        .pfm (rtlab-bench reads no PNG: see `rtlab sweep --export-scenes`)
-  --kernel-dir=DIR      read kernel sources from a source tree [embedded]
-  --list-devices        print the OpenCL devices and exit
-  --version             print the commit this binary was built from and exit
+const char* kExitStatus = R"(
 Exit status: 0 when every benchmark or cell ran; 1 for a bad flag, a selection that matches no
 benchmark, a scene that cannot be loaded, or a benchmark or cell that failed (in sweep mode,
 cells of stop-after-failure groups may fail: that is what they measure); 130 after Ctrl-C, with
 --benchmark_out written for the benchmarks that finished.
 )";
-
-void printUsage() {
-    std::fputs(kUsage, stdout);
-    std::printf("\nPipelines (--pipelines, and `pipelines =` in sweep files):\n%s",
-                pipelineRegistry().help().c_str());
-}
 
 struct Flags {
     std::vector<std::string> scenes{"empty", "spheres", "shadows", "cornell", "mesh", "envmap"};
@@ -130,95 +90,131 @@ std::vector<std::string> split(const std::string& s) {
     return out;
 }
 
-Flags parseFlags(int argc, char** argv) {
-    Flags f;
-    for (int i = 1; i < argc; ++i) {
-        std::string a = argv[i];
-        if (a == "--help" || a == "-h") {
-            printUsage();
-            std::exit(0);
-        }
-        if (a == "--version") {
-            std::printf("rtlab-bench %s\n", RTLAB_COMMIT);
-            std::exit(0);
-        }
-        if (a == "--list-devices") {
-            f.listDevices = true;
-            continue;
-        }
-        if (a == "--smoke") {
-            f.smoke = true;
-            continue;
-        }
-        size_t eq = a.find('=');
-        std::string key = a.substr(0, eq);
-        std::string value;
-        if (eq != std::string::npos) {
-            value = a.substr(eq + 1);
-        } else if (i + 1 < argc) {
-            value = argv[++i];
-        } else {
-            throw Error(key + ": needs a value (see --help)");
-        }
-        auto integer = [&](int lo, int hi) {
-            int v = std::atoi(value.c_str());
-            if (v < lo || v > hi || value.empty())
-                throw Error(key + " " + value + ": must be in " + std::to_string(lo) + ".." +
-                            std::to_string(hi));
-            return v;
-        };
-        auto seconds = [&] {
-            char* end = nullptr;
-            double v = std::strtod(value.c_str(), &end);
-            if (value.empty() || *end || !(v >= 0) || v > 1e7)
-                throw Error(key + " " + value + ": expected seconds, 0 or more (0: no limit)");
-            return v;
-        };
-        f.given.insert(key);
-        if (key == "--scenes")
-            f.scenes = split(value);
-        else if (key == "--pipelines")
-            f.pipelines = split(value);
-        else if (key == "--sizes")
-            f.sizes = split(value);
-        else if (key == "--bounces")
-            f.bounces = value;
-        else if (key == "--accels")
-            f.accels = split(value);
-        else if (key == "--cells")
-            f.cells = value;
-        else if (key == "--sweep")
-            f.sweep = value;
-        else if (key == "--out")
-            f.out = value;
-        else if (key == "--resume")
-            f.resume = value;
-        else if (key == "--device")
-            f.device = value;
-        else if (key == "--devices")
-            f.devices = split(value);
-        else if (key == "--shard")
-            f.shard = value;
-        else if (key == "--scene-dir")
-            f.sceneDir = value;
-        else if (key == "--kernel-dir")
-            f.kernelDir = value;
-        else if (key == "--repeats")
-            f.repeats = integer(1, 1000);
-        else if (key == "--frames")
-            f.frames = integer(1, 100000);
-        else if (key == "--warmup")
-            f.warmup = integer(0, 100);
-        else if (key == "--count-rays")
-            f.countRays = value == "yes" || value == "true";
-        else if (key == "--time-limit")
-            f.timeLimit = std::atof(value.c_str());
-        else if (key == "--cell-timeout")
-            f.cellTimeout = seconds();
-        else
-            throw Error("unknown flag " + key + " (see --help)");
-    }
-    return f;
+// The flags of every mode, in the groups --help shows them in. CLI11 takes both --flag=value
+// and --flag value; a flag given twice keeps its last value. Bad values are refused here, in
+// rtlab's one-line form (cli/parse_error.h); names (scenes, pipelines, structures, devices) are
+// checked where they are used, against what exists.
+void addFlags(CLI::App& app, Flags& f) {
+    app.option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
+    auto list = [&](const char* name, std::vector<std::string>& into, const char* type,
+                    const std::string& help) {
+        return app
+            .add_option_function<std::string>(
+                name, [&into](const std::string& v) { into = split(v); }, help)
+            ->type_name(type);
+    };
+
+    const char* gbench = "Google Benchmark mode";
+    list("--scenes", f.scenes, "a,b,...",
+         "Scene names in the scene folder [empty,spheres,shadows,cornell,mesh,envmap]")
+        ->group(gbench);
+    list("--pipelines", f.pipelines, "a,b,...", "Any registered pipelines (listed below) [all]")
+        ->group(gbench);
+    list("--sizes", f.sizes, "WxH,...", "[640x360,1280x720,1920x1080,3840x2160]")->group(gbench);
+    app.add_option("--bounces", f.bounces, "List and/or ranges [0..8]")
+        ->type_name("0..8")
+        ->group(gbench);
+    list("--accels", f.accels, "bvh,...", "none, bv, grid, bvh, wide, cwbvh [each scene's default]")
+        ->group(gbench);
+    app.add_option("--cells", f.cells,
+                   "Instead of the lists above: the cells of a sweep file (every cell: "
+                   "stop-after-failure applies in sweep mode only)")
+        ->type_name("SWEEP")
+        ->group(gbench);
+    app.add_option("--repeats", f.repeats, "Repetitions per benchmark; the median is reported [5]")
+        ->type_name("N")
+        ->check(CLI::Range(1, 1000))
+        ->group(gbench);
+    app.add_option("--frames", f.frames,
+                   "Timed frames per repetition (fixed, so that sub-millisecond cells do not "
+                   "auto-iterate for minutes) [5]")
+        ->type_name("N")
+        ->check(CLI::Range(1, 100000))
+        ->group(gbench);
+    app.add_option("--warmup", f.warmup, "Untimed frames before timing [2]")
+        ->type_name("N")
+        ->check(CLI::Range(0, 100))
+        ->group(gbench);
+    app.add_option_function<std::string>(
+           "--count-rays", [&f](const std::string& v) { f.countRays = v == "yes" || v == "true"; },
+           "One untimed frame with device ray counters [yes]")
+        ->type_name("yes|no")
+        ->check(CLI::IsMember({"yes", "no", "true", "false"}).description(""))
+        ->group(gbench);
+
+    const char* sweep = "Sweep mode (no Google Benchmark; what `rtlab sweep --import` reads)";
+    app.add_option("--sweep", f.sweep, "Run this sweep file's cells (needs --out)")
+        ->type_name("SWEEP")
+        ->group(sweep);
+    app.add_option("--out", f.out,
+                   "Folder for rows.jsonl (one row per cell, in cell order, as they are "
+                   "measured), sweep.json and the kept frames (images/*.pfm)")
+        ->type_name("DIR")
+        ->group(sweep);
+    app.add_option("--time-limit", f.timeLimit,
+                   "Stop before a cell that would end after this many seconds [0: none]")
+        ->type_name("SECONDS")
+        ->group(sweep);
+    app.add_option("--shard", f.shard,
+                   "Run only the work units u with u % N == i, for N machines (merge: `rtlab "
+                   "sweep CONFIG --import DIR0 DIR1 ...`); with --smoke, that share of its cells")
+        ->type_name("i/N")
+        ->group(sweep);
+    app.add_option("--resume", f.resume,
+                   "Skip the cells an earlier run's rows.jsonl measured (or that timed out); give "
+                   "`rtlab sweep --import` both output folders afterwards. Groups with "
+                   "stop-after-failure (bench/sweeps/limits) skip the settings no smaller than "
+                   "one that failed and write them as rows with status \"skipped\"")
+        ->type_name("ROWS,...")
+        ->group(sweep);
+
+    app.add_flag("--smoke", f.smoke,
+                 "The smoke check, over --scenes, --sizes, --pipelines, --accels and --shard: one "
+                 "frame of every scene x size x pipeline (both megakernel layouts) x structure, "
+                 "one line each: PASS when it ran, every pixel is finite and it agrees with the "
+                 "megakernel's frame (tree layout, the scene's own structure) as two structures "
+                 "must; FAIL and why otherwise. Defaults: "
+                 "empty,spheres,shadows,cornell,mesh,envmap,divergence at 160x90 and 1920x1080, "
+                 "every pipeline and structure. Exit status 1 when a cell fails")
+        ->group("Smoke check");
+
+    const char* every = "Every mode";
+    app.add_option("--device", f.device,
+                   "One OpenCL device by index or name [$RTLAB_DEVICE, else first GPU]")
+        ->type_name("SPEC")
+        ->group(every);
+    list("--devices", f.devices, "SPEC,...",
+         "Several OpenCL devices by index or name, or all (every GPU); not with --device. Sweep "
+         "mode runs the cells on them at once, one context each, rows in cell order; Google "
+         "Benchmark mode registers one set of benchmarks per device")
+        ->group(every);
+    app.add_option("--cell-timeout", f.cellTimeout,
+                   "A benchmark repetition or sweep cell (program builds included) that has not "
+                   "finished by then fails with \"timeout\"; 0 = no limit [600]. Google Benchmark "
+                   "mode: the later benchmarks are then not run. Sweep mode: after a stuck "
+                   "compiler the sweep goes on in a fresh context; after a stuck device it stops "
+                   "with every row so far written, and --resume goes on past the cell. Either way "
+                   "the exit status is 1")
+        ->type_name("SECONDS")
+        ->check(CLI::Range(0.0, 1e7))
+        ->group(every);
+    app.add_option("--scene-dir", f.sceneDir,
+                   "Where <scene>.json are [scenes/ of the checkout]; cubemap faces must be .pfm "
+                   "(rtlab-bench reads no PNG: see `rtlab sweep --export-scenes`)")
+        ->type_name("DIR")
+        ->group(every);
+    app.add_option("--kernel-dir", f.kernelDir, "Read kernel sources from a source tree [embedded]")
+        ->type_name("DIR")
+        ->group(every);
+    app.add_flag("--list-devices", f.listDevices, "Print the OpenCL devices and exit")
+        ->group(every);
+    app.set_version_flag("--version", std::string("rtlab-bench ") + RTLAB_COMMIT,
+                         "Print the commit this binary was built from and exit");
+    app.set_help_flag("-h,--help", "Print this help and exit");
+    app.footer(std::string(kExitStatus) +
+               "\nPipelines (--pipelines, and `pipelines =` in sweep files):\n" +
+               pipelineRegistry().help() +
+               "\nGoogle Benchmark's own flags: --benchmark_list_tests, --benchmark_filter, ...");
 }
 
 // Cubemap faces without OpenImageIO: .pfm only.
@@ -672,19 +668,28 @@ int benchmarkCommand(const Flags& f) {
 }  // namespace
 
 int main(int argc, char** argv) {
+    Flags f;
+    CLI::App app{kDescription, "rtlab-bench"};
+    addFlags(app, f);
+    // Google Benchmark answers --help with its own flags alone and exits: ours come first.
     for (int i = 1; i < argc; ++i)
         if (!std::strcmp(argv[i], "--help") || !std::strcmp(argv[i], "-h")) {
-            printUsage();
-            std::puts(
-                "\nGoogle Benchmark's own flags: --benchmark_list_tests, --benchmark_filter, ...");
+            std::fputs(app.help().c_str(), stdout);
             return 0;
         }
+    // Google Benchmark takes its --benchmark_* flags out of argv; the rest are ours.
+    for (int i = 1; i < argc; ++i)
+        progress.filtered |= std::strncmp(argv[i], "--benchmark_filter", 18) == 0;
+    benchmark::Initialize(&argc, argv);
     try {
-        // Google Benchmark takes its --benchmark_* flags out of argv; the rest are ours.
-        for (int i = 1; i < argc; ++i)
-            progress.filtered |= std::strncmp(argv[i], "--benchmark_filter", 18) == 0;
-        benchmark::Initialize(&argc, argv);
-        Flags f = parseFlags(argc, argv);
+        app.parse(argc, argv);
+    } catch (const CLI::ParseError& e) {
+        return cli::reportParseError(app, e, "rtlab-bench", argc, argv);
+    }
+    for (const CLI::Option* opt : app.get_options())
+        if (opt->count() && !opt->get_lnames().empty())
+            f.given.insert("--" + opt->get_lnames().front());
+    try {
         if (f.listDevices) return listDevicesCommand();
         int status = f.smoke            ? smokeCommand(f)
                      : !f.sweep.empty() ? sweepCommand(f)

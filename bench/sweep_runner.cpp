@@ -349,93 +349,98 @@ nlohmann::json sweepSettingsJson(const SweepConfig& c) {
 
 namespace {
 
-// One cell's outcome, waiting for its turn in the output.
-struct Result {
-    nlohmann::json row;
-    std::optional<Image> image;
-};
+// ---- Planning: what this run measures ----
 
-// What the workers share; every member is guarded by `lock`.
-struct SweepState {
-    std::mutex lock;
-    Progress* progress = nullptr;
-    SweepSummary* summary = nullptr;
-    size_t nextUnit = 0;
-    bool started = false, stop = false;  // a batch began; the time limit (or an error) stops all
-    std::exception_ptr error;
-    std::map<size_t, Result> results;  // by cell index, until every earlier cell is out
-    std::vector<size_t> order;         // the cells to run, in cell order
-    size_t emitted = 0;                // order[0, emitted) went to the sink
-};
-
-}  // namespace
-
-SweepSummary runSweep(const SweepConfig& config, const SweepRunOptions& options,
-                      const std::function<void(const nlohmann::json&)>& onStart,
-                      const RowSink& sink) {
-    // Shared: a measurement that overruns the cell time limit keeps its scene and context.
+// The sweep's scenes, loaded once. Shared, because a measurement that overruns the cell time
+// limit keeps its scene while the sweep goes on.
+struct SweepScenes {
     std::map<std::string, std::shared_ptr<const Scene>> scenes;
-    std::map<std::string, nlohmann::json> sceneInfo;
-    for (const std::string& name : sweepScenes(config)) {
-        scenes.emplace(name, std::make_shared<const Scene>(
-                                 loadScene(scenePath(name, options.sceneDir), options.readImage)));
-        sceneInfo[name] = sceneJson(*scenes.at(name));
-    }
-    // The whole sweep's cells and units, whatever shard and resume leave of them: cell and unit
-    // indices are then the same on every machine.
-    const std::vector<Cell> cells =
-        expandCells(config, [&](const std::string& n) -> const Scene& { return *scenes.at(n); });
-    std::vector<WorkUnit> units;
-    std::vector<char> inShard(cells.size(), 0);
-    {
-        std::vector<WorkUnit> all = workUnits(cells);
-        for (size_t u = 0; u < all.size(); ++u) {
-            if (int(u % size_t(options.shard.count)) != options.shard.index) continue;
-            for (auto [i, j] : all[u].batches)
-                for (size_t k = i; k < j; ++k) inShard[k] = 1;
-            units.push_back(std::move(all[u]));
-        }
-    }
-    SweepState state;
-    SweepSummary summary;
-    for (size_t k = 0; k < cells.size(); ++k) {
-        if (!inShard[k]) continue;
-        if (options.skip.count(cells[k].key()))
-            ++summary.skipped;
-        else
-            state.order.push_back(k);
-    }
+    std::map<std::string, nlohmann::json> info;  // sceneJson() of each, for meta and rows
+};
 
-    std::vector<DeviceInfo> devices = options.devices.empty()
-                                          ? std::vector<DeviceInfo>{selectDevice(options.device)}
-                                          : selectDevices(options.devices);
-    std::vector<std::shared_ptr<ClContext>> contexts;
-    for (const DeviceInfo& d : devices)
-        contexts.push_back(std::make_shared<ClContext>(d, options.sources));
-    nlohmann::json device = deviceJson(devices.front());
-    summary.cells = int(state.order.size());
-    summary.meta = {{"sweep", config.name},
-                    {"config_file", config.path.string()},
-                    {"config", config.text},
-                    {"settings", sweepSettingsJson(config)},
-                    {"scenes", sceneInfo},
-                    {"started", utcNow()},
-                    {"host_load_start", loadAverage()},
-                    {"cells", state.order.size()},
-                    {"cell_timeout_s", options.cellTimeoutS},
-                    {"skipped_as_done", summary.skipped}};
-    summary.meta.update(device);
-    if (!options.shard.whole()) {
-        summary.meta["shard"] = options.shard.str();
-        summary.meta["sweep_cells"] = cells.size();
+SweepScenes loadSweepScenes(const SweepConfig& config, const SweepRunOptions& options) {
+    SweepScenes s;
+    for (const std::string& name : sweepScenes(config)) {
+        s.scenes.emplace(name, std::make_shared<const Scene>(loadScene(
+                                   scenePath(name, options.sceneDir), options.readImage)));
+        s.info[name] = sceneJson(*s.scenes.at(name));
     }
-    std::string on = devices.front().label();
+    return s;
+}
+
+// The whole sweep's cells, and the share of them this run measures: the work units of its
+// shard, less the cells an earlier run measured (--resume). Cell and unit indices are those of
+// the whole sweep, whatever shard and resume leave of it, so they are the same on every machine
+// and the shards' rows merge by them.
+struct SweepPlan {
+    std::vector<Cell> cells;
+    std::vector<WorkUnit> units;  // this shard's, in sweep order
+    std::vector<size_t> order;    // the cells to run, in cell order
+    int skippedAsDone = 0;        // cells of this shard that --resume skips
+};
+
+SweepPlan planSweep(const SweepConfig& config, const SweepRunOptions& options,
+                    const SweepScenes& scenes) {
+    SweepPlan plan;
+    plan.cells = expandCells(
+        config, [&](const std::string& n) -> const Scene& { return *scenes.scenes.at(n); });
+    std::vector<char> inShard(plan.cells.size(), 0);
+    std::vector<WorkUnit> all = workUnits(plan.cells);
+    for (size_t u = 0; u < all.size(); ++u) {
+        if (int(u % size_t(options.shard.count)) != options.shard.index) continue;
+        for (auto [i, j] : all[u].batches)
+            for (size_t k = i; k < j; ++k) inShard[k] = 1;
+        plan.units.push_back(std::move(all[u]));
+    }
+    for (size_t k = 0; k < plan.cells.size(); ++k) {
+        if (!inShard[k]) continue;
+        if (options.skip.count(plan.cells[k].key()))
+            ++plan.skippedAsDone;
+        else
+            plan.order.push_back(k);
+    }
+    return plan;
+}
+
+// The set's meta before the first cell: the sweep file, its settings and scenes, the device
+// (of the first context; every device with --devices), the shard and the cell time limit.
+nlohmann::json sweepMeta(const SweepConfig& config, const SweepRunOptions& options,
+                         const SweepPlan& plan, const SweepScenes& scenes,
+                         const std::vector<DeviceInfo>& devices) {
+    nlohmann::json meta = {{"sweep", config.name},
+                           {"config_file", config.path.string()},
+                           {"config", config.text},
+                           {"settings", sweepSettingsJson(config)},
+                           {"scenes", scenes.info},
+                           {"started", utcNow()},
+                           {"host_load_start", loadAverage()},
+                           {"cells", plan.order.size()},
+                           {"cell_timeout_s", options.cellTimeoutS},
+                           {"skipped_as_done", plan.skippedAsDone}};
+    meta.update(deviceJson(devices.front()));
+    if (!options.shard.whole()) {
+        meta["shard"] = options.shard.str();
+        meta["sweep_cells"] = plan.cells.size();
+    }
     if (devices.size() > 1) {
         nlohmann::json list = nlohmann::json::array();
+        for (const DeviceInfo& d : devices) {
+            list.push_back(deviceJson(d));
+            list.back()["device_index"] = d.index;
+        }
+        meta["devices"] = list;
+    }
+    return meta;
+}
+
+// The run's first line on stderr: the cell count, the shard, where it runs and the commit;
+// before it, a warning when the devices of one run differ (their rows do not compare).
+void announceSweep(const SweepConfig& config, const SweepRunOptions& options, const SweepPlan& plan,
+                   const std::vector<DeviceInfo>& devices) {
+    std::string on = devices.front().label();
+    if (devices.size() > 1) {
         on = std::to_string(devices.size()) + " contexts:";
         for (size_t w = 0; w < devices.size(); ++w) {
-            list.push_back(deviceJson(devices[w]));
-            list.back()["device_index"] = devices[w].index;
             on += (w ? ", d" : " d") + std::to_string(w) + " = " + devices[w].label();
             if (devices[w].name != devices.front().name)
                 std::fprintf(stderr,
@@ -444,248 +449,322 @@ SweepSummary runSweep(const SweepConfig& config, const SweepRunOptions& options,
                              config.name.c_str(), devices.front().name.c_str(),
                              devices[w].name.c_str());
         }
-        summary.meta["devices"] = list;
     }
     std::fprintf(stderr, "sweep %s: %zu cells%s on %s, commit %s\n", config.name.c_str(),
-                 state.order.size(),
+                 plan.order.size(),
                  options.shard.whole() ? "" : (" (shard " + options.shard.str() + ")").c_str(),
                  on.c_str(), RTLAB_COMMIT);
-    if (onStart) onStart(summary.meta);
+}
 
-    Progress progress(cells, state.order, int(devices.size()));
-    state.progress = &progress;
-    state.summary = &summary;
+// ---- Running: the workers and what they share ----
+
+// One cell's outcome, waiting for its turn in the output.
+struct Result {
+    nlohmann::json row;
+    std::optional<Image> image;
+};
+
+// One worker: a device's context (replaced after a stuck program build), what its rows say of
+// the device, and the tag its progress lines carry when several devices share the sweep.
+struct Worker {
+    std::shared_ptr<ClContext> cl;
+    nlohmann::json where;
+    std::string tag;
+};
+
+// A sweep in progress. Each worker takes the next work unit from the shared queue and runs its
+// batches in order: it starts a batch (under the time limit), measures it (under the cell time
+// limit), and records its rows; rows go to the sink in cell order as soon as every earlier cell
+// is done. The members below lock_ are guarded by it, and so are progress and summary.
+class SweepRun {
+  public:
+    SweepRun(const SweepConfig& config, const SweepRunOptions& options, const SweepPlan& plan,
+             const SweepScenes& scenes, Progress& progress, SweepSummary& summary,
+             const RowSink& sink)
+        : config_(config),
+          options_(options),
+          plan_(plan),
+          scenes_(scenes),
+          progress_(progress),
+          summary_(summary),
+          sink_(sink) {}
+
+    // Runs work units until none is left or the sweep stops. A worker that throws (the sink
+    // could not write, say) stops the others; the first error is kept for finish().
+    void work(Worker self) {
+        try {
+            for (;;) {
+                size_t u;
+                {
+                    std::lock_guard<std::mutex> hold(lock_);
+                    if (stop_ || nextUnit_ == plan_.units.size()) return;
+                    u = nextUnit_++;
+                }
+                if (!runUnit(self, plan_.units[u])) return;
+            }
+        } catch (...) {
+            std::lock_guard<std::mutex> hold(lock_);
+            if (!error_) error_ = std::current_exception();
+            stop_ = true;
+        }
+    }
+
+    // After the workers: the rows still held back go out (past cells that never ran), and a
+    // worker's error is rethrown.
+    void finish() {
+        emit(true);
+        if (error_) std::rethrow_exception(error_);
+    }
+
+  private:
+    // A unit's batches in order. stop-after-failure is decided within a unit (a scene's limits
+    // batches are one unit), from the cells of it that failed or ran past max-frame-s. False
+    // when the sweep stopped before one of its batches.
+    bool runUnit(Worker& self, const WorkUnit& unit) {
+        std::vector<Stop> stops;
+        for (auto [i, j] : unit.batches) {
+            std::vector<size_t> here;  // the batch's cells less those --resume skips
+            for (size_t k = i; k < j; ++k)
+                if (!options_.skip.count(plan_.cells[k].key())) here.push_back(k);
+            if (here.empty()) continue;
+            // stop-after-failure: cells no smaller than one that stopped are recorded, not run.
+            std::vector<size_t> run;
+            std::map<size_t, std::string> skipWhy;
+            for (size_t k : here) {
+                if (plan_.cells[k].stopAfterFailure)
+                    skipWhy[k] = skipReason(config_, plan_.cells[k], stops);
+                if (skipWhy[k].empty()) run.push_back(k);
+            }
+            if (!run.empty() && !startBatch(run, self.tag)) return false;
+            std::map<size_t, Measurement> ms;
+            double seconds = run.empty() ? 0 : measureBatch(self, plan_.cells[i], run, ms);
+            recordBatch(self, plan_.cells[i], here, run, skipWhy, ms, seconds, stops);
+        }
+        return true;
+    }
+
+    // --time-limit: a batch that would end past it is not started, and the sweep stops there
+    // (the first batch always starts). Otherwise its cells show as started. False: stopped.
+    bool startBatch(const std::vector<size_t>& run, const std::string& tag) {
+        std::lock_guard<std::mutex> hold(lock_);
+        if (stop_) return false;
+        double predicted = 0;
+        for (size_t k : run) predicted += progress_.estimate(k);
+        if (options_.timeLimitS > 0 && started_ &&
+            progress_.elapsed() + predicted > options_.timeLimitS) {
+            std::fprintf(stderr,
+                         "\nsweep %s: stopping before %s, the time limit of "
+                         "%s would pass\n",
+                         config_.name.c_str(), plan_.cells[run.front()].label().c_str(),
+                         formatDuration(options_.timeLimitS).c_str());
+            summary_.complete = false;
+            stop_ = true;
+            return false;
+        }
+        started_ = true;
+        progress_.starting(run, tag);
+        return true;
+    }
+
+    // Measures the batch's cells with their frames interleaved (first: the batch's first cell,
+    // whose scene and frame counts the batch shares), under the cell time limit times the
+    // number of cells. Fills ms by cell index; returns the batch's seconds.
+    double measureBatch(Worker& self, const Cell& first, const std::vector<size_t>& run,
+                        std::map<size_t, Measurement>& ms) {
+        std::vector<Variant> variants;
+        bool keep = false;
+        double cap = 0;
+        for (size_t k : run) {
+            const Cell& c = plan_.cells[k];
+            variants.push_back({c.pipeline, c.options});
+            // The limits cells keep their frames: the pipelines' images must agree.
+            keep = keep || c.images || c.stopAfterFailure;
+            if (c.maxFrameS > 0) cap = cap > 0 ? std::min(cap, c.maxFrameS) : c.maxFrameS;
+        }
+        auto t0 = std::chrono::steady_clock::now();
+        // A limits batch gets a context of its own: drivers keep memory per context (NVIDIA
+        // reserves private memory for the largest kernel it ran), so a wavefront cell after the
+        // megakernel's deepest cells could fail where it runs in a new process.
+        std::shared_ptr<ClContext> ctx =
+            first.stopAfterFailure
+                ? std::make_shared<ClContext>(self.cl->device(), options_.sources)
+                : self.cl;
+        std::shared_ptr<const Scene> scene = scenes_.scenes.at(first.scene);
+        const double limit = options_.cellTimeoutS * double(run.size());
+        auto got = withinSeconds(limit, [=, warmup = first.warmup, repeats = first.repeats,
+                                         countRays = first.countRays] {
+            return measureCells(*ctx, *scene, variants, warmup, repeats, countRays, keep, cap);
+        });
+        double seconds =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        if (got) {
+            for (size_t r = 0; r < run.size(); ++r) ms[run[r]] = std::move((*got)[r]);
+        } else {
+            timedOut(self, *ctx, ctx == self.cl, run, limit, ms);
+        }
+        return seconds;
+    }
+
+    // A batch past the cell time limit: each of its cells fails with "timeout", naming what was
+    // stuck. The stuck thread keeps ctx and the scene; this worker never touches ctx again. A
+    // stuck compiler runs nothing on the device, so the worker goes on in a new context; a
+    // stuck device or driver leaves a state that later timings could not be trusted in, so the
+    // sweep stops.
+    void timedOut(Worker& self, const ClContext& ctx, bool workersContext,
+                  const std::vector<size_t>& run, double limit, std::map<size_t, Measurement>& ms) {
+        const std::string compiling = ctx.building();
+        char head[160];
+        std::snprintf(
+            head, sizeof head,
+            "did not finish within %g s (cell time "
+            "limit %g s%s): ",
+            limit, options_.cellTimeoutS,
+            run.size() > 1
+                ? (" x " + std::to_string(run.size()) + " cells measured together").c_str()
+                : "");
+        std::string why = head + (compiling.empty() ? std::string("the device or its driver "
+                                                                  "did not return")
+                                                    : "the OpenCL compiler did not finish "
+                                                      "building " +
+                                                          compiling);
+        for (size_t k : run) {
+            Measurement& m = ms[k];
+            m.error = why;
+            m.failure = FailureKind::Timeout;
+        }
+        std::lock_guard<std::mutex> hold(lock_);
+        summary_.timedOut += int(run.size());
+        if (!compiling.empty() && workersContext) {
+            self.cl = std::make_shared<ClContext>(self.cl->device(), options_.sources);
+        } else if (compiling.empty()) {
+            const std::string label = plan_.cells[run.front()].label();
+            std::fprintf(stderr,
+                         "\nsweep %s: %s timed out on the device; "
+                         "stopping (rows so far are written; --resume "
+                         "goes on past it)\n",
+                         config_.name.c_str(), label.c_str());
+            summary_.complete = false;
+            summary_.meta["stopped_by"] = "timeout: " + label;
+            stop_ = true;
+        }
+    }
+
+    // The rows of a batch's cells, with their progress lines, in cell order: here are those
+    // --resume left, run those of them that were measured, skipWhy says why the others were not
+    // (stop-after-failure). Each measured cell gets its share of the batch's time for the
+    // estimate of the time left; cells of stop-after-failure groups that failed or ran past
+    // max-frame-s go to stops. Then whatever rows are due go to the sink.
+    void recordBatch(const Worker& self, const Cell& first, const std::vector<size_t>& here,
+                     const std::vector<size_t>& run, std::map<size_t, std::string>& skipWhy,
+                     std::map<size_t, Measurement>& ms, double seconds, std::vector<Stop>& stops) {
+        // The batch's time less its program builds, shared out over its cells.
+        const std::vector<double> share = batchShares(plan_.cells, run, ms);
+        double framesSeconds = seconds;
+        for (size_t k : run) framesSeconds -= ms[k].programMs / 1e3;
+        framesSeconds = std::max(0.0, framesSeconds);
+        const auto diff = frameAgreement(run, ms);
+        const nlohmann::json& sceneInfo = scenes_.info.at(first.scene);
+        std::lock_guard<std::mutex> hold(lock_);
+        for (size_t k : here) {
+            const Cell& cell = plan_.cells[k];
+            Measurement& m = ms[k];
+            if (!skipWhy[k].empty()) {
+                progress_.skipped(k, skipWhy[k]);
+                ++summary_.notRun;
+                nlohmann::json row = rowJson(config_, cell, m, self.where, sceneInfo, skipWhy[k]);
+                row["cell_index"] = k;
+                results_[k] = {row, std::nullopt};
+                continue;
+            }
+            double build = m.programMs / 1e3, frames = 0;
+            for (size_t r = 0; r < run.size(); ++r)
+                if (run[r] == k) frames = share[r];
+            progress_.finished(k, build + framesSeconds * frames, build, m, self.tag);
+            ++(m.ok ? summary_.measured : summary_.failed);
+            nlohmann::json row = rowJson(config_, cell, m, self.where, sceneInfo);
+            row["cell_index"] = k;
+            if (m.ok && cell.stopAfterFailure && !m.image.rgb.empty()) {
+                row["image_nonfinite"] = nonFinitePixels(m.image);
+                if (row["image_nonfinite"].get<long long>() > 0)
+                    std::fprintf(stderr, "    WARNING: %lld pixels are NaN or infinite\n",
+                                 row["image_nonfinite"].get<long long>());
+            }
+            if (auto it = diff.find(k); it != diff.end()) {
+                row["image_compared_with"] = it->second.first;
+                row["image_max_diff"] = it->second.second;
+                if (it->second.second != 0)
+                    std::fprintf(stderr, "    WARNING: %s and %s frames differ by up to %g\n",
+                                 cell.pipeline.c_str(), it->second.first.c_str(),
+                                 it->second.second);
+            }
+            if (cell.stopAfterFailure) {
+                if (!m.ok) {
+                    stops.push_back({cell, std::string("error: ") + failureKindName(m.failure)});
+                } else if (cell.maxFrameS > 0 && m.wallMs > cell.maxFrameS * 1e3) {
+                    char why[96];
+                    std::snprintf(why, sizeof why, "a frame took %.1f s, over max-frame-s %g",
+                                  m.wallMs / 1e3, cell.maxFrameS);
+                    stops.push_back({cell, why});
+                }
+            }
+            Result& r = results_[k];
+            r.row = std::move(row);
+            if (m.ok && cell.images) r.image = std::move(m.image);
+        }
+        emit(false);
+    }
+
+    // Frames of the same setting from every pipeline of a limits batch must agree (bit-identical
+    // by design), which catches a silent wrong image at a limit (tiling, launch splitting).
+    // By cell: the pipeline it was compared with and the largest |difference|.
+    std::map<size_t, std::pair<std::string, double>> frameAgreement(
+        const std::vector<size_t>& run, std::map<size_t, Measurement>& ms) const {
+        std::map<std::string, size_t> bySetting;
+        std::map<size_t, std::pair<std::string, double>> diff;
+        for (size_t k : run) {
+            const Measurement& m = ms[k];
+            if (!m.ok || !plan_.cells[k].stopAfterFailure || m.image.rgb.empty()) continue;
+            auto [it, fresh] = bySetting.emplace(plan_.cells[k].settingKey(), k);
+            if (fresh) continue;
+            double d = maxDifference(ms[it->second].image, m.image);
+            diff[k] = {plan_.cells[it->second].pipeline, d};
+            diff[it->second] = {plan_.cells[k].pipeline, d};
+        }
+        return diff;
+    }
 
     // Hands finished rows to the sink in cell order, as far as every earlier cell is done
-    // (all: also past cells that never ran, at the end).
-    auto emit = [&](bool all) {
-        for (; state.emitted < state.order.size(); ++state.emitted) {
-            auto it = state.results.find(state.order[state.emitted]);
-            if (it == state.results.end()) {
+    // (all: also past cells that never ran, at the end). Callers hold the lock, or run alone.
+    void emit(bool all) {
+        for (; emitted_ < plan_.order.size(); ++emitted_) {
+            auto it = results_.find(plan_.order[emitted_]);
+            if (it == results_.end()) {
                 if (all) continue;
                 return;
             }
-            sink(it->second.row, it->second.image ? &*it->second.image : nullptr);
-            state.results.erase(it);
+            sink_(it->second.row, it->second.image ? &*it->second.image : nullptr);
+            results_.erase(it);
         }
-    };
-
-    auto worker = [&](size_t w) {
-        std::shared_ptr<ClContext> cl = contexts[w];  // replaced after a stuck program build
-        nlohmann::json where = deviceJson(cl->device());
-        where["device_index"] = cl->device().index;
-        std::string tag = devices.size() > 1 ? " on d" + std::to_string(w) : "";
-        for (;;) {
-            size_t u;
-            {
-                std::lock_guard<std::mutex> hold(state.lock);
-                if (state.stop || state.nextUnit == units.size()) return;
-                u = state.nextUnit++;
-            }
-            std::vector<Stop> stops;  // cells of this unit that failed or ran past max-frame-s
-            for (auto [i, j] : units[u].batches) {
-                std::vector<size_t> here;
-                for (size_t k = i; k < j; ++k)
-                    if (!options.skip.count(cells[k].key())) here.push_back(k);
-                if (here.empty()) continue;
-                // stop-after-failure: cells no smaller than one that stopped are recorded, not run.
-                std::vector<size_t> run;
-                std::map<size_t, std::string> skipWhy;
-                for (size_t k : here) {
-                    if (cells[k].stopAfterFailure) skipWhy[k] = skipReason(config, cells[k], stops);
-                    if (skipWhy[k].empty()) run.push_back(k);
-                }
-                if (!run.empty()) {
-                    std::lock_guard<std::mutex> hold(state.lock);
-                    if (state.stop) return;
-                    double predicted = 0;
-                    for (size_t k : run) predicted += progress.estimate(k);
-                    if (options.timeLimitS > 0 && state.started &&
-                        progress.elapsed() + predicted > options.timeLimitS) {
-                        std::fprintf(stderr,
-                                     "\nsweep %s: stopping before %s, the time limit of "
-                                     "%s would pass\n",
-                                     config.name.c_str(), cells[run.front()].label().c_str(),
-                                     formatDuration(options.timeLimitS).c_str());
-                        summary.complete = false;
-                        state.stop = true;
-                        return;
-                    }
-                    state.started = true;
-                    progress.starting(run, tag);
-                }
-                const Cell& c = cells[i];
-                std::map<size_t, Measurement> ms;
-                double seconds = 0;
-                if (!run.empty()) {
-                    std::vector<Variant> variants;
-                    bool keep = false;
-                    double cap = 0;
-                    for (size_t k : run) {
-                        variants.push_back({cells[k].pipeline, cells[k].options});
-                        // The limits cells keep their frames: the pipelines' images must agree.
-                        keep = keep || cells[k].images || cells[k].stopAfterFailure;
-                        if (cells[k].maxFrameS > 0)
-                            cap = cap > 0 ? std::min(cap, cells[k].maxFrameS) : cells[k].maxFrameS;
-                    }
-                    auto t0 = std::chrono::steady_clock::now();
-                    // A limits batch gets a context of its own: drivers keep memory per context
-                    // (NVIDIA reserves private memory for the largest kernel it ran), so a
-                    // wavefront cell after the megakernel's deepest cells could fail where it
-                    // runs in a new process.
-                    std::shared_ptr<ClContext> ctx =
-                        c.stopAfterFailure
-                            ? std::make_shared<ClContext>(cl->device(), options.sources)
-                            : cl;
-                    std::shared_ptr<const Scene> scene = scenes.at(c.scene);
-                    const double limit = options.cellTimeoutS * double(run.size());
-                    auto got = withinSeconds(limit, [=, warmup = c.warmup, repeats = c.repeats,
-                                                     countRays = c.countRays] {
-                        return measureCells(*ctx, *scene, variants, warmup, repeats, countRays,
-                                            keep, cap);
-                    });
-                    seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0)
-                                  .count();
-                    if (got) {
-                        for (size_t r = 0; r < run.size(); ++r) ms[run[r]] = std::move((*got)[r]);
-                    } else {
-                        // The thread keeps ctx and scene; this worker never touches ctx again.
-                        const std::string compiling = ctx->building();
-                        char head[160];
-                        std::snprintf(head, sizeof head,
-                                      "did not finish within %g s (cell time "
-                                      "limit %g s%s): ",
-                                      limit, options.cellTimeoutS,
-                                      run.size() > 1 ? (" x " + std::to_string(run.size()) +
-                                                        " cells measured together")
-                                                           .c_str()
-                                                     : "");
-                        std::string why =
-                            head + (compiling.empty() ? std::string("the device or its driver "
-                                                                    "did not return")
-                                                      : "the OpenCL compiler did not finish "
-                                                        "building " +
-                                                            compiling);
-                        for (size_t k : run) {
-                            Measurement& m = ms[k];
-                            m.error = why;
-                            m.failure = FailureKind::Timeout;
-                        }
-                        std::lock_guard<std::mutex> hold(state.lock);
-                        summary.timedOut += int(run.size());
-                        if (!compiling.empty() && ctx == cl) {
-                            // Nothing of this context runs on the device: go on in a new one.
-                            cl = std::make_shared<ClContext>(cl->device(), options.sources);
-                        } else if (compiling.empty()) {
-                            // What the device runs, or the driver's state, is unknown: what is
-                            // measured after it could not be trusted. Stop here.
-                            std::fprintf(stderr,
-                                         "\nsweep %s: %s timed out on the device; "
-                                         "stopping (rows so far are written; --resume "
-                                         "goes on past it)\n",
-                                         config.name.c_str(), cells[run.front()].label().c_str());
-                            summary.complete = false;
-                            summary.meta["stopped_by"] = "timeout: " + cells[run.front()].label();
-                            state.stop = true;
-                        }
-                    }
-                }
-                // The batch's time less its program builds, shared out over its cells.
-                const std::vector<double> share = batchShares(cells, run, ms);
-                double framesSeconds = seconds;
-                for (size_t k : run) framesSeconds -= ms[k].programMs / 1e3;
-                framesSeconds = std::max(0.0, framesSeconds);
-                // Frames of the same setting from every pipeline: they must agree (bit-identical
-                // by design), which catches a silent wrong image at a limit (tiling, launch
-                // splitting).
-                std::map<std::string, size_t> bySetting;
-                std::map<size_t, std::pair<std::string, double>> diff;  // cell -> (other, max |d|)
-                for (size_t k : run) {
-                    const Measurement& m = ms[k];
-                    if (!m.ok || !cells[k].stopAfterFailure || m.image.rgb.empty()) continue;
-                    auto [it, fresh] = bySetting.emplace(cells[k].settingKey(), k);
-                    if (fresh) continue;
-                    double d = maxDifference(ms[it->second].image, m.image);
-                    diff[k] = {cells[it->second].pipeline, d};
-                    diff[it->second] = {cells[k].pipeline, d};
-                }
-                std::lock_guard<std::mutex> hold(state.lock);
-                for (size_t k : here) {
-                    Measurement& m = ms[k];
-                    nlohmann::json row;
-                    if (!skipWhy[k].empty()) {
-                        progress.skipped(k, skipWhy[k]);
-                        ++summary.notRun;
-                        row =
-                            rowJson(config, cells[k], m, where, sceneInfo.at(c.scene), skipWhy[k]);
-                        row["cell_index"] = k;
-                        state.results[k] = {row, std::nullopt};
-                        continue;
-                    }
-                    double build = m.programMs / 1e3, frames = 0;
-                    for (size_t r = 0; r < run.size(); ++r)
-                        if (run[r] == k) frames = share[r];
-                    progress.finished(k, build + framesSeconds * frames, build, m, tag);
-                    ++(m.ok ? summary.measured : summary.failed);
-                    row = rowJson(config, cells[k], m, where, sceneInfo.at(c.scene));
-                    row["cell_index"] = k;
-                    if (m.ok && cells[k].stopAfterFailure && !m.image.rgb.empty()) {
-                        row["image_nonfinite"] = nonFinitePixels(m.image);
-                        if (row["image_nonfinite"].get<long long>() > 0)
-                            std::fprintf(stderr, "    WARNING: %lld pixels are NaN or infinite\n",
-                                         row["image_nonfinite"].get<long long>());
-                    }
-                    if (auto it = diff.find(k); it != diff.end()) {
-                        row["image_compared_with"] = it->second.first;
-                        row["image_max_diff"] = it->second.second;
-                        if (it->second.second != 0)
-                            std::fprintf(stderr,
-                                         "    WARNING: %s and %s frames differ by up to %g\n",
-                                         cells[k].pipeline.c_str(), it->second.first.c_str(),
-                                         it->second.second);
-                    }
-                    if (cells[k].stopAfterFailure) {
-                        if (!m.ok) {
-                            stops.push_back(
-                                {cells[k], std::string("error: ") + failureKindName(m.failure)});
-                        } else if (cells[k].maxFrameS > 0 && m.wallMs > cells[k].maxFrameS * 1e3) {
-                            char why[96];
-                            std::snprintf(why, sizeof why,
-                                          "a frame took %.1f s, over max-frame-s %g",
-                                          m.wallMs / 1e3, cells[k].maxFrameS);
-                            stops.push_back({cells[k], why});
-                        }
-                    }
-                    Result& r = state.results[k];
-                    r.row = std::move(row);
-                    if (m.ok && cells[k].images) r.image = std::move(m.image);
-                }
-                emit(false);
-            }
-        }
-    };
-    // A worker that throws (the sink could not write, say) stops the others; the first error
-    // is rethrown here once they have finished.
-    auto guarded = [&](size_t w) {
-        try {
-            worker(w);
-        } catch (...) {
-            std::lock_guard<std::mutex> hold(state.lock);
-            if (!state.error) state.error = std::current_exception();
-            state.stop = true;
-        }
-    };
-    if (contexts.size() == 1) {
-        guarded(0);
-    } else {
-        std::vector<std::thread> threads;
-        for (size_t w = 0; w < contexts.size(); ++w) threads.emplace_back(guarded, w);
-        for (std::thread& t : threads) t.join();
     }
-    emit(true);
-    if (state.error) std::rethrow_exception(state.error);
-    progress.done();
-    summary.seconds = progress.elapsed();
+
+    const SweepConfig& config_;
+    const SweepRunOptions& options_;
+    const SweepPlan& plan_;
+    const SweepScenes& scenes_;
+    Progress& progress_;
+    SweepSummary& summary_;
+    const RowSink& sink_;
+
+    std::mutex lock_;
+    size_t nextUnit_ = 0;
+    bool started_ = false, stop_ = false;  // a batch began; the time limit (or an error) stops all
+    std::exception_ptr error_;
+    std::map<size_t, Result> results_;  // by cell index, until every earlier cell is out
+    size_t emitted_ = 0;                // plan_.order[0, emitted_) went to the sink
+};
+
+// What the set's meta says at the end: when it finished, the host's load, and the counts.
+void finishMeta(SweepSummary& summary) {
     summary.meta["finished"] = utcNow();
     summary.meta["host_load_end"] = loadAverage();
     summary.meta["seconds"] = summary.seconds;
@@ -694,6 +773,46 @@ SweepSummary runSweep(const SweepConfig& config, const SweepRunOptions& options,
     summary.meta["failed"] = summary.failed;
     summary.meta["timed_out"] = summary.timedOut;
     summary.meta["not_run"] = summary.notRun;
+}
+
+}  // namespace
+
+SweepSummary runSweep(const SweepConfig& config, const SweepRunOptions& options,
+                      const std::function<void(const nlohmann::json&)>& onStart,
+                      const RowSink& sink) {
+    const SweepScenes scenes = loadSweepScenes(config, options);
+    const SweepPlan plan = planSweep(config, options, scenes);
+    std::vector<DeviceInfo> devices = options.devices.empty()
+                                          ? std::vector<DeviceInfo>{selectDevice(options.device)}
+                                          : selectDevices(options.devices);
+    std::vector<Worker> workers;
+    for (const DeviceInfo& d : devices) {
+        Worker w{std::make_shared<ClContext>(d, options.sources), {}, ""};
+        w.where = deviceJson(w.cl->device());
+        w.where["device_index"] = w.cl->device().index;
+        if (devices.size() > 1) w.tag = " on d" + std::to_string(workers.size());
+        workers.push_back(std::move(w));
+    }
+    SweepSummary summary;
+    summary.cells = int(plan.order.size());
+    summary.skipped = plan.skippedAsDone;
+    summary.meta = sweepMeta(config, options, plan, scenes, devices);
+    announceSweep(config, options, plan, devices);
+    if (onStart) onStart(summary.meta);
+
+    Progress progress(plan.cells, plan.order, int(devices.size()));
+    SweepRun run(config, options, plan, scenes, progress, summary, sink);
+    if (workers.size() == 1) {
+        run.work(workers[0]);
+    } else {
+        std::vector<std::thread> threads;
+        for (const Worker& w : workers) threads.emplace_back([&run, w] { run.work(w); });
+        for (std::thread& t : threads) t.join();
+    }
+    run.finish();
+    progress.done();
+    summary.seconds = progress.elapsed();
+    finishMeta(summary);
     return summary;
 }
 
