@@ -55,9 +55,9 @@ nlohmann::json settled(nlohmann::json row) {
                           "kernel_ms", "longest_launch_ms", "launches", "mrays_per_s",
                           "accel_build_ms", "program_ms", "kernel_resources"})
         row.erase(k);
-    // The queue pipeline's launch-sizing times (its read-back count stays).
+    // The queue pipeline's launch-sizing and shade-stage times (its read-back count stays).
     if (row.contains("extras"))
-        for (const char* k : {"idle_ms", "span_ms"}) row["extras"].erase(k);
+        for (const char* k : {"idle_ms", "span_ms", "shade_ms"}) row["extras"].erase(k);
     return row;
 }
 
