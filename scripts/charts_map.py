@@ -23,7 +23,7 @@ import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from compare import Verdict  # noqa: E402
-from sweep_rows import Series  # noqa: E402
+from sweep_rows import Series, family  # noqa: E402
 
 NAME = re.compile(r"map-s(\d+)(?:-t(\d+))?-x(\d+)-o(\d+)-m(\d+)(?:-f\d+x\d+)?$")
 
@@ -42,6 +42,9 @@ def load(path):
 def cells(rows):
     """{(size, special, octaves, materials, triangles): {series key: row}} for the map's scenes;
     triangles is the mesh walls' count an object, 0 for spheres."""
+    # A selector (`--pipeline auto`) renders with one of the designs on the map: it is no
+    # contender of its own (scripts/auto_eval.py sets it against them).
+    rows = [r for r in rows if family(r) != "selector"]
     series = Series(rows)
     out = {}
     for r in rows:
