@@ -11,6 +11,7 @@
 #include <ostream>
 #include <string>
 
+#include "command_case.h"
 #include "pipelines/registry.h"
 #include "scratch_dir.h"
 
@@ -47,13 +48,6 @@ struct BenchBadCase {
 
 void PrintTo(const BenchBadCase& c, std::ostream* os) { *os << "rtlab-bench " << c.args; }
 
-std::string benchCaseName(const ::testing::TestParamInfo<BenchBadCase>& info) {
-    std::string name = std::to_string(info.index);
-    for (char c : std::string(info.param.args).substr(0, 60))
-        name += std::isalnum((unsigned char)c) ? c : '_';
-    return name;
-}
-
 class BenchCliRejects : public ::testing::TestWithParam<BenchBadCase> {};
 
 TEST_P(BenchCliRejects, WithOneLineAndExitStatusOne) {
@@ -85,7 +79,7 @@ INSTANTIATE_TEST_SUITE_P(
         BenchBadCase{"--sweep", "--sweep: 1 required SWEEP missing"},
         BenchBadCase{"--shard=0/2", "--shard: only with --sweep"},
         BenchBadCase{"--smoke --resume=rows.jsonl", "--resume: not with --smoke"}),
-    benchCaseName);
+    rt::test::commandCaseName<BenchBadCase>);
 
 TEST(BenchCli, HelpExplainsEveryFlagAndPipeline) {
     if (!std::filesystem::exists(benchPath())) GTEST_SKIP() << "rtlab-bench not built";

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "command_case.h"
 #include "core/cl_runtime.h"
 #include "core/version.h"
 #include "pipelines/registry.h"
@@ -58,13 +59,6 @@ struct BadCase {
 
 // Test names and failure messages show the command line, not gtest's "16-byte object <...>".
 void PrintTo(const BadCase& c, std::ostream* os) { *os << "rtlab " << c.args; }
-
-std::string caseName(const ::testing::TestParamInfo<BadCase>& info) {
-    std::string name = std::to_string(info.index);
-    for (char c : std::string(info.param.args).substr(0, 60))
-        name += std::isalnum((unsigned char)c) ? c : '_';
-    return name;
-}
 
 class CliRejects : public ::testing::TestWithParam<BadCase> {};
 
@@ -176,7 +170,7 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"predict scenes/spheres.json --size 0x10", "--size 0x10: width and height must"},
         BadCase{"predict scenes/spheres.json --threshold 40", "--threshold 40: must be in 0..32"},
         BadCase{"predict scenes/spheres.json --bounces 99", "--bounces 99: must be in 0..64"}),
-    caseName);
+    rt::test::commandCaseName<BadCase>);
 
 TEST(Cli, RendersWithEveryPipeline) {
     for (const std::string& name : rt::pipelineRegistry().names()) {
