@@ -62,6 +62,25 @@ inline Pending Megakernel_Unpack(PackedPending q) {
 #define RT_STACK_POP(q) (q)
 #endif
 
+// One step of a path: pops the top pending ray of pixel (x, y)'s sample `sample`, traces it,
+// pushes its children and returns what it adds to the pixel. Both schedules of the weighted
+// layout take their steps here: Megakernel_Sample below, one sample at a time, and the persistent
+// megakernel, whose lanes start a new pixel when their stack runs dry.
+inline float3 Megakernel_TraceNext(const SceneData* sc, RT_STACK_RECORD* stack, int* top, int x,
+                                   int y, int sample) {
+    Pending p = RT_STACK_POP(stack[--*top]);
+    Node node = RayTree_TraceNode(sc, p.ray, p.type, Sampling_PointKey(x, y, sample, p.depth));
+    if (node.kind == RT_KIND_MISS) return PathState_Miss(sc, &p);
+    Pending refl, refr;
+    bool hasRefl, hasRefr;
+    const float3 term = PathState_Step(sc, &node, &p, true, true, RT_PATTERN_ANY, &refl,
+                                       &hasRefl, &refr, &hasRefr);
+    // Depth-first: at most one pending sibling per level, so B*(C-1)+1 entries suffice.
+    if (hasRefr) stack[(*top)++] = RT_STACK_PUSH(refr);
+    if (hasRefl) stack[(*top)++] = RT_STACK_PUSH(refl);
+    return term;
+}
+
 inline float3 Megakernel_Sample(const SceneData* sc, int x, int y, int sample) {
     RT_STACK_RECORD stack[RT_STACK_SIZE];
     int top = 0;
@@ -69,19 +88,7 @@ inline float3 Megakernel_Sample(const SceneData* sc, int x, int y, int sample) {
     float3 color = (float3)(0.0f, 0.0f, 0.0f);
     while (top > 0) {
         RT_COUNT_WARP_STEP(sc);  // the lanes that still have a ray to trace
-        Pending p = RT_STACK_POP(stack[--top]);
-        Node node = RayTree_TraceNode(sc, p.ray, p.type, Sampling_PointKey(x, y, sample, p.depth));
-        if (node.kind == RT_KIND_MISS) {
-            color += PathState_Miss(sc, &p);
-            continue;
-        }
-        Pending refl, refr;
-        bool hasRefl, hasRefr;
-        color += PathState_Step(sc, &node, &p, true, true, RT_PATTERN_ANY, &refl, &hasRefl, &refr,
-                                &hasRefr);
-        // Depth-first: at most one pending sibling per level, so B*(C-1)+1 entries suffice.
-        if (hasRefr) stack[top++] = RT_STACK_PUSH(refr);
-        if (hasRefl) stack[top++] = RT_STACK_PUSH(refl);
+        color += Megakernel_TraceNext(sc, stack, &top, x, y, sample);
     }
     return color;
 }
