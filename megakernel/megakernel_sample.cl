@@ -73,8 +73,8 @@ inline float3 Megakernel_TraceNext(const SceneData* sc, RT_STACK_RECORD* stack, 
     if (node.kind == RT_KIND_MISS) return PathState_Miss(sc, &p);
     Pending refl, refr;
     bool hasRefl, hasRefr;
-    const float3 term = PathState_Step(sc, &node, &p, true, true, RT_PATTERN_ANY, &refl,
-                                       &hasRefl, &refr, &hasRefr);
+    const float3 term =
+        PathState_Step(sc, &node, &p, true, true, RT_PATTERN_ANY, &refl, &hasRefl, &refr, &hasRefr);
     // Depth-first: at most one pending sibling per level, so B*(C-1)+1 entries suffice.
     if (hasRefr) stack[(*top)++] = RT_STACK_PUSH(refr);
     if (hasRefl) stack[(*top)++] = RT_STACK_PUSH(refl);

@@ -21,7 +21,7 @@ kernel void Persistent_Render(RT_SCENE_PARAMS, global float* image, global int* 
     RT_STACK_RECORD stack[RT_STACK_SIZE];
     int top = 0, pixel = -1, x = 0, y = 0, sample = 0;
     float3 color = (float3)(0.0f, 0.0f, 0.0f);  // the current sample's sum
-    float3 acc = color;                          // the pixel's sum over its finished samples
+    float3 acc = color;                         // the pixel's sum over its finished samples
     for (;;) {
         if (top == 0) {
             if (pixel >= 0) {  // the current sample's tree is done
