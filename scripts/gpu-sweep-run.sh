@@ -11,7 +11,7 @@ set -uo pipefail
 C=$(cd "$(dirname "$0")" && pwd)
 OUT=${OUT:-$PWD/out}
 mkdir -p "$OUT"
-SWEEP=$(cat "$C/SWEEP")
+SWEEP=${RTLAB_SWEEP:-$(cat "$C/SWEEP")}  # RTLAB_SWEEP: another carried sweep (batch.sh)
 LIMIT=${RTLAB_GPU_TIME_LIMIT:-480}
 DEVICE=${RTLAB_GPU_DEVICE:-gpu}  # "cpu" rehearses the whole run on PoCL
 DEVICES=${RTLAB_GPU_DEVICES:-}  # "all" or "0,1": the sweep on several devices at once

@@ -3,14 +3,16 @@
 # machine with an OpenCL GPU driver: rtlab-bench and its libraries travel with it), and turns
 # what comes back into results/<device-slug>/ here.
 #
-#   scripts/gpu-sweep.sh prepare [SWEEP] [--resume DIR]...
+#   scripts/gpu-sweep.sh prepare [SWEEP...] [--resume DIR]...
 #       Builds rtlab and rtlab-bench from a clean clone of HEAD (so every result names an exact
 #       commit) in build-gpu/, and fills carry/gpu-sweep/ (git-ignored) with rtlab-bench, the
 #       libraries it needs beside it (libbenchmark.so.1debian, libtinyobjloader, libassimp with
 #       libdraco and libminizip; not libOpenCL.so.1, the GPU host's own ICD loader is used, nor
 #       libz, which every host has and its driver libraries load too),
 #       the scenes with .pfm cubemap faces, the sweep file, run.sh and smoke.sh (scripts/gpu-smoke,
-#       the check to pass before any GPU result is called done). --resume DIR (a folder
+#       the check to pass before any GPU result is called done) and batch.sh (scripts/gpu-batch:
+#       the smoke check and several sweeps in one session, one file back). Several SWEEPs: all
+#       travel, run.sh runs the first (RTLAB_SWEEP=NAME another). --resume DIR (a folder
 #       copied back from an earlier run) makes the new run skip the cells that one measured.
 #       Generated scenes are too large to carry (the map's walls, the stress scenes): the
 #       generators travel instead (scripts/make-map.py, make-stress.py; Python's standard
@@ -66,15 +68,18 @@ sweep_scenes() { sed -n 's/#.*//; s/^[[:space:]]*scenes[[:space:]]*=//p' "$1" | 
 lib_path() { ldd "$1" | awk -v n="$2" '$1 == n { print $3 }'; }
 
 prepare() {
-    local sweep=full resumes=() i=1 path missing
+    local sweeps=() resumes=() i=1 path missing sweep
     while [ $# -gt 0 ]; do
         case $1 in
             --resume) [ $# -ge 2 ] || die "--resume needs a folder"; resumes+=("$2"); shift 2 ;;
             -*) die "unknown option $1" ;;
-            *) sweep=$1; shift ;;
+            *) sweeps+=("$1"); shift ;;
         esac
     done
-    [ -f "bench/sweeps/$sweep" ] || die "no sweep bench/sweeps/$sweep"
+    [ ${#sweeps[@]} -gt 0 ] || sweeps=(full)
+    for sweep in "${sweeps[@]}"; do
+        [ -f "bench/sweeps/$sweep" ] || die "no sweep bench/sweeps/$sweep"
+    done
     build_clean
     rm -rf "$CARRY"
     mkdir -p "$CARRY/bin" "$CARRY/sweeps" "$CARRY/resume"
@@ -90,14 +95,14 @@ prepare() {
                   -e libOpenCL.so.1 -e libz.so.1 -e "=> $ROOT/$CARRY/bin/" || true)
     [ -z "$missing" ] || echo "gpu-sweep: rtlab-bench also needs (not carried): $missing" >&2
     (cd "$BUILD/src" && "$BUILD/build/bin/rtlab" sweep --export-scenes "$ROOT/$CARRY/scenes") >/dev/null
-    cp "$BUILD/src/bench/sweeps/$sweep" "$CARRY/sweeps/"
+    for sweep in "${sweeps[@]}"; do cp "$BUILD/src/bench/sweeps/$sweep" "$CARRY/sweeps/"; done
     mkdir -p "$CARRY/scripts"
     cp "$BUILD/src/scripts/make-map.py" "$BUILD/src/scripts/make-stress.py" "$CARRY/scripts/"
     # The shared models sit beside this checkout, not the clean clone: copy from here.
-    if sweep_scenes "$CARRY/sweeps/$sweep" | grep -q '^real/'; then
+    if cat "$CARRY"/sweeps/* | sweep_scenes /dev/stdin | grep -q '^real/'; then
         "$ROOT/scripts/copy-models.sh" "$ROOT/$CARRY/scenes/real" >/dev/null
     fi
-    echo "$sweep" >"$CARRY/SWEEP"
+    echo "${sweeps[0]}" >"$CARRY/SWEEP"
     for dir in "${resumes[@]+"${resumes[@]}"}"; do
         [ -f "$dir/rows.jsonl" ] || die "--resume $dir: no rows.jsonl there"
         cp "$dir/rows.jsonl" "$CARRY/resume/rows-$i.jsonl"
@@ -105,9 +110,10 @@ prepare() {
     done
     cp "$BUILD/src/scripts/gpu-sweep-run.sh" "$CARRY/run.sh"
     cp "$BUILD/src/scripts/gpu-smoke" "$CARRY/smoke.sh"
+    cp "$BUILD/src/scripts/gpu-batch" "$CARRY/batch.sh"
     cp "$BUILD/src/scripts/gpu-env.sh" "$CARRY/gpu-env.sh"
     echo "gpu-sweep: $CARRY ready ($(du -sh "$CARRY" | cut -f1)), commit" \
-         "$(git -C "$BUILD/src" rev-parse --short=12 HEAD), sweep $sweep"
+         "$(git -C "$BUILD/src" rev-parse --short=12 HEAD), sweeps ${sweeps[*]}"
     if [ "$(du -sm "$CARRY" | cut -f1)" -gt 64 ]; then
         echo "gpu-sweep: note: $CARRY is over 64 MiB, more than some GPU sessions carry" >&2
     fi
