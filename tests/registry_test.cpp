@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <set>
@@ -245,6 +246,24 @@ TEST(Registry, SweepFilesTakeEveryDeclaredOption) {
 // fields of RenderOptions: the cells the same sweep file expands to now must have the keys those
 // rows recorded, read through currentCellKey (resumed sweeps and merged results match rows by
 // them).
+// Every committed sweep file parses: its keys, pipelines and option values are what the registry
+// declares (a list where an option takes one value is an error that only a device run would
+// otherwise find).
+TEST(Registry, EveryCommittedSweepFileParses) {
+    int files = 0;
+    for (const auto& e : std::filesystem::directory_iterator("bench/sweeps")) {
+        if (e.path().has_extension()) continue;  // README.md
+        ++files;
+        try {
+            const bench::SweepConfig c = bench::loadSweep(e.path());
+            EXPECT_FALSE(c.groups.empty()) << e.path();
+        } catch (const std::exception& x) {
+            ADD_FAILURE() << x.what();
+        }
+    }
+    EXPECT_GT(files, 20);
+}
+
 TEST(Registry, RecordedRowsKeepTheirCellKeys) {
     // The queue's options; both megakernel layouts, with and without a launch cap.
     for (const char* file : {"results/pocl-pthread-skylake-avx512-amd-epyc/queue-launch-cpu.json",
