@@ -3,6 +3,7 @@
 
 #include <chrono>
 
+#include "core/error.h"
 #include "core/kernel_resources.h"
 
 namespace rt {
@@ -49,6 +50,27 @@ DeviceScene& DevicePipeline::deviceScene(const Scene& scene, RenderOptions::Acce
     return *scene_;
 }
 
+cl::Program DevicePipeline::rayLoopProgram(const std::string& file,
+                                           const std::vector<std::string>& defines,
+                                           const std::vector<std::string>& options,
+                                           const RenderOptions& o,
+                                           const std::vector<std::string>& nvidiaDefines) {
+    countLanes_ = false;
+    if (cl_.device().vendor.find("NVIDIA") == std::string::npos)
+        return program(file, defines, options);
+    std::vector<std::string> nvidia = defines;
+    nvidia.insert(nvidia.end(), nvidiaDefines.begin(), nvidiaDefines.end());
+    if (o.countRays) nvidia.push_back("RT_COUNT_LANES");
+    if (nvidia.size() == defines.size()) return program(file, defines, options);
+    try {
+        cl::Program p = program(file, nvidia, options);
+        countLanes_ = o.countRays;
+        return p;
+    } catch (const Error&) {
+        return program(file, defines, options);
+    }
+}
+
 void DevicePipeline::startRayCount(const RenderOptions& options) {
     if (options.countRays) scene_->resetRayCounts(cl_.queue());
 }
@@ -57,6 +79,13 @@ void DevicePipeline::finishRayCount(const RenderOptions& options) {
     if (!options.countRays) return;
     stats_.rays = scene_->readRayCounts(cl_.queue());
     stats_.raysCounted = true;
+    if (countLanes_) {
+        // Mean busy lanes of a 32-lane warp over the steps of its ray loop.
+        const WarpCounts w = scene_->readWarpCounts(cl_.queue());
+        stats_.extras["warp_steps"] = double(w.steps);
+        stats_.extras["warp_lanes_active"] =
+            w.steps ? double(w.lanesActive) / double(w.steps) : 0.0;
+    }
 }
 
 }  // namespace rt

@@ -51,13 +51,24 @@ class DevicePipeline : public Pipeline {
     // The scene's device copy with the structure of `accel`, made again only when either
     // changed; its structure's statistics go into the frame's.
     DeviceScene& deviceScene(const Scene& scene, RenderOptions::Accel accel);
+    // program() for a kernel whose ray loop counts its warps' busy lanes (RT_COUNT_WARP_STEP):
+    // on NVIDIA, a counting frame's program is built with RT_COUNT_LANES (inline PTX) and
+    // `nvidiaDefines` (further PTX the kernel uses there); should the driver refuse either, the
+    // program without them, and the frame counts rays alone.
+    cl::Program rayLoopProgram(const std::string& file, const std::vector<std::string>& defines,
+                               const std::vector<std::string>& options, const RenderOptions& o,
+                               const std::vector<std::string>& nvidiaDefines = {});
     // The device ray counters, for a counting frame (RenderOptions::countRays): zeroed before
-    // it, read into the frame's statistics after it. Both do nothing for other frames.
+    // it, read into the frame's statistics after it (and the busy lanes, when the program from
+    // rayLoopProgram counts them). Both do nothing for other frames.
     void startRayCount(const RenderOptions& options);
     void finishRayCount(const RenderOptions& options);
 
     ClContext& cl_;
     std::unique_ptr<DeviceScene> scene_;
+
+  private:
+    bool countLanes_ = false;  // the last rayLoopProgram counts busy lanes
 };
 
 }  // namespace rt

@@ -48,20 +48,8 @@ Image MegakernelPipeline::renderFrame(const Scene& scene, const RenderOptions& o
                          " (or use --layout weighted)");
     stats_.privateBytes = privateBytes(scene, o);
 
-    // The counting frame on NVIDIA also counts the warps' busy lanes (inline PTX); should the
-    // driver refuse that, the frame counts rays alone.
-    cl::Program program;
-    bool countLanes = false;
-    if (o.countRays && cl_.device().vendor.find("NVIDIA") != std::string::npos) {
-        std::vector<std::string> d = defines(scene, o);
-        d.push_back("RT_COUNT_LANES");
-        try {
-            program = this->program("megakernel.cl", d, buildOptions(o));
-            countLanes = true;
-        } catch (const Error&) {
-        }
-    }
-    if (!countLanes) program = this->program("megakernel.cl", defines(scene, o), buildOptions(o));
+    const cl::Program program =
+        rayLoopProgram("megakernel.cl", defines(scene, o), buildOptions(o), o);
     DeviceScene& deviceScene = this->deviceScene(scene, o.accel);
     size_t bytes = size_t(o.width) * o.height * 3 * sizeof(float);
     const bool adaptive = o.adaptiveAa && o.aa > 1;
@@ -129,15 +117,6 @@ Image MegakernelPipeline::renderFrame(const Scene& scene, const RenderOptions& o
                                       size_t(last - first) * rowBytes,
                                       out.rgb.data() + size_t(first) * o.width * 3);
         finishRayCount(o);
-        if (o.countRays) {
-            if (countLanes) {
-                // Mean busy lanes of a 32-lane warp over the steps of its ray loop.
-                WarpCounts w = deviceScene.readWarpCounts(cl_.queue());
-                stats_.extras["warp_steps"] = w.steps;
-                stats_.extras["warp_lanes_active"] =
-                    w.steps ? double(w.lanesActive) / double(w.steps) : 0.0;
-            }
-        }
     } catch (const cl::Error& e) {
         throwClError(e, "megakernel frame on " + cl_.device().name,
                      "the megakernel keeps " + std::to_string(stats_.privateBytes / 1024) +

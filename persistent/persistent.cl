@@ -1,48 +1,109 @@
 // rtlab — the persistent megakernel (Aila and Laine 2009's persistent threads): as many
 // work-items as the device keeps busy at once, each taking its next pixel from a global counter
-// as soon as its own pixel is done.
+// once its own pixel is done.
 //
 // The loop is flat: one iteration traces one ray of whatever pixel the lane holds, and a lane
-// whose stack runs dry fetches its next pixel inside the same iteration. A loop over pixels with a
+// whose stack runs dry takes its next pixel at the top of an iteration. A loop over pixels with a
 // loop over rays inside it would gain nothing on a SIMT machine: the lanes that leave the inner
 // loop wait at its end for the warp's deepest ray tree, exactly as in the one-pixel megakernel.
-// Flat, a warp keeps all of its lanes tracing until the counter runs out.
+//
+// Pixels are handed out in tiles of 8 x 4 (Persistent_PixelOf), so that lanes taking pixels at
+// the same time get neighbours, whose rays take the same paths through the scene. On NVIDIA
+// (RT_WARP_PTX) the lanes of a warp without a pixel wait until `refill` of them are idle (or
+// none is busy) and then take consecutive pixels with one atomic add: a warp trades a few idle
+// steps for lanes that start, and so stay, together.
 //
 // The per-ray work is the weighted megakernel's (Megakernel_TraceNext), and each pixel's rays and
 // samples are summed in the same order, so the image is the same to the bit.
 #include "megakernel_sample.cl"
 
-// Pixels [first, first + count) of the frame, in row-major order; *next counts the ones taken
-// (zeroed by the host before each launch).
+// Pixel `k` of the `count` pixels from `first` in row-major order: whole rows go by 8 x 4 tiles
+// (bands of 4 rows, strips of 8 columns, the last band and strip cut to fit); part of one row
+// goes left to right.
+inline int2 Persistent_PixelOf(int k, int first, int count, int width) {
+    if (count < width || first % width != 0) {
+        const int p = first + k, y = p / width;
+        return (int2)(p - y * width, y);
+    }
+    const int rows = count / width, band = k / (width * 4);
+    const int bandRows = min(4, rows - band * 4), i = k - band * width * 4;
+    const int strip = i / (8 * bandRows), j = i - strip * 8 * bandRows;
+    const int stripWidth = min(8, width - strip * 8);
+    return (int2)(strip * 8 + j % stripWidth, first / width + band * 4 + j / stripWidth);
+}
+
+#ifdef RT_WARP_PTX
+// Whether the warp's lanes without a pixel take new ones this step: once `refill` of its lanes
+// are idle, or all of them. Every lane calls it; *wanting gets the idle lanes (PTX
+// vote.sync.ballot among the lanes that run it together).
+inline bool Persistent_Refill(bool idle, int refill, uint* wanting) {
+    uint active, idleLanes;
+    __asm__ volatile("activemask.b32 %0;" : "=r"(active));
+    __asm__ volatile("{ .reg .pred q; setp.ne.u32 q, %1, 0; vote.sync.ballot.b32 %0, q, %2; }"
+                     : "=r"(idleLanes)
+                     : "r"((uint)idle), "r"(active));
+    *wanting = idleLanes;
+    return (int)popcount(idleLanes) >= refill || idleLanes == active;
+}
+
+// Pixels for the lanes of `wanting` (each of them calls this): one atomic add by the lowest,
+// its result passed to the others with shfl.sync, lane by lane in order.
+inline int Persistent_TakeTogether(global int* next, uint wanting) {
+    uint lane, below;
+    __asm__ volatile("mov.u32 %0, %%laneid;" : "=r"(lane));
+    __asm__ volatile("mov.u32 %0, %%lanemask_lt;" : "=r"(below));
+    const uint leader = (uint)(31 - clz(wanting & -wanting));
+    int base = 0;
+    if (lane == leader) base = atomic_add(next, (int)popcount(wanting));
+    __asm__ volatile("shfl.sync.idx.b32 %0, %1, %2, 0x1f, %3;"
+                     : "=r"(base)
+                     : "r"(base), "r"(leader), "r"(wanting));
+    return base + (int)popcount(wanting & below);
+}
+#else
+// Elsewhere each work-item is a warp of its own: it takes a pixel as soon as it has none.
+inline bool Persistent_Refill(bool idle, int refill, uint* wanting) {
+    *wanting = idle ? 1u : 0u;
+    return true;
+}
+inline int Persistent_TakeTogether(global int* next, uint wanting) { return atomic_inc(next); }
+#endif
+
+// Pixels [first, first + count) of the frame; *next counts the ones taken (zeroed by the host
+// before each launch). `refill`: RT_WARP_PTX only, the idle lanes a warp waits for.
 kernel void Persistent_Render(RT_SCENE_PARAMS, global float* image, global int* next, int first,
-                              int count) {
+                              int count, int refill) {
     RT_SCENE_INIT(sc);
     const int samples = settings.aaSamples * settings.aaSamples;
     RT_STACK_RECORD stack[RT_STACK_SIZE];
-    int top = 0, pixel = -1, x = 0, y = 0, sample = 0;
+    int top = 0, pixel = -1, sample = 0;
+    int2 xy = (int2)(0, 0);
     float3 color = (float3)(0.0f, 0.0f, 0.0f);  // the current sample's sum
     float3 acc = color;                         // the pixel's sum over its finished samples
     for (;;) {
-        if (top == 0) {
-            if (pixel >= 0) {  // the current sample's tree is done
-                acc = sample == 0 ? color : acc + color;
-                if (++sample == samples) {
-                    Megakernel_Store(image, pixel * 3, acc / (float)samples);
-                    pixel = -1;
-                }
+        if (top == 0 && pixel >= 0) {  // the current sample's tree is done
+            acc = sample == 0 ? color : acc + color;
+            if (++sample == samples) {
+                Megakernel_Store(image, pixel * 3, acc / (float)samples);
+                pixel = -1;
+            } else {
+                stack[top++] = RT_STACK_PUSH(PathState_Primary(&sc, xy.x, xy.y, sample));
+                color = (float3)(0.0f, 0.0f, 0.0f);
             }
-            if (pixel < 0) {
-                const int k = atomic_inc(next);
-                if (k >= count) return;
-                pixel = first + k;
-                y = pixel / settings.width;
-                x = pixel - y * settings.width;
-                sample = 0;
-            }
-            stack[top++] = RT_STACK_PUSH(PathState_Primary(&sc, x, y, sample));
+        }
+        uint wanting;
+        const bool refillNow = Persistent_Refill(pixel < 0, refill, &wanting);
+        if (pixel < 0 && refillNow) {
+            const int k = Persistent_TakeTogether(next, wanting);
+            if (k >= count) return;
+            xy = Persistent_PixelOf(k, first, count, settings.width);
+            pixel = xy.y * settings.width + xy.x;
+            sample = 0;
+            stack[top++] = RT_STACK_PUSH(PathState_Primary(&sc, xy.x, xy.y, 0));
             color = (float3)(0.0f, 0.0f, 0.0f);
         }
-        RT_COUNT_WARP_STEP(&sc);  // every lane that holds a pixel traces a ray
-        color += Megakernel_TraceNext(&sc, stack, &top, x, y, sample);
+        if (pixel < 0) continue;  // waiting for the warp's refill
+        RT_COUNT_WARP_STEP(&sc);  // the lanes that trace a ray this step
+        color += Megakernel_TraceNext(&sc, stack, &top, xy.x, xy.y, sample);
     }
 }

@@ -29,6 +29,24 @@ const PipelineOption& groupsOption() {
     return o;
 }
 
+const PipelineOption& refillOption() {
+    static const PipelineOption o{
+        .name = "persistent-refill",
+        .type = PipelineOption::Type::Integer,
+        .help =
+            "Persistent megakernel on NVIDIA: a warp's lanes without a pixel wait until N of "
+            "them are idle (or all), then take neighbouring pixels together, 1..32; other "
+            "devices take a pixel per work-item at once [16]",
+        .defaultValue = 16ll,
+        .min = 1,
+        .max = 32,
+        .sweepKey = "persistent-refill",
+        .cellTag = "F",
+        .label = "refill at {} idle lanes",
+    };
+    return o;
+}
+
 }  // namespace
 
 size_t PersistentPipeline::workItems(const DeviceInfo& device, const RenderOptions& o,
@@ -48,7 +66,8 @@ Image PersistentPipeline::renderFrame(const Scene& scene, const RenderOptions& o
     setMegaLayout(weighted, MegaLayout::Weighted);
     const std::vector<std::string> defines = MegakernelPipeline::defines(scene, weighted);
     stats_.privateBytes = MegakernelPipeline::privateBytes(scene, weighted);
-    cl::Program program = this->program("persistent.cl", defines);
+    // On NVIDIA the warp's lanes vote and take pixels together (inline PTX, RT_WARP_PTX).
+    const cl::Program program = rayLoopProgram("persistent.cl", defines, {}, o, {"RT_WARP_PTX"});
     DeviceScene& deviceScene = this->deviceScene(scene, o.accel);
     const DeviceInfo& dev = cl_.device();
     const size_t bytes = size_t(o.width) * o.height * 3 * sizeof(float);
@@ -62,6 +81,7 @@ Image PersistentPipeline::renderFrame(const Scene& scene, const RenderOptions& o
 
     Kernel kernel(program, "Persistent_Render");
     kernel.set("image", image_.get()).set("next", next_.get());
+    kernel.set("refill", cl_int(refillOption().integer(o.pipelineOptions)));
     const size_t local = dev.isGpu() ? 128 : 64;
     const size_t most = workItems(dev, o, local);
     dev::RenderSettings settings = makeSettings(scene, o);
@@ -117,9 +137,10 @@ void registerPersistentMegakernel(PipelineRegistry& registry) {
     p.family = "megakernel";
     p.description =
         "the weighted megakernel with persistent threads: a device-filling launch whose "
-        "work-items take pixels from a global counter (--persistent-groups N)";
+        "work-items take pixels from a global counter as their ray trees end "
+        "(--persistent-groups N, --persistent-refill N)";
     p.supports = {.adaptiveAa = false, .tiling = false, .rowWindow = true};
-    p.options = {groupsOption()};
+    p.options = {groupsOption(), refillOption()};
     p.make = [](ClContext* cl) { return std::make_unique<PersistentPipeline>(*cl); };
     registry.add(std::move(p));
 }

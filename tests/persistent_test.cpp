@@ -1,7 +1,8 @@
 // Persistent megakernel: the weighted megakernel's image to the bit on every standard scene,
 // whoever renders which pixel (one work-group per compute unit or many, one launch or pieces
-// under --max-launch-ms, a row window), the same rays counted, and one clear error per option it
-// refuses.
+// under --max-launch-ms, a row window, frames whose sides are no multiple of the 8 x 4 tiles it
+// hands out, warps that refill at one idle lane or at all 32), the same rays counted, and one
+// clear error per option it refuses.
 #include "persistent/persistent.h"
 
 #include <gtest/gtest.h>
@@ -30,11 +31,14 @@ RenderOptions weighted(const Scene& scene, int bounces, int aa) {
     return o;
 }
 
-void setGroups(RenderOptions& o, long long groups) {
-    const PipelineInfo& info = pipelineInfo("persist");
-    ASSERT_EQ(info.options.size(), 1u);
-    info.options[0].set(o.pipelineOptions, groups);
+// Sets the persistent megakernel's option `name` (a flag name without its dashes).
+void setOption(RenderOptions& o, const std::string& name, long long value) {
+    for (const PipelineOption& option : pipelineInfo("persist").options)
+        if (option.name == name) return option.set(o.pipelineOptions, value);
+    FAIL() << "persist has no option " << name;
 }
+
+void setGroups(RenderOptions& o, long long groups) { setOption(o, "persistent-groups", groups); }
 
 class PersistentVsMega : public ::testing::TestWithParam<const char*> {};
 
@@ -75,6 +79,20 @@ TEST(Persistent, PiecesAndRowWindowsKeepTheBits) {
                 << "row " << y;
 }
 
+TEST(Persistent, CutTilesAndEveryRefillKeepTheBits) {
+    Scene scene = load("cornell");
+    MegakernelPipeline mega(test::device());
+    PersistentPipeline persist(test::device());
+    RenderOptions o = weighted(scene, 3, 2);
+    o.width = 37;   // four strips of 8 columns and one of 5
+    o.height = 23;  // five bands of 4 rows and one of 3
+    const Image m = mega.render(scene, o);
+    for (long long refill : {1, 7, 32}) {
+        setOption(o, "persistent-refill", refill);
+        EXPECT_TRUE(sameBits(m, persist.render(scene, o))) << "refill " << refill;
+    }
+}
+
 TEST(Persistent, CountsTheRaysTheMegakernelCounts) {
     Scene scene = load("spheres");
     RenderOptions o = weighted(scene, 5, 2);
@@ -88,7 +106,7 @@ TEST(Persistent, CountsTheRaysTheMegakernelCounts) {
     EXPECT_GT(persist.stats().rays[RT_RAY_PRIMARY], 0u);
 }
 
-TEST(Persistent, RefusesAdaptiveAntiAliasingAndGroupsOutOfRange) {
+TEST(Persistent, RefusesAdaptiveAntiAliasingAndOptionsOutOfRange) {
     Scene scene = load("spheres");
     RenderOptions o = weighted(scene, 2, 2);
     o.adaptiveAa = true;
@@ -106,6 +124,12 @@ TEST(Persistent, RefusesAdaptiveAntiAliasingAndGroupsOutOfRange) {
         ADD_FAILURE() << "no error for --persistent-groups 0";
     } catch (const Error& e) {
         EXPECT_STREQ(e.what(), "--persistent-groups 0: must be in 1..64");
+    }
+    try {
+        setOption(g, "persistent-refill", 33);
+        ADD_FAILURE() << "no error for --persistent-refill 33";
+    } catch (const Error& e) {
+        EXPECT_STREQ(e.what(), "--persistent-refill 33: must be in 1..32");
     }
 }
 
