@@ -9,9 +9,10 @@
 //
 // Pixels are handed out in tiles of 8 x 4 (Persistent_PixelOf), so that lanes taking pixels at
 // the same time get neighbours, whose rays take the same paths through the scene. On NVIDIA
-// (RT_WARP_PTX) the lanes of a warp without a pixel wait until `refill` of them are idle (or
-// none is busy) and then take consecutive pixels with one atomic add: a warp trades a few idle
-// steps for lanes that start, and so stay, together.
+// (RT_WARP_PTX) the lanes of a warp without a pixel take consecutive pixels with one atomic add,
+// once `refill` of them are idle (or none is busy): waiting for more trades idle steps for lanes
+// that start together. The host's default, 1, takes at once: on walls of small objects with
+// mirrors and glass, waiting cost more than the coherence it bought.
 //
 // The per-ray work is the weighted megakernel's (Megakernel_TraceNext), and each pixel's rays and
 // samples are summed in the same order, so the image is the same to the bit.

@@ -36,8 +36,8 @@ const PipelineOption& refillOption() {
         .help =
             "Persistent megakernel on NVIDIA: a warp's lanes without a pixel wait until N of "
             "them are idle (or all), then take neighbouring pixels together, 1..32; other "
-            "devices take a pixel per work-item at once [16]",
-        .defaultValue = 16ll,
+            "devices take a pixel per work-item at once [1]",
+        .defaultValue = 1ll,
         .min = 1,
         .max = 32,
         .sweepKey = "persistent-refill",
