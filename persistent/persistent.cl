@@ -19,10 +19,10 @@
 #include "megakernel_sample.cl"
 
 // Pixel `k` of the `count` pixels from `first` in row-major order: whole rows go by 8 x 4 tiles
-// (bands of 4 rows, strips of 8 columns, the last band and strip cut to fit); part of one row
-// goes left to right.
+// (bands of 4 rows, strips of 8 columns, the last band and strip cut to fit); anything else (part
+// of one row, under --max-launch-ms) goes left to right.
 inline int2 Persistent_PixelOf(int k, int first, int count, int width) {
-    if (count < width || first % width != 0) {
+    if (first % width != 0 || count % width != 0) {
         const int p = first + k, y = p / width;
         return (int2)(p - y * width, y);
     }
