@@ -159,6 +159,20 @@ def chart(meta, series, grid, keys, path):
     plt.close(fig)
 
 
+def commits_of(meta, rows):
+    """The commit the chart names: the one the rows record, every one of them (short, in order of
+    first appearance) when a map joins runs of several binaries (a sweep resumed at another
+    commit), or the meta's when the rows record none."""
+    seen = []
+    for r in rows:
+        c = (r.get("commit") or "")[:12]
+        if c and c not in seen:
+            seen.append(c)
+    if len(seen) > 1:
+        return ", ".join(c[:7] for c in seen)
+    return seen[0] if seen else meta.get("commit", "?")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("rows", nargs="+")
@@ -167,6 +181,7 @@ def main():
     meta, rows = load(a.rows[0])
     for more in a.rows[1:]:
         rows += load(more)[1]
+    meta = dict(meta, commit=commits_of(meta, rows))
     series, grid = cells(rows)
     if not grid:
         sys.exit(f"{' '.join(a.rows)}: no rows of map scenes "

@@ -481,6 +481,16 @@ class MapTest(unittest.TestCase):
         self.assertIn("| size px | triangles | mirrors+glass |", text)
         self.assertIn("| 16 | 320 | 50% | 8 | 4.000 | 5.000 | mega | 1.25x | - |", text)
 
+    def test_a_map_joined_from_two_binaries_names_both_commits(self):
+        spec = importlib.util.spec_from_file_location("charts_map", os.path.join(SCRIPTS, "charts_map.py"))
+        m = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(m)
+        rows = [dict(r, commit=c) for r, c in zip(self.rows(), ["9e9a1ebb88a9", "9e9a1ebb88a9",
+                                                               "8c4e049bdf7b"])]
+        self.assertEqual(m.commits_of({"commit": "8c4e049bdf7b"}, rows), "9e9a1eb, 8c4e049")
+        self.assertEqual(m.commits_of({"commit": "8c4e049bdf7b"}, rows[:2]), "9e9a1ebb88a9")
+        self.assertEqual(m.commits_of({"commit": "8c4e049bdf7b"}, []), "8c4e049bdf7b")
+
 
 class PredictEvalTest(unittest.TestCase):
     """scripts/predict_eval.py: the busy-lane threshold fitted between the settings the queue won
