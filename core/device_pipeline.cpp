@@ -62,11 +62,17 @@ cl::Program DevicePipeline::rayLoopProgram(const std::string& file,
     nvidia.insert(nvidia.end(), nvidiaDefines.begin(), nvidiaDefines.end());
     if (o.countRays) nvidia.push_back("RT_COUNT_LANES");
     if (nvidia.size() == defines.size()) return program(file, defines, options);
+    // A build the driver refused once is not tried again for every frame.
+    std::string key = file;
+    for (const std::string& d : nvidia) key += " -D" + d;
+    for (const std::string& x : options) key += " " + x;
+    if (refusedBuilds_.count(key)) return program(file, defines, options);
     try {
         cl::Program p = program(file, nvidia, options);
         countLanes_ = o.countRays;
         return p;
     } catch (const Error&) {
+        refusedBuilds_.insert(key);
         return program(file, defines, options);
     }
 }

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <memory>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -68,7 +69,8 @@ class DevicePipeline : public Pipeline {
     std::unique_ptr<DeviceScene> scene_;
 
   private:
-    bool countLanes_ = false;  // the last rayLoopProgram counts busy lanes
+    bool countLanes_ = false;              // the last rayLoopProgram counts busy lanes
+    std::set<std::string> refusedBuilds_;  // rayLoopProgram's NVIDIA builds the driver refused
 };
 
 }  // namespace rt
