@@ -114,6 +114,9 @@ INSTANTIATE_TEST_SUITE_P(
                 "--max-registers 8: must be in 16..255"},
         BadCase{"render scenes/spheres.json --pipeline queue --pool 0 -o /tmp/x.png",
                 "--pool 0: must be in 1..67108864"},
+        BadCase{
+            "render scenes/spheres.json --pipeline persist --persistent-refill 33 -o /tmp/x.png",
+            "--persistent-refill 33: must be in 1..32"},
         BadCase{"render scenes/spheres.json --pipeline queue --pool 8 --bounces 6 -o /tmp/x.png",
                 "use --pool 64 or more"},
         BadCase{"render scenes/spheres.json --pipeline queue --queue-launch sideways -o /tmp/x.png",
