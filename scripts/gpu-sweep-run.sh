@@ -6,7 +6,10 @@
 # Google Benchmark cells. It writes to $OUT (default ./out), which goes back for
 # `scripts/gpu-sweep.sh import`; log.txt holds its output. RTLAB_GPU_DEVICES=all (or a list)
 # runs the cells on several GPUs at once; RTLAB_SHARD=i/N runs one share of the sweep (one
-# machine or array task of N).
+# machine or array task of N). RTLAB_GPU_PREBUILD=N first runs the sweep's cells once, untimed,
+# in N processes at once, so that the programs it needs are built on N cores and the timed run
+# finds them in the program cache (a fresh host builds each one for seconds, a tree-layout
+# megakernel once per bounce limit for 13-33 s on NVIDIA).
 set -uo pipefail
 C=$(cd "$(dirname "$0")" && pwd)
 OUT=${OUT:-$PWD/out}
@@ -16,6 +19,7 @@ LIMIT=${RTLAB_GPU_TIME_LIMIT:-480}
 DEVICE=${RTLAB_GPU_DEVICE:-gpu}  # "cpu" rehearses the whole run on PoCL
 DEVICES=${RTLAB_GPU_DEVICES:-}  # "all" or "0,1": the sweep on several devices at once
 SHARD=${RTLAB_SHARD:-}          # "i/N": this machine's share of the sweep
+PREBUILD=${RTLAB_GPU_PREBUILD:-0}  # processes that build the programs before the timed run
 GBENCH_S=${RTLAB_GPU_GBENCH_S:-60}  # time for the Google Benchmark cells at the end; 0 skips them
 export LD_LIBRARY_PATH=$C/bin${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}
 export RTLAB_CACHE_DIR=/tmp/rtlab-cache
@@ -57,6 +61,25 @@ make_scenes() {
     echo "generated in $((SECONDS - start)) s ($(du -sh "$C/scenes" | cut -f1) of scenes)"
 }
 
+# The cells still to measure, once each (one frame, no warm-up), split over $PREBUILD processes:
+# nothing is kept but the programs they leave in the cache. Bounded by a third of the time
+# limit; a process cut short only leaves the timed run more to build.
+prebuild() {
+    local resume=$1 i start=$SECONDS once=/tmp/rtlab-prebuild.sweep
+    sed -E 's/^(repeats|warmup)[[:space:]]*=.*/\1 = 1/; s/^warmup = 1/warmup = 0/' \
+        "$C/sweeps/$SWEEP" >"$once"
+    echo "== building programs in $PREBUILD processes"
+    for ((i = 0; i < PREBUILD; i++)); do
+        rm -rf "/tmp/rtlab-prebuild-$i"
+        timeout $((LIMIT / 3 + 30)) "$C/bin/rtlab-bench" --sweep "$once" \
+            --out "/tmp/rtlab-prebuild-$i" "${where[@]}" --scene-dir "$C/scenes" \
+            --time-limit $((LIMIT / 3)) --shard "$i/$PREBUILD" ${resume:+--resume "$resume"} \
+            >/dev/null 2>&1 &
+    done
+    wait
+    echo "programs built in $((SECONDS - start)) s ($(ls /tmp/rtlab-cache 2>/dev/null | wc -l) in the cache)"
+}
+
 main() {
     echo "== machine"
     uname -a
@@ -74,6 +97,7 @@ main() {
     resume=$(ls "$C"/resume/*.jsonl 2>/dev/null | paste -sd, -)
     local where=(--device "$DEVICE")
     [ -z "$DEVICES" ] || where=(--devices "$DEVICES")
+    [ "$PREBUILD" -gt 0 ] && prebuild "$resume"
     echo "== sweep $SWEEP${SHARD:+, shard $SHARD} (stops itself after ${LIMIT} s${resume:+; skips what $resume measured})"
     rm -rf "$w"
     # The hard stop still keeps the rows measured so far: rows.jsonl is written cell by cell.
