@@ -63,7 +63,8 @@ make_scenes() {
 
 # The cells still to measure, once each (one frame, no warm-up), split over $PREBUILD processes:
 # nothing is kept but the programs they leave in the cache. Bounded by a third of the time
-# limit; a process cut short only leaves the timed run more to build.
+# limit, which its time counts against; a process cut short only leaves the timed run more to
+# build.
 prebuild() {
     local resume=$1 i start=$SECONDS once=/tmp/rtlab-prebuild.sweep
     sed -E 's/^(repeats|warmup)[[:space:]]*=.*/\1 = 1/; s/^warmup = 1/warmup = 0/' \
@@ -71,7 +72,7 @@ prebuild() {
     echo "== building programs in $PREBUILD processes"
     for ((i = 0; i < PREBUILD; i++)); do
         rm -rf "/tmp/rtlab-prebuild-$i"
-        timeout $((LIMIT / 3 + 30)) "$C/bin/rtlab-bench" --sweep "$once" \
+        timeout $((LIMIT / 3 + 15)) "$C/bin/rtlab-bench" --sweep "$once" \
             --out "/tmp/rtlab-prebuild-$i" "${where[@]}" --scene-dir "$C/scenes" \
             --time-limit $((LIMIT / 3)) --shard "$i/$PREBUILD" ${resume:+--resume "$resume"} \
             >/dev/null 2>&1 &
@@ -97,11 +98,16 @@ main() {
     resume=$(ls "$C"/resume/*.jsonl 2>/dev/null | paste -sd, -)
     local where=(--device "$DEVICE")
     [ -z "$DEVICES" ] || where=(--devices "$DEVICES")
-    [ "$PREBUILD" -gt 0 ] && prebuild "$resume"
+    if [ "$PREBUILD" -gt 0 ]; then
+        local before=$SECONDS
+        prebuild "$resume"
+        LIMIT=$((LIMIT - (SECONDS - before)))  # the whole run keeps to RTLAB_GPU_TIME_LIMIT
+        [ "$LIMIT" -gt 10 ] || LIMIT=10
+    fi
     echo "== sweep $SWEEP${SHARD:+, shard $SHARD} (stops itself after ${LIMIT} s${resume:+; skips what $resume measured})"
     rm -rf "$w"
     # The hard stop still keeps the rows measured so far: rows.jsonl is written cell by cell.
-    timeout $((LIMIT + 60)) "$C/bin/rtlab-bench" --sweep "$C/sweeps/$SWEEP" --out "$w" \
+    timeout $((LIMIT + 30)) "$C/bin/rtlab-bench" --sweep "$C/sweeps/$SWEEP" --out "$w" \
         "${where[@]}" --scene-dir "$C/scenes" --time-limit "$LIMIT" ${resume:+--resume "$resume"} \
         ${SHARD:+--shard "$SHARD"}
     status=$?

@@ -3,7 +3,8 @@
 check and run.sh in a temporary carry folder, every step runs under the limit it was given, the
 steps' output comes back as one batch.tar that is rewritten after every step (so a session cut
 short keeps what finished), a failing or unknown step makes the exit status 1 without stopping
-the others, and a tar past 15 MiB is split into parts that join back into it.
+the others, a tar past 15 MiB is split into parts that join back into it, and a batch deadline
+cuts the step limits to fit inside it or skips a step that cannot.
 """
 import os
 import shutil
@@ -91,6 +92,24 @@ class GpuBatch(unittest.TestCase):
                 with open(os.path.join(self.out, p), "rb") as f:
                     joined.write(f.read())
         self.assertIn("alpha/rows.jsonl", self.members())
+
+    def test_a_deadline_cuts_step_limits_to_fit_and_skips_a_step_without_room(self):
+        # 300 s for the batch, 45 s of slack a step: smoke keeps its 100 (the stand-ins take no
+        # time), alpha's 480 becomes 255, and beta, asked for 400, is still cut to 255: the
+        # stand-ins return at once, so each step finds the whole deadline left.
+        run = self.batch("smoke:100", "alpha", "beta:400", RTLAB_BATCH_DEADLINE="300")
+        self.assertEqual(run.returncode, 0, run.stdout + run.stderr)
+        files = self.members()
+        self.assertIn("(limit 100)", files["smoke/smoke.txt"])
+        self.assertEqual(files["alpha/log.txt"].strip(), "limit 255 gbench 0")
+        self.assertEqual(files["beta/log.txt"].strip(), "limit 255 gbench 0")
+        self.assertIn("alpha: limit cut from 480 to 255 s (batch deadline)", run.stdout)
+        # A deadline shorter than the slack and 20 s leaves no room: the step is skipped, the
+        # batch fails and says why.
+        run = self.batch("alpha:60", RTLAB_BATCH_DEADLINE="50")
+        self.assertEqual(run.returncode, 1)
+        self.assertIn("alpha: skipped", run.stdout)
+        self.assertNotIn("alpha/rows.jsonl", self.members())
 
     def test_no_steps_prints_the_usage_and_exits_2(self):
         run = self.batch()
