@@ -77,9 +77,10 @@ def varying(rows, keys):
 def line_chart(meta, rows, title, axis_key, ylabel):
     """Device ms against the bounce limit or the resolution, a panel per scene, each point's
     frame spread as an error bar; the settings a scene keeps fixed are in its title, those that
-    vary get a line style each. A cell some series did not measure where the others did breaks
-    its line and is marked on the bottom edge, so that a line that stops is not read as a
-    trend."""
+    vary get a line style each. Every panel spans the values the chart's rows take along the
+    axis (a sweep stopped by its time limit leaves later scenes shorter): a cell a series did
+    not measure there breaks its line and is marked on the bottom edge, so that neither a line
+    that stops nor one drawn across a gap is read as a trend."""
     scenes, series = scenes_of(rows), Series(rows)
     guess = [series.label(k) for k in series.keys] + ["× on the bottom edge: not measured (the "
                                                       "series' colour)"] * 2
@@ -89,6 +90,7 @@ def line_chart(meta, rows, title, axis_key, ylabel):
     handles, labels, any_missing = [], [], False
     xof = (lambda r: r["bounces"]) if axis_key == "bounces" else \
         (lambda r: r["width"] * r["height"] / 1e6)
+    xs = sorted({xof(r) for r in rows})
     for ax, scene in zip(panels, scenes):
         srows = [r for r in rows if r["scene"] == scene]
         vary = varying(srows, other)
@@ -97,7 +99,6 @@ def line_chart(meta, rows, title, axis_key, ylabel):
         missing = []  # (series index, [x], colour)
         for n, variant in enumerate(variants):
             vrows = [r for r in srows if setting_text(r, vary) == variant]
-            xs = sorted({xof(r) for r in vrows})
             for j, key in enumerate(keys):
                 pts = {xof(r): r for r in vrows if series.key(r) == key}
                 if not pts:

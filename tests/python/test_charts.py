@@ -335,6 +335,24 @@ class ChartsTest(unittest.TestCase):
         self.assertEqual({c.get_color() for c in crosses},
                          {chart_style.SERIES_STYLES[("mega", "weighted")][0]})
 
+    def test_a_scene_cut_short_is_marked_over_the_whole_span_not_bridged(self):
+        # A sweep stopped by its time limit: the second scene has B = 0 and 1 only, while the
+        # first ran 0..4. Its lines must not stop at 1 unmarked (nor be drawn across a gap):
+        # every series gets crosses at B = 2, 3 and 4 in that panel.
+        rows = sweep_rows_fixture(("bounces",))
+        scenes = sorted({r["scene"] for r in rows})
+        self.assertEqual(len(scenes), 2)
+        rows = [r for r in rows if not (r["scene"] == scenes[1] and r["bounces"] >= 2)]
+        fig = charts.time_vs_bounces(META, rows)
+        cut = [ax for ax in fig.axes if ax.get_title().startswith(scenes[1])][0]
+        crosses = [line for line in cut.lines if line.get_marker() == chart_style.MISSING_MARKER]
+        self.assertEqual(len(crosses), 4)  # one row per series
+        for c in crosses:
+            self.assertEqual(list(c.get_xdata()), [2, 3, 4])
+        whole = [ax for ax in fig.axes if ax.get_title().startswith(scenes[0])][0]
+        self.assertEqual([line for line in whole.lines
+                          if line.get_marker() == chart_style.MISSING_MARKER], [])
+
     def test_kernel_breakdown_has_a_panel_per_series_and_no_second_axis(self):
         fig = charts.kernel_breakdown(META, sweep_rows_fixture(("bounces",)))
         panels = [ax for ax in fig.axes if ax.patches]
