@@ -2,7 +2,9 @@
 """How `--pipeline auto` does against the designs it chooses from (bench/sweeps/auto): for each
 scene, auto's device time against the better of the megakernel (either layout) and the queue
 wavefront, the bar the designs-at-their-best question sets (within 5% of it everywhere, faster
-than both somewhere), with the design auto chose, why, and the busy lanes it predicted.
+than both somewhere), with the design auto chose, why, and the busy lanes it predicted. Each way
+auto chooses (`--auto-choice predict`, the default, and `measure`, by trial frames) is scored on
+its own, in a table of its own.
 
 A gap inside the measured frame spread is no gap (compare.py's tie rule): auto "within 5%" means
 its time is at most 1.05 times the better one's or ties it, and "faster than both" means faster
@@ -25,10 +27,20 @@ from sweep_rows import own_options  # noqa: E402
 BAR = 1.05
 
 
+# How auto chose (its auto-choice option) -> the series name its rows get; predict is the default.
+AUTO_SERIES = {"predict": "auto", "measure": "auto-measure"}
+AUTO_TITLES = {"auto": "by prediction (`--auto-choice predict`, the default)",
+               "auto-measure": "by trial frames (`--auto-choice measure`)"}
+
+
 def design(r):
-    """mega-tree, mega-weighted, wave, queue, persist, auto: the series a row belongs to."""
+    """mega-tree, mega-weighted, wave, queue, persist, auto, auto-measure: the series a row
+    belongs to."""
     if r["pipeline"] == "mega":
         return "mega-" + own_options(r).get("layout", "tree")
+    if r["pipeline"] == "auto":
+        choice = own_options(r).get("auto-choice", "predict")
+        return AUTO_SERIES.get(choice, "auto-" + choice)
     return r["pipeline"]
 
 
@@ -45,17 +57,17 @@ def load(paths):
     return cells
 
 
-def evaluate(cells):
-    """[(scene, row dict, auto, best, ratio, within, faster)] for scenes where auto, the queue and
-    a megakernel ran."""
+def evaluate(cells, auto="auto"):
+    """[(scene, row dict, auto, best, ratio, within, faster)] for scenes where the auto series
+    `auto`, the queue and a megakernel ran."""
     out = []
     for scene, d in cells.items():
         megas = [d[k] for k in ("mega-weighted", "mega-tree") if k in d]
-        if "auto" not in d or "queue" not in d or not megas:
+        if auto not in d or "queue" not in d or not megas:
             continue
         mega = min(megas, key=lambda r: r["device_ms"])
         best = min((mega, d["queue"]), key=lambda r: r["device_ms"])
-        a = d["auto"]
+        a = d[auto]
         ratio = a["device_ms"] / best["device_ms"]
         within = ratio <= BAR or tied(a, best)
         faster = all(a["device_ms"] < r["device_ms"] and not tied(a, r) for r in (mega, d["queue"]))
@@ -63,11 +75,12 @@ def evaluate(cells):
     return out
 
 
-def table(results):
+def table(results, auto="auto", heading="#"):
     cols = ["mega-weighted", "mega-tree", "wave", "queue", "persist"]
     first = results[0][2] if results else {}
     commits = sorted({r.get("commit", "?")[:12] for _, d, *_ in results for r in d.values()})
-    lines = [f"# `--pipeline auto` against the designs it chooses from",
+    lines = [f"{heading} `--pipeline auto` {AUTO_TITLES.get(auto, auto)} against the designs it "
+             "chooses from",
              "",
              f"{first.get('device', '?')}, driver {first.get('driver', '?')}, "
              f"commit{'s' if len(commits) > 1 else ''} {', '.join(f'`{c}`' for c in commits)}; "
@@ -76,7 +89,7 @@ def table(results):
              f"{first.get('warmup')} warm-up frames. Ratio: auto over the better of the megakernel "
              f"(either layout) and the queue; *tie* where the gap is inside the frame spread.",
              "",
-             "| scene | auto | " + " | ".join(cols) + " | ratio | auto chose | busy lanes |",
+             "| scene | auto | " + " | ".join(cols) + " | ratio | auto chose | busy lanes predicted |",
              "|" + "---|" * (len(cols) + 5)]
     for scene, d, a, best, ratio, within, faster in sorted(results):
         x = a.get("extras") or {}
@@ -87,7 +100,7 @@ def table(results):
         lanes = x.get("auto_busy_lanes")
         lines.append(f"| `{scene}` | {a['device_ms']:.3f} | " + " | ".join(cells) +
                      f" | {verdict} | {x.get('auto_design', '?')} | "
-                     f"{'' if lanes is None else f'{lanes:.1f}'} |")
+                     f"{'—' if lanes is None else f'{lanes:.1f}'} |")
     n = len(results)
     over = [s for s, *_, w, f in results if not w]
     faster = [s for s, *_, f in results if f]
@@ -105,7 +118,14 @@ def main():
     ap.add_argument("rows", nargs="+", help="sweep rows (rows.jsonl) of bench/sweeps/auto")
     ap.add_argument("--out", help="write the Markdown table here (default: stdout)")
     args = ap.parse_args()
-    text = table(evaluate(load(args.rows)))
+    cells = load(args.rows)
+    present = [a for a in AUTO_SERIES.values() if any(a in d for d in cells.values())]
+    present += sorted({k for d in cells.values() for k in d
+                       if k.startswith("auto") and k not in present})
+    several = len(present) > 1
+    text = "\n".join(table(evaluate(cells, a), a, "##" if several else "#") for a in present)
+    if several:
+        text = "# `--pipeline auto` against the designs it chooses from\n\n" + text
     if args.out:
         with open(args.out, "w") as f:
             f.write(text)

@@ -9,11 +9,13 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."
 import auto_eval  # noqa: E402
 
 
-def row(scene, pipeline, ms, spread=0.01, layout=None, design=None):
+def row(scene, pipeline, ms, spread=0.01, layout=None, design=None, choice=None):
     r = {"scene": scene, "pipeline": pipeline, "status": "ok", "device_ms": ms,
          "device_ms_min": ms - spread / 2, "device_ms_max": ms + spread / 2, "commit": "abc"}
     if layout:
         r["options"] = {"layout": layout}
+    if choice:
+        r["options"] = {"auto-choice": choice}
     if design:
         r["extras"] = {"auto_design": design, "auto_busy_lanes": 20.0}
     return r
@@ -58,6 +60,23 @@ class AutoEval(unittest.TestCase):
         self.assertEqual(best["options"]["layout"], "weighted")
         self.assertAlmostEqual(ratio, 1.5)
         self.assertFalse(within)
+
+    def test_auto_by_prediction_and_by_trial_frames_are_scored_apart(self):
+        # One sweep runs auto both ways (bench/sweeps/auto); the trial-frame rows come last and
+        # must not stand in for the predicted ones.
+        rows = [row("a", "mega", 1.0, layout="weighted"), row("a", "queue", 2.0),
+                row("a", "auto", 1.5, design="queue", choice="predict"),
+                row("a", "auto", 1.0, design="mega-weighted", choice="measure")]
+        cells = self.cells(rows)
+        self.assertEqual(sorted(cells["a"]), ["auto", "auto-measure", "mega-weighted", "queue"])
+        (_, _, _, _, predicted, within, _), = auto_eval.evaluate(cells)
+        self.assertAlmostEqual(predicted, 1.5)
+        self.assertFalse(within)
+        (_, _, _, _, measured, within, _), = auto_eval.evaluate(cells, "auto-measure")
+        self.assertAlmostEqual(measured, 1.0)
+        self.assertTrue(within)
+        self.assertIn("by trial frames", auto_eval.table(auto_eval.evaluate(cells, "auto-measure"),
+                                                          "auto-measure"))
 
 
 if __name__ == "__main__":
