@@ -208,6 +208,29 @@ class ReadmeTest(unittest.TestCase):
                 self.assertIn("not a sweep JSON", done.stderr)
                 self.assertNotIn("Traceback", done.stderr)
 
+    def test_a_hand_written_about_file_titles_the_readme_and_survives_regeneration(self):
+        with tempfile.TemporaryDirectory(prefix="rtlab-test-charts-") as tmp:
+            path = self.write_set(tmp)
+            folder = os.path.dirname(path)
+            readme = os.path.join(folder, "README.md")
+            self.run_readme(path)
+            with open(readme) as f:
+                plain = f.read()
+            self.assertTrue(plain.startswith("# Results: "), plain[:80])
+            self.assertNotIn("ABOUT.md", plain)
+            with open(os.path.join(folder, "ABOUT.md"), "w") as f:
+                f.write("# Results: the rest of a split set\n\nMeasured apart because of X.\n")
+            for _ in range(2):  # a second run neither loses nor repeats it
+                self.run_readme(path)
+                with open(readme) as f:
+                    text = f.read()
+                self.assertTrue(text.startswith("# Results: the rest of a split set\n"))
+                self.assertEqual(text.count("Measured apart because of X."), 1)
+                self.assertIn("[`ABOUT.md`](ABOUT.md)", text)
+                # The context sits under the header table, before the first section.
+                self.assertLess(text.index("| Device |"), text.index("Measured apart"))
+                self.assertLess(text.index("Measured apart"), text.index("## Which pipeline"))
+
     def test_every_pipeline_has_a_column(self):
         with tempfile.TemporaryDirectory(prefix="rtlab-test-charts-") as tmp:
             path = self.write_set(tmp)
