@@ -105,7 +105,7 @@ void Renderer::animate() {
         config_.fixedStep > 0
             ? double(rendered_) * config_.fixedStep
             : std::chrono::duration<double>(std::chrono::steady_clock::now() - started_).count();
-    int s = freeSlot();  // a new address, so the pipelines upload the moved object
+    int s = freeSlot();  // another Scene object (SceneId), so the pipelines upload the moved one
     if (slotLoad_[size_t(s)] != slotLoad_[size_t(current_)]) {
         slots_[size_t(s)] = slots_[size_t(current_)];
         slotLoad_[size_t(s)] = slotLoad_[size_t(current_)];

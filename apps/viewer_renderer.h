@@ -7,12 +7,13 @@
 // --accel none on a CPU device) shows row by row, and a new request from the window abandons
 // it between two pieces and starts over. Pipelines without row windows render a frame whole.
 //
-// Buffers: each Pipeline keeps its device buffers while the scene address and the frame size stay
-// the same, so a still frame only changes the camera (kernel settings) and queues kernels. The
-// pipelines have no call yet to update objects in place, and know a scene only by its address; so
-// the renderer never changes a scene a pipeline may hold a device copy of. A reload or an animation
-// step writes a different slot (a scene at another fixed address), which the pipelines then upload,
-// while their image and ray-tree buffers stay.
+// Buffers: each Pipeline keeps its device buffers while the scene object (its SceneId) and the
+// frame size stay the same, so a still frame only changes the camera (kernel settings) and queues
+// kernels. The pipelines have no call yet to update objects in place, and know a scene only by
+// its SceneId, which an object keeps while it is changed in place; so the renderer never changes
+// a scene a pipeline may hold a device copy of. A reload or an animation step writes a different
+// slot (another Scene object), which the pipelines then upload, while their image and ray-tree
+// buffers stay.
 #pragma once
 
 #include <array>
@@ -144,12 +145,12 @@ class Renderer {
 
     // Render-thread state. slotLoad_ says which load a slot's content comes from (0 = empty).
     // Two slots per pipeline (held_), the current and the backup, so one is always free; sized
-    // once, so that a slot's address stays put.
+    // once, so that a slot stays one object.
     std::vector<Scene> slots_;
     std::vector<uint64_t> slotLoad_;
     uint64_t loads_ = 0;
     int current_ = 0;
-    // A pipeline and the slots whose address its device scene may carry: the one it rendered
+    // A pipeline and the slots whose SceneId its device scene may carry: the one it rendered
     // last, plus the one it failed on (a failure may or may not have replaced its copy).
     struct Held {
         std::string name;

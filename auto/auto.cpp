@@ -61,11 +61,11 @@ std::string format(const char* fmt, double a, double b = 0) {
     return buf;
 }
 
-// What a decision depends on: the scene (by address, as DeviceScene keeps it) and every setting
+// What a decision depends on: the scene (by its SceneId, as DeviceScene keeps it) and every setting
 // but the row window, the launch cap and ray counting, which change how a frame is cut or
 // counted, not which design is fastest for it.
 struct DecisionKey {
-    const Scene* scene = nullptr;
+    uint64_t scene = 0;
     int width = 0, height = 0, bounces = 0, shadowSamples = 0, aa = 0;
     bool adaptive = false, robustSphere = false, watertight = false;
     RenderOptions::Offset offset{};
@@ -76,7 +76,7 @@ struct DecisionKey {
 
     DecisionKey() = default;
     DecisionKey(const Scene& s, const RenderOptions& o)
-        : scene(&s),
+        : scene(s.id.value()),
           width(o.width),
           height(o.height),
           bounces(o.bounces),

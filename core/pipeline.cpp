@@ -173,7 +173,7 @@ static cl::Buffer upload(ClContext& cl, const std::vector<T>& v, const char* wha
 }
 
 DeviceScene::DeviceScene(ClContext& cl, const Scene& scene, RenderOptions::Accel a)
-    : cl_(cl), source_(&scene), accel_(a) {
+    : cl_(cl), source_(scene.id.value()), accel_(a) {
     AccelData accel = buildAccel(scene, a);
     stats_ = accel.stats;
     grid_ = accel.grid;

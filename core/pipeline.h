@@ -135,17 +135,17 @@ class DeviceScene {
     // The counters themselves (RT_RAY_TYPES ray counters, then the warp counters), for a kernel
     // that adds to them outside RT_SCENE_PARAMS.
     const cl::Buffer& rayCountBuffer() const { return rayCounts_; }
-    // True when this copy was made from `scene` with `accel` (by address: scenes are not mutated
-    // while a pipeline holds them, except the camera, which travels in the settings).
+    // True when this copy was made from `scene` with `accel` (by its SceneId: scenes are not
+    // mutated while a pipeline holds them, except the camera, which travels in the settings).
     bool matches(const Scene& scene, RenderOptions::Accel accel) const {
-        return source_ == &scene && accel_ == accel;
+        return source_ == scene.id.value() && accel_ == accel;
     }
     // Which structure was built, in how long, and how large it is (for FrameStats::accel).
     const AccelStats& accelStats() const { return stats_; }
 
   private:
     ClContext& cl_;
-    const Scene* source_;
+    uint64_t source_;  // the Scene's id (SceneId), not its address, which a later scene may reuse
     RenderOptions::Accel accel_;
     AccelStats stats_;
     dev::Grid grid_{};

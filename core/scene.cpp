@@ -1,6 +1,13 @@
 #include "core/scene.h"
 
+#include <atomic>
+
 namespace rt {
+
+uint64_t SceneId::next() {
+    static std::atomic<uint64_t> counter{0};
+    return ++counter;
+}
 
 int Scene::branching() const {
     for (const dev::Material& m : materials)

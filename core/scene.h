@@ -58,7 +58,26 @@ struct Environment {
     std::vector<float> cubemap;
 };
 
+// Which Scene object a device copy of a scene or a cached decision was made from. Every Scene
+// takes a new number when it is made, copied or assigned, so a scene loaded where an earlier one
+// lay in memory is not taken for it: an address can be reused, a number is not.
+class SceneId {
+  public:
+    SceneId() : value_(next()) {}
+    SceneId(const SceneId&) : value_(next()) {}
+    SceneId& operator=(const SceneId&) {
+        value_ = next();
+        return *this;
+    }
+    uint64_t value() const { return value_; }
+
+  private:
+    static uint64_t next();
+    uint64_t value_;
+};
+
 struct Scene {
+    SceneId id;                    // this object, for caches of what was made from it
     std::string name;              // file stem
     std::filesystem::path source;  // file it came from (for messages)
     dev::Camera camera{};

@@ -22,6 +22,7 @@
 #include "image/image_io.h"
 #include "megakernel/megakernel_options.h"
 #include "test_device.h"
+#include "test_images.h"
 
 namespace rt {
 namespace {
@@ -102,6 +103,27 @@ TEST(Registry, EveryDevicePipelineRendersTheSameImage) {
         const ImageDiff d = compareImages(other, first, 1e-5, false);
         EXPECT_TRUE(d.allWithin()) << names[i] << " differs from " << names[0] << " by up to "
                                    << d.maxAbs << " (" << d.nonfinite << " non-finite pixels)";
+    }
+}
+
+// A pipeline keeps the device copy of the last scene it rendered. A scene loaded into the same
+// storage as the one before (a variable assigned, a loop's local) must not be taken for it, as
+// it was when the copy was matched by address: every pipeline, auto's cached decision included,
+// renders the second scene as a fresh pipeline does.
+TEST(Registry, ASceneLoadedWhereAnotherLayIsNotTakenForIt) {
+    Scene scene = loadScene("scenes/spheres.json", readImage);
+    RenderOptions o = scene.defaults;
+    o.width = 24;
+    o.height = 16;
+    o.bounces = 2;
+    for (const std::string& name : pipelineRegistry().names(true)) {
+        std::unique_ptr<Pipeline> reused = makePipeline(name, &test::device());
+        reused->render(scene, o);
+        scene = loadScene("scenes/envmap.json", readImage);  // same object, new contents
+        const Image second = reused->render(scene, o);
+        const Image fresh = makePipeline(name, &test::device())->render(scene, o);
+        EXPECT_TRUE(test::sameBits(second, fresh)) << name;
+        scene = loadScene("scenes/spheres.json", readImage);
     }
 }
 
