@@ -70,6 +70,7 @@ inline bool Persistent_Refill(bool idle, int refill, uint* wanting) {
 inline int Persistent_TakeTogether(global int* next, uint wanting) { return atomic_inc(next); }
 #endif
 
+#ifndef RT_PERSIST_REGROUP
 // Pixels [first, first + count) of the frame; *next counts the ones taken (zeroed by the host
 // before each launch). `refill`: RT_WARP_PTX only, the idle lanes a warp waits for.
 kernel void Persistent_Render(RT_SCENE_PARAMS, global float* image, global int* next, int first,
@@ -108,3 +109,128 @@ kernel void Persistent_Render(RT_SCENE_PARAMS, global float* image, global int* 
         color += Megakernel_TraceNext(&sc, stack, &top, xy.x, xy.y, sample);
     }
 }
+#else
+// The regrouped form (--persistent-regroup pattern; RT_PERSIST_REGROUP is the work-group size):
+// the loop above, with each step cut in two at the hit. Every lane traces its own ray; then the
+// work-group sorts the hits by procedural pattern in local memory (a miss and an idle lane are
+// two more keys), and lane i shades the i-th hit of that order, whoever's it is, so that the
+// lanes of a warp run one pattern's code together instead of one after the other (a software
+// form of shader execution reordering). The owner takes back the result and sums and pushes it
+// exactly as Megakernel_TraceNext does: a pixel's terms arrive in the same order and each is
+// computed by the same code from the same bits, so the image stays the weighted megakernel's.
+// Each lane takes a pixel as soon as it has none (`refill` does not apply).
+#define RG_LANES RT_PERSIST_REGROUP
+#define RG_MISS (RT_PATTERN_BUMP + 1)  // the key of a ray that left the scene
+#define RG_IDLE (RG_MISS + 1)          // the key of a lane without a ray this step
+#define RG_KEYS (RG_IDLE + 1)
+
+typedef struct RegroupHit {
+    Node node;
+    Pending p;
+} RegroupHit;
+
+typedef struct RegroupShade {
+    float3 term;
+    Pending refl, refr;
+    int children;  // bit 0: refl, bit 1: refr
+} RegroupShade;
+
+kernel void Persistent_RenderRegrouped(RT_SCENE_PARAMS, global float* image, global int* next,
+                                       int first, int count, int refill) {
+    RT_SCENE_INIT(sc);
+    local RegroupHit hits[RG_LANES];
+    local RegroupShade shaded[RG_LANES];
+    local int keys[RG_KEYS];
+    local int anyRay;
+    const int lane = (int)get_local_id(0);
+    const int samples = settings.aaSamples * settings.aaSamples;
+    RT_STACK_RECORD stack[RT_STACK_SIZE];
+    int top = 0, pixel = -1, sample = 0;
+    bool drained = false;  // the counter has no pixel left for this lane
+    int2 xy = (int2)(0, 0);
+    float3 color = (float3)(0.0f, 0.0f, 0.0f);
+    float3 acc = color;
+    for (;;) {
+        if (top == 0 && pixel >= 0) {  // the current sample's tree is done
+            acc = sample == 0 ? color : acc + color;
+            if (++sample == samples) {
+                Megakernel_Store(image, pixel * 3, acc / (float)samples);
+                pixel = -1;
+            } else {
+                stack[top++] = RT_STACK_PUSH(PathState_Primary(&sc, xy.x, xy.y, sample));
+                color = (float3)(0.0f, 0.0f, 0.0f);
+            }
+        }
+        if (pixel < 0 && !drained) {
+            const int k = atomic_inc(next);
+            if (k >= count) {
+                drained = true;
+            } else {
+                xy = Persistent_PixelOf(k, first, count, settings.width);
+                pixel = xy.y * settings.width + xy.x;
+                sample = 0;
+                stack[top++] = RT_STACK_PUSH(PathState_Primary(&sc, xy.x, xy.y, 0));
+                color = (float3)(0.0f, 0.0f, 0.0f);
+            }
+        }
+        // The whole work-group leaves together, once none of its lanes holds a ray: every
+        // lane must reach every barrier below.
+        if (lane == 0) anyRay = 0;
+        if (lane < RG_KEYS) keys[lane] = 0;
+        barrier(CLK_LOCAL_MEM_FENCE);
+        if (pixel >= 0) anyRay = 1;
+        barrier(CLK_LOCAL_MEM_FENCE);
+        if (anyRay == 0) break;
+
+        // Trace this lane's ray and file the hit under its key.
+        Pending p;
+        Node node;
+        int key = RG_IDLE;
+        if (pixel >= 0) {
+            RT_COUNT_WARP_STEP(&sc);  // the lanes that trace a ray this step
+            p = RT_STACK_POP(stack[--top]);
+            node = RayTree_TraceNode(&sc, p.ray, p.type,
+                                     Sampling_PointKey(xy.x, xy.y, sample, p.depth));
+            key = node.kind == RT_KIND_MISS ? RG_MISS : sc.materials[node.material].pattern;
+        }
+        const int rank = atomic_inc(&keys[key]);
+        barrier(CLK_LOCAL_MEM_FENCE);
+        int slot = rank, busy = 0;
+        for (int k = 0; k < RG_IDLE; ++k) {
+            if (k < key) slot += keys[k];
+            busy += keys[k];
+        }
+        if (pixel >= 0) {
+            hits[slot].node = node;
+            hits[slot].p = p;
+        }
+        barrier(CLK_LOCAL_MEM_FENCE);
+
+        // Shade the lane-th hit of the sorted order.
+        if (lane < busy) {
+            const Node n = hits[lane].node;
+            const Pending q = hits[lane].p;
+            RegroupShade s;
+            s.children = 0;
+            if (n.kind == RT_KIND_MISS) {
+                s.term = PathState_Miss(&sc, &q);
+            } else {
+                bool hasRefl, hasRefr;
+                s.term = PathState_Step(&sc, &n, &q, true, true, RT_PATTERN_ANY, &s.refl, &hasRefl,
+                                        &s.refr, &hasRefr);
+                s.children = (hasRefl ? 1 : 0) | (hasRefr ? 2 : 0);
+            }
+            shaded[lane] = s;
+        }
+        barrier(CLK_LOCAL_MEM_FENCE);
+
+        // Take back this lane's own result, in Megakernel_TraceNext's order.
+        if (pixel >= 0) {
+            const RegroupShade s = shaded[slot];
+            color += s.term;
+            if (s.children & 2) stack[top++] = RT_STACK_PUSH(s.refr);
+            if (s.children & 1) stack[top++] = RT_STACK_PUSH(s.refl);
+        }
+    }
+}
+#endif

@@ -47,6 +47,25 @@ const PipelineOption& refillOption() {
     return o;
 }
 
+// Whether a work-group sorts its hits by procedural pattern before shading them
+// (persistent.cl, Persistent_RenderRegrouped).
+const PipelineOption& regroupOption() {
+    static const PipelineOption o{
+        .name = "persistent-regroup",
+        .type = PipelineOption::Type::Choice,
+        .help =
+            "Persistent megakernel: off, or pattern: each step, a work-group sorts its hits by "
+            "procedural pattern in local memory and each lane shades the next hit of that "
+            "order, so that a warp runs one pattern's code at a time; same image [off]",
+        .defaultValue = "off",
+        .choices = {"off", "pattern"},
+        .sweepKey = "persistent-regroup",
+        .cellTag = "O",
+        .label = "regroup by {}",
+    };
+    return o;
+}
+
 }  // namespace
 
 size_t PersistentPipeline::workItems(const DeviceInfo& device, const RenderOptions& o,
@@ -66,10 +85,16 @@ Image PersistentPipeline::renderFrame(const Scene& scene, const RenderOptions& o
     setMegaLayout(weighted, MegaLayout::Weighted);
     const std::vector<std::string> defines = MegakernelPipeline::defines(scene, weighted);
     stats_.privateBytes = MegakernelPipeline::privateBytes(scene, weighted);
-    // On NVIDIA the warp's lanes vote and take pixels together (inline PTX, RT_WARP_PTX).
-    const cl::Program program = rayLoopProgram("persistent.cl", defines, {}, o, {"RT_WARP_PTX"});
-    DeviceScene& deviceScene = this->deviceScene(scene, o.accel);
     const DeviceInfo& dev = cl_.device();
+    const size_t local = dev.isGpu() ? 128 : 64;
+    // Regrouped: the work-group's local arrays are sized by its work-items.
+    const bool regroup = regroupOption().index(o.pipelineOptions) == 1;
+    std::vector<std::string> programDefines = defines;
+    if (regroup) programDefines.push_back("RT_PERSIST_REGROUP=" + std::to_string(local));
+    // On NVIDIA the warp's lanes vote and take pixels together (inline PTX, RT_WARP_PTX).
+    const cl::Program program =
+        rayLoopProgram("persistent.cl", programDefines, {}, o, {"RT_WARP_PTX"});
+    DeviceScene& deviceScene = this->deviceScene(scene, o.accel);
     const size_t bytes = size_t(o.width) * o.height * 3 * sizeof(float);
     try {
         image_.ensure(cl_, bytes, "the image buffer");
@@ -79,15 +104,14 @@ Image PersistentPipeline::renderFrame(const Scene& scene, const RenderOptions& o
     }
     stats_.addBuffer("image", bytes);
 
-    Kernel kernel(program, "Persistent_Render");
+    Kernel kernel(program, regroup ? "Persistent_RenderRegrouped" : "Persistent_Render");
     kernel.set("image", image_.get()).set("next", next_.get());
     kernel.set("refill", cl_int(refillOption().integer(o.pipelineOptions)));
-    const size_t local = dev.isGpu() ? 128 : 64;
     const size_t most = workItems(dev, o, local);
     dev::RenderSettings settings = makeSettings(scene, o);
     deviceScene.setArgs(kernel, settings);
     std::string key = std::to_string(o.width) + "x" + std::to_string(o.height);
-    for (const std::string& d : defines) key += " " + d;
+    for (const std::string& d : programDefines) key += " " + d;
     key += " b" + std::to_string(o.bounces) + " g" + std::to_string(most);
     const int first = o.rowBegin, last = o.lastRow();
     if (first != 0 || last != o.height)
@@ -138,9 +162,9 @@ void registerPersistentMegakernel(PipelineRegistry& registry) {
     p.description =
         "the weighted megakernel with persistent threads: a device-filling launch whose "
         "work-items take pixels from a global counter as their ray trees end "
-        "(--persistent-groups N, --persistent-refill N)";
+        "(--persistent-groups N, --persistent-refill N, --persistent-regroup pattern)";
     p.supports = {.adaptiveAa = false, .tiling = false, .rowWindow = true};
-    p.options = {groupsOption(), refillOption()};
+    p.options = {groupsOption(), refillOption(), regroupOption()};
     p.make = [](ClContext* cl) { return std::make_unique<PersistentPipeline>(*cl); };
     registry.add(std::move(p));
 }

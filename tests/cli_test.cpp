@@ -117,6 +117,9 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{
             "render scenes/spheres.json --pipeline persist --persistent-refill 33 -o /tmp/x.png",
             "--persistent-refill 33: must be in 1..32"},
+        BadCase{"render scenes/spheres.json --pipeline persist --persistent-regroup material "
+                "-o /tmp/x.png",
+                "--persistent-regroup material: must be off or pattern"},
         BadCase{"render scenes/spheres.json --pipeline queue --pool 8 --bounces 6 -o /tmp/x.png",
                 "use --pool 64 or more"},
         BadCase{"render scenes/spheres.json --pipeline queue --queue-launch sideways -o /tmp/x.png",

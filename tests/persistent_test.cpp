@@ -32,7 +32,8 @@ RenderOptions weighted(const Scene& scene, int bounces, int aa) {
 }
 
 // Sets the persistent megakernel's option `name` (a flag name without its dashes).
-void setOption(RenderOptions& o, const std::string& name, long long value) {
+template <typename Value>
+void setOption(RenderOptions& o, const std::string& name, Value value) {
     for (const PipelineOption& option : pipelineInfo("persist").options)
         if (option.name == name) return option.set(o.pipelineOptions, value);
     FAIL() << "persist has no option " << name;
@@ -90,6 +91,28 @@ TEST(Persistent, CutTilesAndEveryRefillKeepTheBits) {
     for (long long refill : {1, 7, 32}) {
         setOption(o, "persistent-refill", refill);
         EXPECT_TRUE(sameBits(m, persist.render(scene, o))) << "refill " << refill;
+    }
+}
+
+// Regrouped, a lane shades other lanes' hits: the divergence scene mixes procedural patterns,
+// mirrors and glass, so most steps move hits between lanes. Each pixel's terms still arrive in
+// its own order, so the bits and the counted rays stay the weighted megakernel's.
+TEST(Persistent, RegroupedByPatternKeepsTheBitsAndTheRays) {
+    MegakernelPipeline mega(test::device());
+    PersistentPipeline persist(test::device());
+    for (const char* name : {"divergence", "spheres", "envmap"}) {
+        Scene scene = load(name);
+        RenderOptions o = weighted(scene, 4, 2);
+        o.width = 37;
+        o.height = 23;
+        o.countRays = true;
+        const Image m = mega.render(scene, o);
+        setOption(o, "persistent-regroup", std::string("pattern"));
+        EXPECT_TRUE(sameBits(m, persist.render(scene, o))) << name;
+        ASSERT_TRUE(persist.stats().raysCounted);
+        EXPECT_EQ(persist.stats().rays, mega.stats().rays) << name;
+        setGroups(o, 1);  // one work-group a compute unit: many pixels a lane, groups leave late
+        EXPECT_TRUE(sameBits(m, persist.render(scene, o))) << name << " 1 group";
     }
 }
 
