@@ -70,6 +70,39 @@ inline bool Persistent_Refill(bool idle, int refill, uint* wanting) {
 inline int Persistent_TakeTogether(global int* next, uint wanting) { return atomic_inc(next); }
 #endif
 
+// A lane's pixel: which one (-1: none), its AA sample, the current sample's sum and the sum of
+// its finished samples. The stack of pending rays and its top stay apart, in private arrays.
+typedef struct PersistentLane {
+    int pixel, sample;
+    int2 xy;
+    float3 color, acc;
+} PersistentLane;
+
+// Starts the lane on pixel k of the launch's pixels: its first sample's primary ray.
+inline void Persistent_Begin(const SceneData* sc, PersistentLane* l, RT_STACK_RECORD* stack,
+                             int* top, int k, int first, int count) {
+    l->xy = Persistent_PixelOf(k, first, count, sc->settings.width);
+    l->pixel = l->xy.y * sc->settings.width + l->xy.x;
+    l->sample = 0;
+    stack[(*top)++] = RT_STACK_PUSH(PathState_Primary(sc, l->xy.x, l->xy.y, 0));
+    l->color = (float3)(0.0f, 0.0f, 0.0f);
+}
+
+// Once the current sample's tree is done: adds the sample to the pixel's sum and starts the
+// next sample, or stores the pixel's mean and frees the lane.
+inline void Persistent_EndOfTree(const SceneData* sc, global float* image, PersistentLane* l,
+                                 RT_STACK_RECORD* stack, int* top, int samples) {
+    if (*top != 0 || l->pixel < 0) return;
+    l->acc = l->sample == 0 ? l->color : l->acc + l->color;
+    if (++l->sample == samples) {
+        Megakernel_Store(image, l->pixel * 3, l->acc / (float)samples);
+        l->pixel = -1;
+    } else {
+        stack[(*top)++] = RT_STACK_PUSH(PathState_Primary(sc, l->xy.x, l->xy.y, l->sample));
+        l->color = (float3)(0.0f, 0.0f, 0.0f);
+    }
+}
+
 #ifndef RT_PERSIST_REGROUP
 // Pixels [first, first + count) of the frame; *next counts the ones taken (zeroed by the host
 // before each launch). `refill`: RT_WARP_PTX only, the idle lanes a warp waits for.
@@ -78,35 +111,21 @@ kernel void Persistent_Render(RT_SCENE_PARAMS, global float* image, global int* 
     RT_SCENE_INIT(sc);
     const int samples = settings.aaSamples * settings.aaSamples;
     RT_STACK_RECORD stack[RT_STACK_SIZE];
-    int top = 0, pixel = -1, sample = 0;
-    int2 xy = (int2)(0, 0);
-    float3 color = (float3)(0.0f, 0.0f, 0.0f);  // the current sample's sum
-    float3 acc = color;                         // the pixel's sum over its finished samples
+    int top = 0;
+    PersistentLane l;
+    l.pixel = -1;
     for (;;) {
-        if (top == 0 && pixel >= 0) {  // the current sample's tree is done
-            acc = sample == 0 ? color : acc + color;
-            if (++sample == samples) {
-                Megakernel_Store(image, pixel * 3, acc / (float)samples);
-                pixel = -1;
-            } else {
-                stack[top++] = RT_STACK_PUSH(PathState_Primary(&sc, xy.x, xy.y, sample));
-                color = (float3)(0.0f, 0.0f, 0.0f);
-            }
-        }
+        Persistent_EndOfTree(&sc, image, &l, stack, &top, samples);
         uint wanting;
-        const bool refillNow = Persistent_Refill(pixel < 0, refill, &wanting);
-        if (pixel < 0 && refillNow) {
+        const bool refillNow = Persistent_Refill(l.pixel < 0, refill, &wanting);
+        if (l.pixel < 0 && refillNow) {
             const int k = Persistent_TakeTogether(next, wanting);
             if (k >= count) return;
-            xy = Persistent_PixelOf(k, first, count, settings.width);
-            pixel = xy.y * settings.width + xy.x;
-            sample = 0;
-            stack[top++] = RT_STACK_PUSH(PathState_Primary(&sc, xy.x, xy.y, 0));
-            color = (float3)(0.0f, 0.0f, 0.0f);
+            Persistent_Begin(&sc, &l, stack, &top, k, first, count);
         }
-        if (pixel < 0) continue;  // waiting for the warp's refill
-        RT_COUNT_WARP_STEP(&sc);  // the lanes that trace a ray this step
-        color += Megakernel_TraceNext(&sc, stack, &top, xy.x, xy.y, sample);
+        if (l.pixel < 0) continue;  // waiting for the warp's refill
+        RT_COUNT_WARP_STEP(&sc);    // the lanes that trace a ray this step
+        l.color += Megakernel_TraceNext(&sc, stack, &top, l.xy.x, l.xy.y, l.sample);
     }
 }
 #else
@@ -145,40 +164,25 @@ kernel void Persistent_RenderRegrouped(RT_SCENE_PARAMS, global float* image, glo
     const int lane = (int)get_local_id(0);
     const int samples = settings.aaSamples * settings.aaSamples;
     RT_STACK_RECORD stack[RT_STACK_SIZE];
-    int top = 0, pixel = -1, sample = 0;
+    int top = 0;
+    PersistentLane l;
+    l.pixel = -1;
     bool drained = false;  // the counter has no pixel left for this lane
-    int2 xy = (int2)(0, 0);
-    float3 color = (float3)(0.0f, 0.0f, 0.0f);
-    float3 acc = color;
     for (;;) {
-        if (top == 0 && pixel >= 0) {  // the current sample's tree is done
-            acc = sample == 0 ? color : acc + color;
-            if (++sample == samples) {
-                Megakernel_Store(image, pixel * 3, acc / (float)samples);
-                pixel = -1;
-            } else {
-                stack[top++] = RT_STACK_PUSH(PathState_Primary(&sc, xy.x, xy.y, sample));
-                color = (float3)(0.0f, 0.0f, 0.0f);
-            }
-        }
-        if (pixel < 0 && !drained) {
+        Persistent_EndOfTree(&sc, image, &l, stack, &top, samples);
+        if (l.pixel < 0 && !drained) {
             const int k = atomic_inc(next);
-            if (k >= count) {
+            if (k >= count)
                 drained = true;
-            } else {
-                xy = Persistent_PixelOf(k, first, count, settings.width);
-                pixel = xy.y * settings.width + xy.x;
-                sample = 0;
-                stack[top++] = RT_STACK_PUSH(PathState_Primary(&sc, xy.x, xy.y, 0));
-                color = (float3)(0.0f, 0.0f, 0.0f);
-            }
+            else
+                Persistent_Begin(&sc, &l, stack, &top, k, first, count);
         }
         // The whole work-group leaves together, once none of its lanes holds a ray: every
         // lane must reach every barrier below.
         if (lane == 0) anyRay = 0;
         if (lane < RG_KEYS) keys[lane] = 0;
         barrier(CLK_LOCAL_MEM_FENCE);
-        if (pixel >= 0) anyRay = 1;
+        if (l.pixel >= 0) anyRay = 1;
         barrier(CLK_LOCAL_MEM_FENCE);
         if (anyRay == 0) break;
 
@@ -186,11 +190,11 @@ kernel void Persistent_RenderRegrouped(RT_SCENE_PARAMS, global float* image, glo
         Pending p;
         Node node;
         int key = RG_IDLE;
-        if (pixel >= 0) {
+        if (l.pixel >= 0) {
             RT_COUNT_WARP_STEP(&sc);  // the lanes that trace a ray this step
             p = RT_STACK_POP(stack[--top]);
             node = RayTree_TraceNode(&sc, p.ray, p.type,
-                                     Sampling_PointKey(xy.x, xy.y, sample, p.depth));
+                                     Sampling_PointKey(l.xy.x, l.xy.y, l.sample, p.depth));
             key = node.kind == RT_KIND_MISS ? RG_MISS : sc.materials[node.material].pattern;
         }
         const int rank = atomic_inc(&keys[key]);
@@ -200,7 +204,7 @@ kernel void Persistent_RenderRegrouped(RT_SCENE_PARAMS, global float* image, glo
             if (k < key) slot += keys[k];
             busy += keys[k];
         }
-        if (pixel >= 0) {
+        if (l.pixel >= 0) {
             hits[slot].node = node;
             hits[slot].p = p;
         }
@@ -225,9 +229,9 @@ kernel void Persistent_RenderRegrouped(RT_SCENE_PARAMS, global float* image, glo
         barrier(CLK_LOCAL_MEM_FENCE);
 
         // Take back this lane's own result, in Megakernel_TraceNext's order.
-        if (pixel >= 0) {
+        if (l.pixel >= 0) {
             const RegroupShade s = shaded[slot];
-            color += s.term;
+            l.color += s.term;
             if (s.children & 2) stack[top++] = RT_STACK_PUSH(s.refr);
             if (s.children & 1) stack[top++] = RT_STACK_PUSH(s.refl);
         }
