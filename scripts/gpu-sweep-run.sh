@@ -20,6 +20,10 @@ DEVICE=${RTLAB_GPU_DEVICE:-gpu}  # "cpu" rehearses the whole run on PoCL
 DEVICES=${RTLAB_GPU_DEVICES:-}  # "all" or "0,1": the sweep on several devices at once
 SHARD=${RTLAB_SHARD:-}          # "i/N": this machine's share of the sweep
 PREBUILD=${RTLAB_GPU_PREBUILD:-0}  # processes that build the programs before the timed run
+[[ $PREBUILD =~ ^[0-9]+$ ]] || {
+    echo "run.sh: RTLAB_GPU_PREBUILD '$PREBUILD': must be a whole number of processes" >&2
+    exit 2
+}
 GBENCH_S=${RTLAB_GPU_GBENCH_S:-60}  # time for the Google Benchmark cells at the end; 0 skips them
 export LD_LIBRARY_PATH=$C/bin${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}
 export RTLAB_CACHE_DIR=/tmp/rtlab-cache

@@ -111,10 +111,39 @@ class GpuBatch(unittest.TestCase):
         self.assertIn("alpha: skipped", run.stdout)
         self.assertNotIn("alpha/rows.jsonl", self.members())
 
+    def test_a_limit_that_is_not_a_number_is_one_line_and_exit_2(self):
+        for steps, env, named in ((["alpha:soon"], {}, "step alpha:"),
+                                  (["alpha"], {"RTLAB_BATCH_DEADLINE": "10m"},
+                                   "RTLAB_BATCH_DEADLINE '10m'")):
+            run = self.batch(*steps, **env)
+            self.assertEqual(run.returncode, 2, run.stdout + run.stderr)
+            self.assertEqual(len(run.stderr.strip().splitlines()), 1, run.stderr)
+            self.assertIn(named, run.stderr)
+            self.assertIn("must be a whole number of seconds", run.stderr)
+            self.assertFalse(os.path.exists(os.path.join(self.tmp, "w", "alpha")))  # nothing ran
+
     def test_no_steps_prints_the_usage_and_exits_2(self):
         run = self.batch()
         self.assertEqual(run.returncode, 2)
         self.assertIn("batch.sh [smoke[:SECONDS]] SWEEP[:SECONDS]", run.stdout)
+
+
+class GpuSweepRun(unittest.TestCase):
+    def test_a_prebuild_count_that_is_not_a_number_is_one_line_and_exit_2(self):
+        # scripts/gpu-sweep-run.sh, carried as run.sh beside a SWEEP file: it stops before it
+        # looks for a device or runs anything.
+        with tempfile.TemporaryDirectory(prefix="rtlab-gpu-run-") as tmp:
+            shutil.copy(os.path.join(ROOT, "scripts", "gpu-sweep-run.sh"),
+                        os.path.join(tmp, "run.sh"))
+            with open(os.path.join(tmp, "SWEEP"), "w") as f:
+                f.write("alpha\n")
+            run = subprocess.run(["bash", os.path.join(tmp, "run.sh")], capture_output=True,
+                                 text=True, env={**os.environ, "OUT": os.path.join(tmp, "out"),
+                                                 "RTLAB_GPU_PREBUILD": "many"})
+            self.assertEqual(run.returncode, 2, run.stdout + run.stderr)
+            self.assertEqual(run.stderr.strip(), "run.sh: RTLAB_GPU_PREBUILD 'many': must be a "
+                             "whole number of processes")
+            self.assertFalse(os.path.exists(os.path.join(tmp, "out", "log.txt")))
 
 
 if __name__ == "__main__":
