@@ -129,20 +129,42 @@ kernel void Persistent_Render(RT_SCENE_PARAMS, global float* image, global int* 
     }
 }
 #else
-// The regrouped form (--persistent-regroup pattern; RT_PERSIST_REGROUP is the work-group size):
-// the loop above, with each step cut in two at the hit. Every lane traces its own ray; then the
-// work-group sorts the hits by procedural pattern in local memory (a miss and an idle lane are
-// two more keys), and lane i shades the i-th hit of that order, whoever's it is, so that the
-// lanes of a warp run one pattern's code together instead of one after the other (a software
-// form of shader execution reordering). The owner takes back the result and sums and pushes it
-// exactly as Megakernel_TraceNext does: a pixel's terms arrive in the same order and each is
-// computed by the same code from the same bits, so the image stays the weighted megakernel's.
-// Each lane takes a pixel as soon as it has none (`refill` does not apply).
+// The regrouped form (--persistent-regroup pattern or material; RT_PERSIST_REGROUP is the
+// work-group size): the loop above, with each step cut in two at the hit. Every lane traces its
+// own ray; then the work-group sorts the hits by what shades them in local memory (a miss and an
+// idle lane are two more keys), and lane i shades the i-th hit of that order, whoever's it is,
+// so that the lanes of a warp run one shading path together instead of one after the other (a
+// software form of shader execution reordering). The owner takes back the result and sums and
+// pushes it exactly as Megakernel_TraceNext does: a pixel's terms arrive in the same order and
+// each is computed by the same code from the same bits, so the image stays the weighted
+// megakernel's. Each lane takes a pixel as soon as it has none (`refill` does not apply).
+//
+// The key is the procedural pattern; with RT_PERSIST_REGROUP_CLASS, a hit without one is keyed
+// by its material class too (plain, mirror, glass), as the queue wavefront's shade queues are.
 #define RG_LANES RT_PERSIST_REGROUP
-#define RG_MISS (RT_PATTERN_BUMP + 1)  // the key of a ray that left the scene
-#define RG_IDLE (RG_MISS + 1)          // the key of a lane without a ray this step
+#define RG_MIRROR (RT_PATTERN_BUMP + 1)  // no pattern, reflective
+#define RG_GLASS (RG_MIRROR + 1)         // no pattern, transparent
+#define RG_MISS (RG_GLASS + 1)           // a ray that left the scene
+#define RG_IDLE (RG_MISS + 1)            // a lane without a ray this step
 #define RG_KEYS (RG_IDLE + 1)
 
+// The sort key of a traced ray's hit.
+inline int Regroup_KeyOf(const SceneData* sc, const Node* node) {
+    if (node->kind == RT_KIND_MISS) return RG_MISS;
+    const global Material* m = &sc->materials[node->material];
+#ifdef RT_PERSIST_REGROUP_CLASS
+    if (m->pattern == RT_PATTERN_NONE) {
+        if (m->opacity < 1.0f) return RG_GLASS;
+        if (m->reflectance > 0.0f) return RG_MIRROR;
+    }
+#endif
+    return m->pattern;
+}
+
+// A lane's slot in local memory holds a hit to shade, then what shading it gave: lane i copies
+// slot i's hit into registers before it writes slot i's result, and no other lane touches slot i
+// between the two barriers, so one array serves both. kRegroupSlotBytes (persistent.cpp) is the
+// size of this union.
 typedef struct RegroupHit {
     Node node;
     Pending p;
@@ -154,13 +176,34 @@ typedef struct RegroupShade {
     int children;  // bit 0: refl, bit 1: refr
 } RegroupShade;
 
+typedef union RegroupSlot {
+    RegroupHit hit;
+    RegroupShade shade;
+} RegroupSlot;
+
+// Shades one traced ray: its term and the children it spawns.
+inline RegroupShade Regroup_Shade(const SceneData* sc, const Node* n, const Pending* q) {
+    RegroupShade s;
+    s.children = 0;
+    if (n->kind == RT_KIND_MISS) {
+        s.term = PathState_Miss(sc, q);
+    } else {
+        bool hasRefl, hasRefr;
+        s.term = PathState_Step(sc, n, q, true, true, RT_PATTERN_ANY, &s.refl, &hasRefl, &s.refr,
+                                &hasRefr);
+        s.children = (hasRefl ? 1 : 0) | (hasRefr ? 2 : 0);
+    }
+    return s;
+}
+
 kernel void Persistent_RenderRegrouped(RT_SCENE_PARAMS, global float* image, global int* next,
                                        int first, int count, int refill) {
     RT_SCENE_INIT(sc);
-    local RegroupHit hits[RG_LANES];
-    local RegroupShade shaded[RG_LANES];
-    local int keys[RG_KEYS];
-    local int anyRay;
+    local RegroupSlot slots[RG_LANES];
+    // Key counts, three sets in turn, so that a step needs no barrier before it counts: it
+    // zeroes the next step's set, last read two steps back, which every lane has left once it
+    // passed the last step's barriers.
+    local int keys[3][RG_KEYS];
     const int lane = (int)get_local_id(0);
     const int samples = settings.aaSamples * settings.aaSamples;
     RT_STACK_RECORD stack[RT_STACK_SIZE];
@@ -168,7 +211,9 @@ kernel void Persistent_RenderRegrouped(RT_SCENE_PARAMS, global float* image, glo
     PersistentLane l;
     l.pixel = -1;
     bool drained = false;  // the counter has no pixel left for this lane
-    for (;;) {
+    if (lane < RG_KEYS) keys[0][lane] = 0;
+    barrier(CLK_LOCAL_MEM_FENCE);
+    for (int step = 0;; step = step == 2 ? 0 : step + 1) {
         Persistent_EndOfTree(&sc, image, &l, stack, &top, samples);
         if (l.pixel < 0 && !drained) {
             const int k = atomic_inc(next);
@@ -177,16 +222,10 @@ kernel void Persistent_RenderRegrouped(RT_SCENE_PARAMS, global float* image, glo
             else
                 Persistent_Begin(&sc, &l, stack, &top, k, first, count);
         }
-        // The whole work-group leaves together, once none of its lanes holds a ray: every
-        // lane must reach every barrier below.
-        if (lane == 0) anyRay = 0;
-        if (lane < RG_KEYS) keys[lane] = 0;
-        barrier(CLK_LOCAL_MEM_FENCE);
-        if (l.pixel >= 0) anyRay = 1;
-        barrier(CLK_LOCAL_MEM_FENCE);
-        if (anyRay == 0) break;
+        local int* counts = keys[step];
+        if (lane < RG_KEYS) keys[step == 2 ? 0 : step + 1][lane] = 0;
 
-        // Trace this lane's ray and file the hit under its key.
+        // Trace this lane's ray and count its hit under its key.
         Pending p;
         Node node;
         int key = RG_IDLE;
@@ -195,42 +234,37 @@ kernel void Persistent_RenderRegrouped(RT_SCENE_PARAMS, global float* image, glo
             p = RT_STACK_POP(stack[--top]);
             node = RayTree_TraceNode(&sc, p.ray, p.type,
                                      Sampling_PointKey(l.xy.x, l.xy.y, l.sample, p.depth));
-            key = node.kind == RT_KIND_MISS ? RG_MISS : sc.materials[node.material].pattern;
+            key = Regroup_KeyOf(&sc, &node);
         }
-        const int rank = atomic_inc(&keys[key]);
+        const int rank = atomic_inc(&counts[key]);
         barrier(CLK_LOCAL_MEM_FENCE);
+        // The whole work-group leaves together, once none of its lanes holds a ray: every lane
+        // must reach every barrier.
+        if (counts[RG_IDLE] == RG_LANES) break;
+
+        // File the hit at its place in key order.
         int slot = rank, busy = 0;
         for (int k = 0; k < RG_IDLE; ++k) {
-            if (k < key) slot += keys[k];
-            busy += keys[k];
+            if (k < key) slot += counts[k];
+            busy += counts[k];
         }
         if (l.pixel >= 0) {
-            hits[slot].node = node;
-            hits[slot].p = p;
+            slots[slot].hit.node = node;
+            slots[slot].hit.p = p;
         }
         barrier(CLK_LOCAL_MEM_FENCE);
 
-        // Shade the lane-th hit of the sorted order.
+        // Shade the lane-th hit of that order.
         if (lane < busy) {
-            const Node n = hits[lane].node;
-            const Pending q = hits[lane].p;
-            RegroupShade s;
-            s.children = 0;
-            if (n.kind == RT_KIND_MISS) {
-                s.term = PathState_Miss(&sc, &q);
-            } else {
-                bool hasRefl, hasRefr;
-                s.term = PathState_Step(&sc, &n, &q, true, true, RT_PATTERN_ANY, &s.refl, &hasRefl,
-                                        &s.refr, &hasRefr);
-                s.children = (hasRefl ? 1 : 0) | (hasRefr ? 2 : 0);
-            }
-            shaded[lane] = s;
+            const Node n = slots[lane].hit.node;
+            const Pending q = slots[lane].hit.p;
+            slots[lane].shade = Regroup_Shade(&sc, &n, &q);
         }
         barrier(CLK_LOCAL_MEM_FENCE);
 
         // Take back this lane's own result, in Megakernel_TraceNext's order.
         if (l.pixel >= 0) {
-            const RegroupShade s = shaded[slot];
+            const RegroupShade s = slots[slot].shade;
             l.color += s.term;
             if (s.children & 2) stack[top++] = RT_STACK_PUSH(s.refr);
             if (s.children & 1) stack[top++] = RT_STACK_PUSH(s.refl);

@@ -47,23 +47,62 @@ const PipelineOption& refillOption() {
     return o;
 }
 
-// Whether a work-group sorts its hits by procedural pattern before shading them
-// (persistent.cl, Persistent_RenderRegrouped).
+// Work-items per work-group; 0 takes the device's default below.
+const PipelineOption& laneOption() {
+    static const PipelineOption o{
+        .name = "persistent-lanes",
+        .type = PipelineOption::Type::Integer,
+        .help =
+            "Persistent megakernel: work-items per work-group, 16..1024, at most what the "
+            "device takes (and, regrouped, what its local memory holds): the lanes that "
+            "--persistent-regroup sorts hits among [128 on a GPU, 64 elsewhere]",
+        .defaultValue = 0ll,
+        .min = 16,
+        .max = 1024,
+        .sweepKey = "persistent-lanes",
+        .cellTag = "N",
+        .label = "{} lanes a group",
+    };
+    return o;
+}
+
+// Whether a work-group sorts its hits before shading them (persistent.cl,
+// Persistent_RenderRegrouped), and by what.
 const PipelineOption& regroupOption() {
     static const PipelineOption o{
         .name = "persistent-regroup",
         .type = PipelineOption::Type::Choice,
         .help =
-            "Persistent megakernel: off, or pattern: each step, a work-group sorts its hits by "
+            "Persistent megakernel: off; pattern: each step, a work-group sorts its hits by "
             "procedural pattern in local memory and each lane shades the next hit of that "
-            "order, so that a warp runs one pattern's code at a time; same image [off]",
+            "order, so that a warp runs one pattern's code at a time; material: by pattern, "
+            "and hits without one by class (plain, mirror, glass); same image [off]",
         .defaultValue = "off",
-        .choices = {"off", "pattern"},
+        .choices = {"off", "pattern", "material"},
         .sweepKey = "persistent-regroup",
         .cellTag = "O",
         .label = "regroup by {}",
     };
     return o;
+}
+
+// Bytes of local memory a regrouped lane keeps: persistent.cl's RegroupSlot, a union of a hit
+// (Node, 48, and Pending, 64 with its float3 alignment) and a shading result (a float3 term, two
+// Pendings and a child mask, 148, padded to 160).
+constexpr size_t kRegroupSlotBytes = 160;
+
+// A work-group size the device cannot run: one line naming the flag, before any build.
+void checkLanes(const DeviceInfo& dev, size_t local, bool regroup) {
+    const std::string flag = "--persistent-lanes " + std::to_string(local) + ": ";
+    if (local > dev.maxWorkGroup)
+        throw Error(flag + dev.name + " runs at most " + std::to_string(dev.maxWorkGroup) +
+                        " work-items a work-group",
+                    FailureKind::InvalidOption);
+    if (regroup && local * kRegroupSlotBytes > dev.localMem)
+        throw Error(flag + "regrouped, a work-group keeps " +
+                        std::to_string(kRegroupSlotBytes) + " bytes of local memory a lane, and " +
+                        dev.name + " has " + std::to_string(dev.localMem) + " a work-group",
+                    FailureKind::InvalidOption);
 }
 
 }  // namespace
@@ -86,11 +125,14 @@ Image PersistentPipeline::renderFrame(const Scene& scene, const RenderOptions& o
     const std::vector<std::string> defines = MegakernelPipeline::defines(scene, weighted);
     stats_.privateBytes = MegakernelPipeline::privateBytes(scene, weighted);
     const DeviceInfo& dev = cl_.device();
-    const size_t local = dev.isGpu() ? 128 : 64;
+    const long long lanes = laneOption().integer(o.pipelineOptions);
+    const size_t local = lanes != 0 ? size_t(lanes) : dev.isGpu() ? 128 : 64;
+    const size_t regroup = regroupOption().index(o.pipelineOptions);
+    checkLanes(dev, local, regroup != 0);
     // Regrouped: the work-group's local arrays are sized by its work-items.
-    const bool regroup = regroupOption().index(o.pipelineOptions) == 1;
     std::vector<std::string> programDefines = defines;
-    if (regroup) programDefines.push_back("RT_PERSIST_REGROUP=" + std::to_string(local));
+    if (regroup != 0) programDefines.push_back("RT_PERSIST_REGROUP=" + std::to_string(local));
+    if (regroup == 2) programDefines.push_back("RT_PERSIST_REGROUP_CLASS");
     // On NVIDIA the warp's lanes vote and take pixels together (inline PTX, RT_WARP_PTX).
     const cl::Program program =
         rayLoopProgram("persistent.cl", programDefines, {}, o, {"RT_WARP_PTX"});
@@ -104,7 +146,7 @@ Image PersistentPipeline::renderFrame(const Scene& scene, const RenderOptions& o
     }
     stats_.addBuffer("image", bytes);
 
-    Kernel kernel(program, regroup ? "Persistent_RenderRegrouped" : "Persistent_Render");
+    Kernel kernel(program, regroup != 0 ? "Persistent_RenderRegrouped" : "Persistent_Render");
     kernel.set("image", image_.get()).set("next", next_.get());
     kernel.set("refill", cl_int(refillOption().integer(o.pipelineOptions)));
     const size_t most = workItems(dev, o, local);
@@ -162,9 +204,10 @@ void registerPersistentMegakernel(PipelineRegistry& registry) {
     p.description =
         "the weighted megakernel with persistent threads: a device-filling launch whose "
         "work-items take pixels from a global counter as their ray trees end "
-        "(--persistent-groups N, --persistent-refill N, --persistent-regroup pattern)";
+        "(--persistent-groups N, --persistent-refill N, --persistent-regroup pattern|material, "
+        "--persistent-lanes N)";
     p.supports = {.adaptiveAa = false, .tiling = false, .rowWindow = true};
-    p.options = {groupsOption(), refillOption(), regroupOption()};
+    p.options = {groupsOption(), refillOption(), regroupOption(), laneOption()};
     p.make = [](ClContext* cl) { return std::make_unique<PersistentPipeline>(*cl); };
     registry.add(std::move(p));
 }

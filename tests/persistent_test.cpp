@@ -96,8 +96,9 @@ TEST(Persistent, CutTilesAndEveryRefillKeepTheBits) {
 
 // Regrouped, a lane shades other lanes' hits: the divergence scene mixes procedural patterns,
 // mirrors and glass, so most steps move hits between lanes. Each pixel's terms still arrive in
-// its own order, so the bits and the counted rays stay the weighted megakernel's.
-TEST(Persistent, RegroupedByPatternKeepsTheBitsAndTheRays) {
+// its own order, so the bits and the counted rays stay the weighted megakernel's, whatever the
+// key and however many lanes sort together.
+TEST(Persistent, RegroupedKeepsTheBitsAndTheRays) {
     MegakernelPipeline mega(test::device());
     PersistentPipeline persist(test::device());
     for (const char* name : {"divergence", "spheres", "envmap"}) {
@@ -107,12 +108,43 @@ TEST(Persistent, RegroupedByPatternKeepsTheBitsAndTheRays) {
         o.height = 23;
         o.countRays = true;
         const Image m = mega.render(scene, o);
-        setOption(o, "persistent-regroup", std::string("pattern"));
-        EXPECT_TRUE(sameBits(m, persist.render(scene, o))) << name;
-        ASSERT_TRUE(persist.stats().raysCounted);
-        EXPECT_EQ(persist.stats().rays, mega.stats().rays) << name;
-        setGroups(o, 1);  // one work-group a compute unit: many pixels a lane, groups leave late
-        EXPECT_TRUE(sameBits(m, persist.render(scene, o))) << name << " 1 group";
+        for (const char* key : {"pattern", "material"}) {
+            RenderOptions r = o;
+            setOption(r, "persistent-regroup", std::string(key));
+            EXPECT_TRUE(sameBits(m, persist.render(scene, r))) << name << " " << key;
+            ASSERT_TRUE(persist.stats().raysCounted);
+            EXPECT_EQ(persist.stats().rays, mega.stats().rays) << name << " " << key;
+            setGroups(r, 1);  // one work-group a compute unit: many pixels a lane, groups leave late
+            EXPECT_TRUE(sameBits(m, persist.render(scene, r))) << name << " " << key << " 1 group";
+            setOption(r, "persistent-lanes", 32ll);  // more groups, fewer lanes to sort among
+            EXPECT_TRUE(sameBits(m, persist.render(scene, r))) << name << " " << key << " 32";
+        }
+    }
+}
+
+// A work-group size the device cannot run is refused by name before anything is built: past
+// its work-group limit, or, regrouped, past its local memory (160 bytes a lane).
+TEST(Persistent, RefusesMoreLanesThanTheDeviceRuns) {
+    Scene scene = load("spheres");
+    const DeviceInfo& dev = test::device().device();
+    PersistentPipeline persist(test::device());
+    for (bool regroup : {false, true}) {
+        RenderOptions o = weighted(scene, 1, 1);
+        o.width = 8;
+        o.height = 4;
+        if (regroup) setOption(o, "persistent-regroup", std::string("material"));
+        const long long lanes = 1024;
+        setOption(o, "persistent-lanes", lanes);
+        const bool fits = size_t(lanes) <= dev.maxWorkGroup &&
+                          (!regroup || size_t(lanes) * 160 <= dev.localMem);
+        try {
+            persist.render(scene, o);
+            EXPECT_TRUE(fits) << "no error for 1024 lanes, regroup " << regroup;
+        } catch (const Error& e) {
+            EXPECT_FALSE(fits) << e.what();
+            EXPECT_EQ(e.kind(), FailureKind::InvalidOption);
+            EXPECT_EQ(std::string(e.what()).rfind("--persistent-lanes 1024: ", 0), 0u) << e.what();
+        }
     }
 }
 
@@ -153,6 +185,12 @@ TEST(Persistent, RefusesAdaptiveAntiAliasingAndOptionsOutOfRange) {
         ADD_FAILURE() << "no error for --persistent-refill 33";
     } catch (const Error& e) {
         EXPECT_STREQ(e.what(), "--persistent-refill 33: must be in 1..32");
+    }
+    try {
+        setOption(g, "persistent-lanes", 8);
+        ADD_FAILURE() << "no error for --persistent-lanes 8";
+    } catch (const Error& e) {
+        EXPECT_STREQ(e.what(), "--persistent-lanes 8: must be in 16..1024");
     }
 }
 
