@@ -117,9 +117,13 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{
             "render scenes/spheres.json --pipeline persist --persistent-refill 33 -o /tmp/x.png",
             "--persistent-refill 33: must be in 1..32"},
-        BadCase{"render scenes/spheres.json --pipeline persist --persistent-regroup material "
+        BadCase{"render scenes/spheres.json --pipeline persist --persistent-regroup shader "
                 "-o /tmp/x.png",
-                "--persistent-regroup material: must be off or pattern"},
+                "--persistent-regroup shader: must be off, pattern or material"},
+        BadCase{"render scenes/spheres.json --pipeline persist --persistent-lanes 8 -o /tmp/x.png",
+                "--persistent-lanes 8: must be in 16..1024"},
+        BadCase{"render scenes/spheres.json --pipeline persist --persistent-batch 0 -o /tmp/x.png",
+                "--persistent-batch 0: must be in 1..64"},
         BadCase{"render scenes/spheres.json --pipeline queue --pool 8 --bounces 6 -o /tmp/x.png",
                 "use --pool 64 or more"},
         BadCase{"render scenes/spheres.json --pipeline queue --queue-launch sideways -o /tmp/x.png",

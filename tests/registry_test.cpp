@@ -317,8 +317,8 @@ TEST(Registry, RecordedRowsKeepTheirCellKeys) {
 }
 
 // Tests and the smoke check run every pipeline in each of its variants: the megakernel in both
-// layouts, the others once at their defaults.
-TEST(Registry, VariantsCoverTheMegakernelsLayouts) {
+// layouts, the persistent megakernel in its three paths, the others once at their defaults.
+TEST(Registry, VariantsCoverTheMegakernelsLayoutsAndSchedules) {
     std::vector<std::string> names;
     for (const PipelineVariantRun& v : pipelineRegistry().variants(true)) {
         names.push_back(v.name);
@@ -326,12 +326,14 @@ TEST(Registry, VariantsCoverTheMegakernelsLayouts) {
         v.apply(o);
         if (v.pipeline == "mega")
             EXPECT_EQ(megaLayoutName(megaLayout(o)), v.variant.name) << v.name;
-        else
+        else if (v.pipeline != "persist")
             EXPECT_EQ(v.name, v.pipeline);
     }
     EXPECT_EQ(std::count(names.begin(), names.end(), "mega-tree"), 1) << names.size();
     EXPECT_EQ(std::count(names.begin(), names.end(), "mega-weighted"), 1) << names.size();
     EXPECT_EQ(std::count(names.begin(), names.end(), "wave"), 1) << names.size();
+    for (const char* persist : {"persist", "persist-regrouped", "persist-batched"})
+        EXPECT_EQ(std::count(names.begin(), names.end(), persist), 1) << persist;
     EXPECT_EQ(std::count(names.begin(), names.end(), "cpu"), 0) << "devices only";
 }
 
