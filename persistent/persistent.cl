@@ -48,17 +48,14 @@ inline bool Persistent_Refill(bool idle, int refill, uint* wanting) {
 }
 
 // Pixels for the lanes of `wanting` (each of them calls this): one atomic add by the lowest,
-// `batch` pixels for each lane, its result passed to the others with shfl.sync. A lane's first
-// pixel is its rank among them; *stride (how many take together) leads to its next ones, so that
-// the warp's lanes go on through neighbouring pixels.
-inline int Persistent_TakeTogether(global int* next, uint wanting, int batch, int* stride) {
+// its result passed to the others with shfl.sync, lane by lane in order.
+inline int Persistent_TakeTogether(global int* next, uint wanting) {
     uint lane, below;
     __asm__ volatile("mov.u32 %0, %%laneid;" : "=r"(lane));
     __asm__ volatile("mov.u32 %0, %%lanemask_lt;" : "=r"(below));
     const uint leader = (uint)(31 - clz(wanting & -wanting));
-    *stride = (int)popcount(wanting);
     int base = 0;
-    if (lane == leader) base = atomic_add(next, *stride * batch);
+    if (lane == leader) base = atomic_add(next, (int)popcount(wanting));
     __asm__ volatile("shfl.sync.idx.b32 %0, %1, %2, 0x1f, %3;"
                      : "=r"(base)
                      : "r"(base), "r"(leader), "r"(wanting));
@@ -70,21 +67,15 @@ inline bool Persistent_Refill(bool idle, int refill, uint* wanting) {
     *wanting = idle ? 1u : 0u;
     return true;
 }
-inline int Persistent_TakeTogether(global int* next, uint wanting, int batch, int* stride) {
-    *stride = 1;
-    return atomic_add(next, batch);
-}
+inline int Persistent_TakeTogether(global int* next, uint wanting) { return atomic_inc(next); }
 #endif
 
 // A lane's pixel: which one (-1: none), its AA sample, the current sample's sum and the sum of
-// its finished samples; and the rest of the batch it took: `left` more pixels, the next at
-// `nextK`, each `stride` after the last. The stack of pending rays and its top stay apart, in
-// private arrays.
+// its finished samples. The stack of pending rays and its top stay apart, in private arrays.
 typedef struct PersistentLane {
     int pixel, sample;
     int2 xy;
     float3 color, acc;
-    int nextK, left, stride;
 } PersistentLane;
 
 // Starts the lane on pixel k of the launch's pixels: its first sample's primary ray.
@@ -95,17 +86,6 @@ inline void Persistent_Begin(const SceneData* sc, PersistentLane* l, RT_STACK_RE
     l->sample = 0;
     stack[(*top)++] = RT_STACK_PUSH(PathState_Primary(sc, l->xy.x, l->xy.y, 0));
     l->color = (float3)(0.0f, 0.0f, 0.0f);
-}
-
-// A lane without a pixel starts the next one of its batch, if the batch has one left inside the
-// launch's pixels.
-inline void Persistent_NextOfBatch(const SceneData* sc, PersistentLane* l, RT_STACK_RECORD* stack,
-                                   int* top, int first, int count) {
-    if (l->pixel >= 0 || l->left == 0) return;
-    const int k = l->nextK;
-    l->nextK += l->stride;
-    l->left = k < count ? l->left - 1 : 0;
-    if (k < count) Persistent_Begin(sc, l, stack, top, k, first, count);
 }
 
 // Once the current sample's tree is done: adds the sample to the pixel's sum and starts the
@@ -125,27 +105,22 @@ inline void Persistent_EndOfTree(const SceneData* sc, global float* image, Persi
 
 #ifndef RT_PERSIST_REGROUP
 // Pixels [first, first + count) of the frame; *next counts the ones taken (zeroed by the host
-// before each launch), `batch` a lane at a time. `refill`: RT_WARP_PTX only, the idle lanes a
-// warp waits for.
+// before each launch). `refill`: RT_WARP_PTX only, the idle lanes a warp waits for.
 kernel void Persistent_Render(RT_SCENE_PARAMS, global float* image, global int* next, int first,
-                              int count, int refill, int batch) {
+                              int count, int refill) {
     RT_SCENE_INIT(sc);
     const int samples = settings.aaSamples * settings.aaSamples;
     RT_STACK_RECORD stack[RT_STACK_SIZE];
     int top = 0;
     PersistentLane l;
     l.pixel = -1;
-    l.left = 0;
     for (;;) {
         Persistent_EndOfTree(&sc, image, &l, stack, &top, samples);
-        Persistent_NextOfBatch(&sc, &l, stack, &top, first, count);
         uint wanting;
         const bool refillNow = Persistent_Refill(l.pixel < 0, refill, &wanting);
         if (l.pixel < 0 && refillNow) {
-            const int k = Persistent_TakeTogether(next, wanting, batch, &l.stride);
+            const int k = Persistent_TakeTogether(next, wanting);
             if (k >= count) return;
-            l.nextK = k + l.stride;
-            l.left = batch - 1;
             Persistent_Begin(&sc, &l, stack, &top, k, first, count);
         }
         if (l.pixel < 0) continue;  // waiting for the warp's refill
@@ -222,7 +197,7 @@ inline RegroupShade Regroup_Shade(const SceneData* sc, const Node* n, const Pend
 }
 
 kernel void Persistent_RenderRegrouped(RT_SCENE_PARAMS, global float* image, global int* next,
-                                       int first, int count, int refill, int batch) {
+                                       int first, int count, int refill) {
     RT_SCENE_INIT(sc);
     local RegroupSlot slots[RG_LANES];
     // Key counts, three sets in turn, so that a step needs no barrier before it counts: it
@@ -235,23 +210,17 @@ kernel void Persistent_RenderRegrouped(RT_SCENE_PARAMS, global float* image, glo
     int top = 0;
     PersistentLane l;
     l.pixel = -1;
-    l.left = 0;
-    l.stride = 1;
     bool drained = false;  // the counter has no pixel left for this lane
     if (lane < RG_KEYS) keys[0][lane] = 0;
     barrier(CLK_LOCAL_MEM_FENCE);
     for (int step = 0;; step = step == 2 ? 0 : step + 1) {
         Persistent_EndOfTree(&sc, image, &l, stack, &top, samples);
-        Persistent_NextOfBatch(&sc, &l, stack, &top, first, count);
         if (l.pixel < 0 && !drained) {
-            const int k = atomic_add(next, batch);
-            if (k >= count) {
+            const int k = atomic_inc(next);
+            if (k >= count)
                 drained = true;
-            } else {
-                l.nextK = k + 1;
-                l.left = batch - 1;
+            else
                 Persistent_Begin(&sc, &l, stack, &top, k, first, count);
-            }
         }
         local int* counts = keys[step];
         if (lane < RG_KEYS) keys[step == 2 ? 0 : step + 1][lane] = 0;

@@ -47,25 +47,6 @@ const PipelineOption& refillOption() {
     return o;
 }
 
-// Pixels a lane takes from the counter at a time.
-const PipelineOption& batchOption() {
-    static const PipelineOption o{
-        .name = "persistent-batch",
-        .type = PipelineOption::Type::Integer,
-        .help =
-            "Persistent megakernel: pixels a work-item takes from the global counter at once, "
-            "1..64; a warp's lanes that take together go through neighbouring pixels. More "
-            "means fewer atomic adds on one counter and a longer tail at the frame's end [1]",
-        .defaultValue = 1ll,
-        .min = 1,
-        .max = 64,
-        .sweepKey = "persistent-batch",
-        .cellTag = "H",
-        .label = "{} pixels a take",
-    };
-    return o;
-}
-
 // Work-items per work-group; 0 takes the device's default below.
 const PipelineOption& laneOption() {
     static const PipelineOption o{
@@ -168,7 +149,6 @@ Image PersistentPipeline::renderFrame(const Scene& scene, const RenderOptions& o
     Kernel kernel(program, regroup != 0 ? "Persistent_RenderRegrouped" : "Persistent_Render");
     kernel.set("image", image_.get()).set("next", next_.get());
     kernel.set("refill", cl_int(refillOption().integer(o.pipelineOptions)));
-    kernel.set("batch", cl_int(batchOption().integer(o.pipelineOptions)));
     const size_t most = workItems(dev, o, local);
     dev::RenderSettings settings = makeSettings(scene, o);
     deviceScene.setArgs(kernel, settings);
@@ -225,16 +205,14 @@ void registerPersistentMegakernel(PipelineRegistry& registry) {
         "the weighted megakernel with persistent threads: a device-filling launch whose "
         "work-items take pixels from a global counter as their ray trees end "
         "(--persistent-groups N, --persistent-refill N, --persistent-regroup pattern|material, "
-        "--persistent-lanes N, --persistent-batch N)";
+        "--persistent-lanes N)";
     p.supports = {.adaptiveAa = false, .tiling = false, .rowWindow = true};
-    p.options = {groupsOption(), refillOption(), regroupOption(), laneOption(), batchOption()};
-    // Tests and the smoke check run the default schedule and the two that take other paths
-    // through persistent.cl: hits sorted in local memory, and whole warps taking batches.
-    PipelineVariant regrouped{"regrouped", {}}, batched{"batched", {}};
+    p.options = {groupsOption(), refillOption(), regroupOption(), laneOption()};
+    // Tests and the smoke check run the default schedule and the regrouped one, whose hits
+    // move between lanes through local memory.
+    PipelineVariant regrouped{"regrouped", {}};
     regroupOption().set(regrouped.values, std::string("material"));
-    refillOption().set(batched.values, 32ll);
-    batchOption().set(batched.values, 4ll);
-    p.variants = {PipelineVariant{"", {}}, regrouped, batched};
+    p.variants = {PipelineVariant{"", {}}, regrouped};
     p.make = [](ClContext* cl) { return std::make_unique<PersistentPipeline>(*cl); };
     registry.add(std::move(p));
 }

@@ -1,9 +1,8 @@
 // Persistent megakernel: the weighted megakernel's image to the bit on every standard scene,
 // whoever renders which pixel (one work-group per compute unit or many, one launch or pieces
 // under --max-launch-ms, a row window, frames whose sides are no multiple of the 8 x 4 tiles it
-// hands out, warps that refill at one idle lane or at all 32, lanes that take one pixel or a
-// batch, work-groups that regroup hits), the same rays counted, and one clear error per option
-// it refuses.
+// hands out, warps that refill at one idle lane or at all 32, work-groups that regroup hits), the
+// same rays counted, and one clear error per option it refuses.
 #include "persistent/persistent.h"
 
 #include <gtest/gtest.h>
@@ -81,7 +80,7 @@ TEST(Persistent, PiecesAndRowWindowsKeepTheBits) {
                 << "row " << y;
 }
 
-TEST(Persistent, CutTilesEveryRefillAndBatchKeepTheBits) {
+TEST(Persistent, CutTilesAndEveryRefillKeepTheBits) {
     Scene scene = load("cornell");
     MegakernelPipeline mega(test::device());
     PersistentPipeline persist(test::device());
@@ -89,13 +88,10 @@ TEST(Persistent, CutTilesEveryRefillAndBatchKeepTheBits) {
     o.width = 37;   // four strips of 8 columns and one of 5
     o.height = 23;  // five bands of 4 rows and one of 3
     const Image m = mega.render(scene, o);
-    for (long long refill : {1, 7, 32})
-        for (long long batch : {1, 5}) {  // 5: batches that end past the frame's last pixel
-            setOption(o, "persistent-refill", refill);
-            setOption(o, "persistent-batch", batch);
-            EXPECT_TRUE(sameBits(m, persist.render(scene, o)))
-                << "refill " << refill << " batch " << batch;
-        }
+    for (long long refill : {1, 7, 32}) {
+        setOption(o, "persistent-refill", refill);
+        EXPECT_TRUE(sameBits(m, persist.render(scene, o))) << "refill " << refill;
+    }
 }
 
 // Regrouped, a lane shades other lanes' hits: the divergence scene mixes procedural patterns,
@@ -122,7 +118,6 @@ TEST(Persistent, RegroupedKeepsTheBitsAndTheRays) {
                       1);  // one work-group a compute unit: many pixels a lane, groups leave late
             EXPECT_TRUE(sameBits(m, persist.render(scene, r))) << name << " " << key << " 1 group";
             setOption(r, "persistent-lanes", 32ll);  // more groups, fewer lanes to sort among
-            setOption(r, "persistent-batch", 3ll);
             EXPECT_TRUE(sameBits(m, persist.render(scene, r))) << name << " " << key << " 32";
         }
     }
