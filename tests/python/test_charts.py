@@ -630,5 +630,60 @@ class RegisterStudyTest(unittest.TestCase):
         self.assertIn("10.050 (tie)", out)
 
 
+class PersistTest(unittest.TestCase):
+    """charts_persist.py: the best persistent schedule per scene and its speed-up over the
+    weighted megakernel, a tie inside the frame spread said as one, the refill and work-group
+    scans kept out of the drawn series."""
+
+    @staticmethod
+    def cell(pipe, scene, ms, spread=0.01, **extra):
+        r = {"pipeline": pipe, "scene": scene, "layout": extra.pop("layout", "tree"),
+             "width": 64, "height": 32, "bounces": 4, "status": "ok", "device_ms": ms,
+             "device_ms_min": ms - spread, "device_ms_max": ms + spread,
+             "persistent_regroup": "off", "persistent_lanes": 0, "persistent_groups": 4,
+             "persistent_refill": 1}
+        r.update(extra)
+        return r
+
+    def rows(self):
+        c = self.cell
+        return [c("mega", "walls", 10.0, layout="weighted"), c("persist", "walls", 5.0),
+                c("persist", "walls", 4.0, persistent_regroup="pattern"),
+                c("persist", "walls", 1.0, persistent_groups=1),  # a scan: not a series
+                c("queue", "walls", 2.0),
+                c("mega", "coherent", 1.0, layout="weighted"), c("persist", "coherent", 1.005),
+                c("persist", "coherent", 1.5, persistent_regroup="material")]
+
+    def run_script(self, rows):
+        d = tempfile.mkdtemp()
+        path = os.path.join(d, "rows.jsonl")
+        with open(path, "w") as f:
+            f.write("\n".join(json.dumps(r) for r in rows) + "\n")
+        with open(os.path.join(d, "sweep.json"), "w") as f:
+            json.dump(dict(META, sweep="persist"), f)
+        p = subprocess.run([sys.executable, os.path.join(SCRIPTS, "charts_persist.py"), path],
+                           capture_output=True, text=True)
+        return d, p
+
+    def test_best_schedule_speed_up_and_tie(self):
+        d, p = self.run_script(self.rows())
+        self.assertEqual(p.returncode, 0, p.stderr)
+        md = open(os.path.join(d, "persist.md")).read()
+        walls = next(line for line in md.splitlines() if line.startswith("| `walls`"))
+        self.assertTrue(walls.endswith("| regrouped by pattern, 128 lanes | 2.50x |"), walls)
+        coherent = next(line for line in md.splitlines() if line.startswith("| `coherent`"))
+        self.assertTrue(coherent.endswith("| flat | 1.00x (tie) |"), coherent)
+        self.assertNotIn("1.00 |", walls.split("|")[3], "the work-group scan is no series")
+        if HAVE_MPL:
+            self.assertGreater(os.path.getsize(os.path.join(d, "persist.png")), 10000)
+
+    def test_no_weighted_megakernel_is_one_line(self):
+        rows = [r for r in self.rows() if r["pipeline"] != "mega"]
+        _, p = self.run_script(rows)
+        self.assertEqual(p.returncode, 1)
+        self.assertIn("no weighted-megakernel rows", p.stderr)
+        self.assertEqual(len(p.stderr.strip().splitlines()), 1, p.stderr)
+
+
 if __name__ == "__main__":
     unittest.main()

@@ -1,0 +1,178 @@
+#!/usr/bin/env python3
+"""Draws the persistent megakernel's schedules against the weighted megakernel, whose per-pixel
+code they share, from a `persist` sweep (bench/sweeps/persist): for each scene, the speed-up of
+each schedule (flat, regrouped by pattern or by material, among 128 or 256 lanes) and of the
+other designs over the weighted megakernel, on a log axis with the issue's 2x target marked. A
+speed-up inside the measured frame spread (compare.py's tie rule) is drawn hollow. Also writes a
+Markdown table beside the chart with every time (the 64-lane, tree-megakernel and refill series
+too) and the best schedule's speed-up per scene.
+
+Usage: scripts/charts_persist.py ROWS.jsonl|SWEEP.json [--out DIR]
+Needs Debian's python3-matplotlib for the chart; the table needs nothing.
+"""
+import argparse
+import json
+import os
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from compare import tied  # noqa: E402
+
+BASE = "weighted megakernel"
+TARGET = 2.0  # the issue's bar on divergent scenes
+
+
+def load(path):
+    if path.endswith(".jsonl"):
+        with open(path) as f:
+            rows = [json.loads(line) for line in f if line.strip()]
+        meta_path = os.path.join(os.path.dirname(path), "sweep.json")
+        meta = json.load(open(meta_path)) if os.path.exists(meta_path) else {}
+        return meta, rows
+    data = json.load(open(path))
+    return data["meta"], data["rows"]
+
+
+def series_of(r):
+    """The series a row belongs to, or None for cells the chart leaves out (the refill and
+    work-group scans, which the table lists)."""
+    p = r["pipeline"]
+    if p == "mega":
+        return BASE if r.get("layout") == "weighted" else "tree megakernel"
+    if p == "queue":
+        return "queue wavefront"
+    if p == "wave":
+        return "tree wavefront"
+    if p != "persist":
+        return None
+    regroup = r.get("persistent_regroup", "off")
+    lanes = r.get("persistent_lanes") or 128
+    groups, refill = r.get("persistent_groups", 4), r.get("persistent_refill", 1)
+    if regroup == "off":
+        if groups == 4 and refill == 1:
+            return "persist, flat"
+        if groups == 4 and refill == 32:
+            return "persist, flat, whole-warp refill"
+        return None
+    if groups * lanes != 512:
+        return None
+    return f"persist, regrouped by {regroup}, {lanes} lanes"
+
+
+ORDER = ["persist, flat", "persist, flat, whole-warp refill",
+         "persist, regrouped by pattern, 128 lanes", "persist, regrouped by material, 128 lanes",
+         "persist, regrouped by material, 64 lanes", "persist, regrouped by material, 256 lanes",
+         "tree megakernel", "tree wavefront", "queue wavefront"]
+# The chart draws these; the table lists every series above.
+DRAWN = {"persist, flat": "#56B4E9", "persist, flat, whole-warp refill": "#999999",
+         "persist, regrouped by pattern, 128 lanes": "#0072B2",
+         "persist, regrouped by material, 256 lanes": "#002b55",
+         "tree wavefront": "#D55E00", "queue wavefront": "#CC79A7"}
+
+
+def cells(rows):
+    """(scenes in sweep order, {scene: {series: row}})."""
+    scenes, out = [], {}
+    for r in rows:
+        s = series_of(r)
+        if s is None or r.get("status", "ok") != "ok":
+            continue
+        if r["scene"] not in out:
+            scenes.append(r["scene"])
+        out.setdefault(r["scene"], {})[s] = r
+    return scenes, out
+
+
+def short(scene):
+    return scene.replace("map/", "").replace("-m16", "")
+
+
+def table(meta, scenes, grid, path):
+    present = [s for s in ORDER if any(s in grid[sc] for sc in scenes)]
+    lines = [f"# Persistent megakernel schedules, {meta.get('device')}", "",
+             f"Driver {meta.get('driver')}, commit `{meta.get('commit')}`, sweep "
+             f"`{meta.get('sweep')}`; median device time of the frames in ms. Speed-up: the "
+             f"weighted megakernel's time over the fastest persistent schedule's; (tie) when the "
+             f"two lie inside each other's frame spread.", "",
+             "| scene | " + " | ".join([BASE] + present) + " | best persist | speed-up |",
+             "|---" * (len(present) + 4) + "|"]
+    for sc in scenes:
+        g = grid[sc]
+        base = g.get(BASE)
+        persists = [s for s in present if s.startswith("persist") and s in g]
+        best = min(persists, key=lambda s: g[s]["device_ms"]) if persists else None
+        cols = [f"{g[s]['device_ms']:.2f}" if s in g else "—" for s in [BASE] + present]
+        if base and best:
+            up = base["device_ms"] / g[best]["device_ms"]
+            tie = " (tie)" if tied(base, g[best]) else ""
+            tail = [best.replace("persist, ", ""), f"{up:.2f}x{tie}"]
+        else:
+            tail = ["—", "—"]
+        lines.append(f"| `{sc}` | " + " | ".join(cols + tail) + " |")
+    with open(path, "w") as f:
+        f.write("\n".join(lines) + "\n")
+
+
+def chart(meta, scenes, grid, path):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.patches import Patch
+    from chart_style import figure, legend_row, log_ticks
+
+    present = [s for s in ORDER if s in DRAWN and any(s in grid[sc] for sc in scenes)]
+    r0 = next(iter(grid[scenes[0]].values()))
+    fig, (ax,), legend_ax = figure(
+        meta, f"Speed-up over the weighted megakernel, the persistent megakernel's schedules "
+        f"and the wavefronts ({r0['width']}x{r0['height']}, B = {r0['bounces']}); hollow: a "
+        f"tie", 1, cols=1, panel=(10, 0.1 * len(scenes) * len(present) + 1.0),
+        legend_rows=1.6)
+    height = 0.8 / len(present)
+    for j, s in enumerate(present):
+        color = DRAWN[s]
+        for i, sc in enumerate(scenes):
+            g = grid[sc]
+            if s not in g or BASE not in g:
+                continue
+            up = g[BASE]["device_ms"] / g[s]["device_ms"]
+            tie = tied(g[BASE], g[s])
+            y = i - 0.4 + height * (j + 0.5)
+            ax.barh(y, up - 1 if up >= 1 else -(1 - up), left=1, height=height * 0.9,
+                    color="white" if tie else color, edgecolor=color, linewidth=1)
+    ax.set_xscale("log")
+    ax.axvline(1, color="black", linewidth=0.8)
+    ax.axvline(TARGET, color="#999999", linestyle="--", linewidth=0.8)
+    ax.text(TARGET, -0.95, " 2x: the issue's target", fontsize=7, color="#555555", va="top")
+    ax.set_yticks(range(len(scenes)), [short(sc) for sc in scenes], fontsize=8)
+    ax.set_ylim(len(scenes) - 0.5, -1)
+    ax.set_xlabel("weighted megakernel's time / this design's time (log; right of 1: faster)")
+    log_ticks(ax, "x")
+    handles = [Patch(facecolor=DRAWN[s], label=s) for s in present]
+    legend_row(legend_ax, handles, [h.get_label() for h in handles], ncol=3)
+    fig.savefig(path)
+    plt.close(fig)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("rows")
+    ap.add_argument("--out", default=None, help="folder for persist.png and persist.md "
+                    "[beside the rows]")
+    a = ap.parse_args()
+    meta, rows = load(a.rows)
+    scenes, grid = cells(rows)
+    if not any(BASE in g for g in grid.values()):
+        sys.exit(f"{a.rows}: no weighted-megakernel rows to compare the persistent megakernel with")
+    out = a.out or os.path.dirname(os.path.abspath(a.rows))
+    os.makedirs(out, exist_ok=True)
+    table(meta, scenes, grid, os.path.join(out, "persist.md"))
+    try:
+        chart(meta, scenes, grid, os.path.join(out, "persist.png"))
+    except ImportError:
+        print("charts_persist: no matplotlib (scripts/setup installs it): table only",
+              file=sys.stderr)
+    print(os.path.join(out, "persist.md"))
+
+
+if __name__ == "__main__":
+    main()
