@@ -47,6 +47,27 @@ const PipelineOption& refillOption() {
     return o;
 }
 
+// A register cap for NVIDIA's compiler, as the megakernel's --max-registers: more warps resident
+// on a multiprocessor, at the cost of spills.
+const PipelineOption& registersOption() {
+    static const PipelineOption o{
+        .name = "persistent-max-registers",
+        .type = PipelineOption::Type::Integer,
+        .help =
+            "Persistent megakernel on NVIDIA: at most this many registers a work-item, 16..255 "
+            "(-cl-nv-maxrregcount); more warps fit a multiprocessor, at the cost of spills (raise "
+            "--persistent-groups to fill them). Other devices ignore it [0: the compiler's "
+            "choice]",
+        .defaultValue = 0ll,
+        .min = 16,
+        .max = 255,
+        .sweepKey = "persistent-max-registers",
+        .cellTag = "J",
+        .label = "at most {} registers",
+    };
+    return o;
+}
+
 // Work-items per work-group; 0 takes the device's default below.
 const PipelineOption& laneOption() {
     static const PipelineOption o{
@@ -134,8 +155,12 @@ Image PersistentPipeline::renderFrame(const Scene& scene, const RenderOptions& o
     if (regroup != 0) programDefines.push_back("RT_PERSIST_REGROUP=" + std::to_string(local));
     if (regroup == 2) programDefines.push_back("RT_PERSIST_REGROUP_CLASS");
     // On NVIDIA the warp's lanes vote and take pixels together (inline PTX, RT_WARP_PTX).
+    std::vector<std::string> buildOptions;
+    const long long registers = registersOption().integer(o.pipelineOptions);
+    if (registers != 0 && dev.vendor.find("NVIDIA") != std::string::npos)
+        buildOptions.push_back("-cl-nv-maxrregcount=" + std::to_string(registers));
     const cl::Program program =
-        rayLoopProgram("persistent.cl", programDefines, {}, o, {"RT_WARP_PTX"});
+        rayLoopProgram("persistent.cl", programDefines, buildOptions, o, {"RT_WARP_PTX"});
     DeviceScene& deviceScene = this->deviceScene(scene, o.accel);
     const size_t bytes = size_t(o.width) * o.height * 3 * sizeof(float);
     try {
@@ -154,6 +179,7 @@ Image PersistentPipeline::renderFrame(const Scene& scene, const RenderOptions& o
     deviceScene.setArgs(kernel, settings);
     std::string key = std::to_string(o.width) + "x" + std::to_string(o.height);
     for (const std::string& d : programDefines) key += " " + d;
+    for (const std::string& b : buildOptions) key += " " + b;
     key += " b" + std::to_string(o.bounces) + " g" + std::to_string(most);
     const int first = o.rowBegin, last = o.lastRow();
     if (first != 0 || last != o.height)
@@ -205,9 +231,9 @@ void registerPersistentMegakernel(PipelineRegistry& registry) {
         "the weighted megakernel with persistent threads: a device-filling launch whose "
         "work-items take pixels from a global counter as their ray trees end "
         "(--persistent-groups N, --persistent-refill N, --persistent-regroup pattern|material, "
-        "--persistent-lanes N)";
+        "--persistent-lanes N, --persistent-max-registers N)";
     p.supports = {.adaptiveAa = false, .tiling = false, .rowWindow = true};
-    p.options = {groupsOption(), refillOption(), regroupOption(), laneOption()};
+    p.options = {groupsOption(), refillOption(), regroupOption(), laneOption(), registersOption()};
     // Tests and the smoke check run the default schedule and the regrouped one, whose hits
     // move between lanes through local memory.
     PipelineVariant regrouped{"regrouped", {}};

@@ -122,6 +122,9 @@ INSTANTIATE_TEST_SUITE_P(
                 "--persistent-regroup shader: must be off, pattern or material"},
         BadCase{"render scenes/spheres.json --pipeline persist --persistent-lanes 8 -o /tmp/x.png",
                 "--persistent-lanes 8: must be in 16..1024"},
+        BadCase{"render scenes/spheres.json --pipeline persist --persistent-max-registers 300 "
+                "-o /tmp/x.png",
+                "--persistent-max-registers 300: must be in 16..255"},
         BadCase{"render scenes/spheres.json --pipeline queue --pool 8 --bounces 6 -o /tmp/x.png",
                 "use --pool 64 or more"},
         BadCase{"render scenes/spheres.json --pipeline queue --queue-launch sideways -o /tmp/x.png",
