@@ -11,26 +11,15 @@ Usage: scripts/charts_persist.py ROWS.jsonl|SWEEP.json [--out DIR]
 Needs Debian's python3-matplotlib for the chart; the table needs nothing.
 """
 import argparse
-import json
 import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from charts_map import load  # noqa: E402  (rows.jsonl beside its sweep.json, or a sweep JSON)
 from compare import tied  # noqa: E402
 
 BASE = "weighted megakernel"
 TARGET = 2.0  # the issue's bar on divergent scenes
-
-
-def load(path):
-    if path.endswith(".jsonl"):
-        with open(path) as f:
-            rows = [json.loads(line) for line in f if line.strip()]
-        meta_path = os.path.join(os.path.dirname(path), "sweep.json")
-        meta = json.load(open(meta_path)) if os.path.exists(meta_path) else {}
-        return meta, rows
-    data = json.load(open(path))
-    return data["meta"], data["rows"]
 
 
 def series_of(r):
