@@ -30,9 +30,7 @@ std::vector<std::string> MegakernelPipeline::defines(const Scene& scene, const R
 }
 
 std::vector<std::string> MegakernelPipeline::buildOptions(const RenderOptions& o) const {
-    const int registers = megaMaxRegisters(o);
-    if (registers == 0 || cl_.device().vendor.find("NVIDIA") == std::string::npos) return {};
-    return {"-cl-nv-maxrregcount=" + std::to_string(registers)};
+    return registerCapBuildOptions(megaMaxRegisters(o), cl_.device().vendor);
 }
 
 size_t MegakernelPipeline::privateBytes(const Scene& scene, const RenderOptions& o) {

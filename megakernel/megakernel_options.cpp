@@ -22,23 +22,8 @@ const PipelineOption& layoutOption() {
     return o;
 }
 
-// A cap on the registers a work-item, for NVIDIA's compiler: fewer registers let more warps share
-// a multiprocessor, at the cost of spills to local memory.
 const PipelineOption& registersOption() {
-    static const PipelineOption o{
-        .name = "max-registers",
-        .type = PipelineOption::Type::Integer,
-        .help =
-            "Megakernel on NVIDIA: at most this many registers a work-item, 16..255 "
-            "(-cl-nv-maxrregcount); more warps fit a multiprocessor, at the cost of spills. "
-            "Other devices ignore it [0: the compiler's choice]",
-        .defaultValue = 0ll,
-        .min = 16,
-        .max = 255,
-        .sweepKey = "max-registers",
-        .cellTag = "Y",
-        .label = "at most {} registers",
-    };
+    static const PipelineOption o = registerCapOption("max-registers", "Megakernel", "", "Y");
     return o;
 }
 
@@ -74,6 +59,29 @@ void setMegaMaxRegisters(RenderOptions& o, int registers) {
 
 const char* megaLayoutName(MegaLayout layout) {
     return layoutOption().choices.at(size_t(layout)).c_str();
+}
+
+PipelineOption registerCapOption(const std::string& name, const std::string& who,
+                                 const std::string& hint, const std::string& cellTag) {
+    return PipelineOption{
+        .name = name,
+        .type = PipelineOption::Type::Integer,
+        .help = who +
+                " on NVIDIA: at most this many registers a work-item, 16..255 "
+                "(-cl-nv-maxrregcount); more warps fit a multiprocessor, at the cost of spills" +
+                hint + ". Other devices ignore it [0: the compiler's choice]",
+        .defaultValue = 0ll,
+        .min = 16,
+        .max = 255,
+        .sweepKey = name,
+        .cellTag = cellTag,
+        .label = "at most {} registers",
+    };
+}
+
+std::vector<std::string> registerCapBuildOptions(long long registers, const std::string& vendor) {
+    if (registers == 0 || vendor.find("NVIDIA") == std::string::npos) return {};
+    return {"-cl-nv-maxrregcount=" + std::to_string(registers)};
 }
 
 }  // namespace rt

@@ -3,6 +3,7 @@
 // Front ends know it only through the declaration.
 #pragma once
 
+#include <string>
 #include <vector>
 
 #include "core/pipeline_options.h"
@@ -26,5 +27,15 @@ int megaMaxRegisters(const RenderOptions& options);
 void setMegaMaxRegisters(RenderOptions& options, int registers);
 // The name as --layout takes it: tree, weighted.
 const char* megaLayoutName(MegaLayout layout);
+
+// A cap on the registers a work-item for NVIDIA's compiler (-cl-nv-maxrregcount), as a pipeline
+// option: `name` is the flag without its dashes, `who` the pipeline as its help names it, `hint`
+// what to change with it. The megakernel's is --max-registers, the persistent megakernel's
+// --persistent-max-registers.
+PipelineOption registerCapOption(const std::string& name, const std::string& who,
+                                 const std::string& hint, const std::string& cellTag);
+// The build options for a cap of `registers` (0: none) on a device of `vendor`: the NVIDIA flag,
+// or nothing elsewhere.
+std::vector<std::string> registerCapBuildOptions(long long registers, const std::string& vendor);
 
 }  // namespace rt

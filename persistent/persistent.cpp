@@ -47,24 +47,11 @@ const PipelineOption& refillOption() {
     return o;
 }
 
-// A register cap for NVIDIA's compiler, as the megakernel's --max-registers: more warps resident
-// on a multiprocessor, at the cost of spills.
+// The megakernel's register cap, for this pipeline's own program.
 const PipelineOption& registersOption() {
-    static const PipelineOption o{
-        .name = "persistent-max-registers",
-        .type = PipelineOption::Type::Integer,
-        .help =
-            "Persistent megakernel on NVIDIA: at most this many registers a work-item, 16..255 "
-            "(-cl-nv-maxrregcount); more warps fit a multiprocessor, at the cost of spills (raise "
-            "--persistent-groups to fill them). Other devices ignore it [0: the compiler's "
-            "choice]",
-        .defaultValue = 0ll,
-        .min = 16,
-        .max = 255,
-        .sweepKey = "persistent-max-registers",
-        .cellTag = "J",
-        .label = "at most {} registers",
-    };
+    static const PipelineOption o =
+        registerCapOption("persistent-max-registers", "Persistent megakernel",
+                          " (raise --persistent-groups to fill them)", "J");
     return o;
 }
 
@@ -155,10 +142,8 @@ Image PersistentPipeline::renderFrame(const Scene& scene, const RenderOptions& o
     if (regroup != 0) programDefines.push_back("RT_PERSIST_REGROUP=" + std::to_string(local));
     if (regroup == 2) programDefines.push_back("RT_PERSIST_REGROUP_CLASS");
     // On NVIDIA the warp's lanes vote and take pixels together (inline PTX, RT_WARP_PTX).
-    std::vector<std::string> buildOptions;
-    const long long registers = registersOption().integer(o.pipelineOptions);
-    if (registers != 0 && dev.vendor.find("NVIDIA") != std::string::npos)
-        buildOptions.push_back("-cl-nv-maxrregcount=" + std::to_string(registers));
+    const std::vector<std::string> buildOptions =
+        registerCapBuildOptions(registersOption().integer(o.pipelineOptions), dev.vendor);
     const cl::Program program =
         rayLoopProgram("persistent.cl", programDefines, buildOptions, o, {"RT_WARP_PTX"});
     DeviceScene& deviceScene = this->deviceScene(scene, o.accel);
