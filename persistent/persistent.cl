@@ -103,7 +103,28 @@ inline void Persistent_EndOfTree(const SceneData* sc, global float* image, Persi
     }
 }
 
-#ifndef RT_PERSIST_REGROUP
+#if defined(RT_PERSIST_NESTED)
+// The nested form (--persistent-loop nested): Aila and Laine's own shape, a loop over pixels
+// around the one-pixel megakernel's loop over rays. The lanes that run together take neighbouring
+// pixels with one atomic add, each renders its pixel as Megakernel_Render does, and they take
+// the next ones once they meet again. Against the flat loop it has no per-ray vote or refill
+// test, and its lanes wait for the warp's deepest tree. Same pixels, same sums, same bits.
+kernel void Persistent_Render(RT_SCENE_PARAMS, global float* image, global int* next, int first,
+                              int count, int refill) {
+    RT_SCENE_INIT(sc);
+    const int samples = settings.aaSamples * settings.aaSamples;
+    for (;;) {
+        uint wanting;
+        Persistent_Refill(true, 32, &wanting);  // the lanes here now: all of them want a pixel
+        const int k = Persistent_TakeTogether(next, wanting);
+        if (k >= count) return;
+        const int2 xy = Persistent_PixelOf(k, first, count, settings.width);
+        float3 acc = Megakernel_Sample(&sc, xy.x, xy.y, 0);
+        for (int s = 1; s < samples; ++s) acc += Megakernel_Sample(&sc, xy.x, xy.y, s);
+        Megakernel_Store(image, (xy.y * settings.width + xy.x) * 3, acc / (float)samples);
+    }
+}
+#elif !defined(RT_PERSIST_REGROUP)
 // Pixels [first, first + count) of the frame; *next counts the ones taken (zeroed by the host
 // before each launch). `refill`: RT_WARP_PTX only, the idle lanes a warp waits for.
 kernel void Persistent_Render(RT_SCENE_PARAMS, global float* image, global int* next, int first,

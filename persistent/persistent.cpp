@@ -55,6 +55,24 @@ const PipelineOption& registersOption() {
     return o;
 }
 
+// The flat loop over rays, or a loop over pixels around the megakernel's loop over rays.
+const PipelineOption& loopOption() {
+    static const PipelineOption o{
+        .name = "persistent-loop",
+        .type = PipelineOption::Type::Choice,
+        .help =
+            "Persistent megakernel: flat (one loop over rays; a lane takes a pixel when its tree "
+            "ends) or nested (a loop over pixels around the megakernel's loop over rays; the "
+            "lanes that finish together take pixels together); nested does not regroup [flat]",
+        .defaultValue = "flat",
+        .choices = {"flat", "nested"},
+        .sweepKey = "persistent-loop",
+        .cellTag = "L",
+        .label = "{} loop",
+    };
+    return o;
+}
+
 // Work-items per work-group; 0 takes the device's default below.
 const PipelineOption& laneOption() {
     static const PipelineOption o{
@@ -137,10 +155,17 @@ Image PersistentPipeline::renderFrame(const Scene& scene, const RenderOptions& o
     const size_t local = lanes != 0 ? size_t(lanes) : dev.isGpu() ? 128 : 64;
     const size_t regroup = regroupOption().index(o.pipelineOptions);
     checkLanes(dev, local, regroup != 0);
+    const bool nested = loopOption().index(o.pipelineOptions) == 1;
+    if (nested && regroup != 0)
+        throw Error("--persistent-loop nested does not go with --persistent-regroup " +
+                        regroupOption().choices[regroup] +
+                        " (regrouping cuts the flat loop's steps)",
+                    FailureKind::InvalidOption);
     // Regrouped: the work-group's local arrays are sized by its work-items.
     std::vector<std::string> programDefines = defines;
     if (regroup != 0) programDefines.push_back("RT_PERSIST_REGROUP=" + std::to_string(local));
     if (regroup == 2) programDefines.push_back("RT_PERSIST_REGROUP_CLASS");
+    if (nested) programDefines.push_back("RT_PERSIST_NESTED");
     // On NVIDIA the warp's lanes vote and take pixels together (inline PTX, RT_WARP_PTX).
     const std::vector<std::string> buildOptions =
         registerCapBuildOptions(registersOption().integer(o.pipelineOptions), dev.vendor);
@@ -216,14 +241,16 @@ void registerPersistentMegakernel(PipelineRegistry& registry) {
         "the weighted megakernel with persistent threads: a device-filling launch whose "
         "work-items take pixels from a global counter as their ray trees end "
         "(--persistent-groups N, --persistent-refill N, --persistent-regroup pattern|material, "
-        "--persistent-lanes N, --persistent-max-registers N)";
+        "--persistent-lanes N, --persistent-max-registers N, --persistent-loop nested)";
     p.supports = {.adaptiveAa = false, .tiling = false, .rowWindow = true};
-    p.options = {groupsOption(), refillOption(), regroupOption(), laneOption(), registersOption()};
-    // Tests and the smoke check run the default schedule and the regrouped one, whose hits
-    // move between lanes through local memory.
-    PipelineVariant regrouped{"regrouped", {}};
+    p.options = {groupsOption(), refillOption(),    regroupOption(),
+                 laneOption(),   registersOption(), loopOption()};
+    // Tests and the smoke check run the default schedule, the regrouped one, whose hits move
+    // between lanes through local memory, and the nested loop.
+    PipelineVariant regrouped{"regrouped", {}}, nested{"nested", {}};
     regroupOption().set(regrouped.values, std::string("material"));
-    p.variants = {PipelineVariant{"", {}}, regrouped};
+    loopOption().set(nested.values, std::string("nested"));
+    p.variants = {PipelineVariant{"", {}}, regrouped, nested};
     p.make = [](ClContext* cl) { return std::make_unique<PersistentPipeline>(*cl); };
     registry.add(std::move(p));
 }

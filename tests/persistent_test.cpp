@@ -1,7 +1,8 @@
 // Persistent megakernel: the weighted megakernel's image to the bit on every standard scene,
 // whoever renders which pixel (one work-group per compute unit or many, one launch or pieces
 // under --max-launch-ms, a row window, frames whose sides are no multiple of the 8 x 4 tiles it
-// hands out, warps that refill at one idle lane or at all 32, work-groups that regroup hits), the
+// hands out, warps that refill at one idle lane or at all 32, a loop over pixels around the loop
+// over rays, work-groups that regroup hits), the
 // same rays counted, and one clear error per option it refuses.
 #include "persistent/persistent.h"
 
@@ -92,6 +93,10 @@ TEST(Persistent, CutTilesAndEveryRefillKeepTheBits) {
         setOption(o, "persistent-refill", refill);
         EXPECT_TRUE(sameBits(m, persist.render(scene, o))) << "refill " << refill;
     }
+    setOption(o, "persistent-loop", std::string("nested"));  // a loop over pixels, no refill
+    EXPECT_TRUE(sameBits(m, persist.render(scene, o))) << "nested";
+    setGroups(o, 1);
+    EXPECT_TRUE(sameBits(m, persist.render(scene, o))) << "nested, 1 group";
 }
 
 // Regrouped, a lane shades other lanes' hits: the divergence scene mixes procedural patterns,
@@ -186,6 +191,20 @@ TEST(Persistent, RefusesAdaptiveAntiAliasingAndOptionsOutOfRange) {
         ADD_FAILURE() << "no error for --persistent-refill 33";
     } catch (const Error& e) {
         EXPECT_STREQ(e.what(), "--persistent-refill 33: must be in 1..32");
+    }
+    try {
+        RenderOptions both = weighted(scene, 2, 1);
+        setOption(both, "persistent-loop", std::string("nested"));
+        setOption(both, "persistent-regroup", std::string("pattern"));
+        persist.render(scene, both);
+        ADD_FAILURE() << "no error for --persistent-loop nested with --persistent-regroup";
+    } catch (const Error& e) {
+        EXPECT_EQ(e.kind(), FailureKind::InvalidOption);
+        EXPECT_EQ(std::string(e.what()).rfind("--persistent-loop nested does not go with "
+                                              "--persistent-regroup pattern",
+                                              0),
+                  0u)
+            << e.what();
     }
     try {
         setOption(g, "persistent-lanes", 8);
