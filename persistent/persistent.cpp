@@ -166,9 +166,9 @@ Image PersistentPipeline::renderFrame(const Scene& scene, const RenderOptions& o
     if (regroup != 0) programDefines.push_back("RT_PERSIST_REGROUP=" + std::to_string(local));
     if (regroup == 2) programDefines.push_back("RT_PERSIST_REGROUP_CLASS");
     if (nested) programDefines.push_back("RT_PERSIST_NESTED");
-    // On NVIDIA the warp's lanes vote and take pixels together (inline PTX, RT_WARP_PTX).
     const std::vector<std::string> buildOptions =
         registerCapBuildOptions(registersOption().integer(o.pipelineOptions), dev.vendor);
+    // On NVIDIA the warp's lanes vote and take pixels together (inline PTX, RT_WARP_PTX).
     const cl::Program program =
         rayLoopProgram("persistent.cl", programDefines, buildOptions, o, {"RT_WARP_PTX"});
     DeviceScene& deviceScene = this->deviceScene(scene, o.accel);
