@@ -1,11 +1,12 @@
 #!/usr/bin/env python3
 """Draws the persistent megakernel's schedules against the weighted megakernel, whose per-pixel
-code they share, from a `persist` sweep (bench/sweeps/persist): for each scene, the speed-up of
-each schedule (flat, regrouped by pattern or by material, among 128 or 256 lanes) and of the
-other designs over the weighted megakernel, on a log axis with the issue's 2x target marked. A
-speed-up inside the measured frame spread (compare.py's tie rule) is drawn hollow. Also writes a
-Markdown table beside the chart with every time (the 64-lane, tree-megakernel and refill series
-too) and the best schedule's speed-up per scene.
+code they share, from a `persist` or `persist-loop` sweep (bench/sweeps/): for each scene, the
+speed-up of each schedule (flat, nested, regrouped by pattern or by material, among 128 or 256
+lanes) and of the other designs over the weighted megakernel, on a log axis with the issue's 2x
+target marked. A speed-up inside the measured frame spread (compare.py's tie rule) is drawn
+hollow. Also writes a Markdown table beside the chart, both named after the sweep (persist.md,
+persist.png), with every time (the 64-lane, tree-megakernel and one-group series too) and the
+best schedule's speed-up per scene. scripts/gpu-sweep.sh import runs it for these sweeps.
 
 Usage: scripts/charts_persist.py ROWS.jsonl|SWEEP.json [--out DIR]
 Needs Debian's python3-matplotlib for the chart; the table needs nothing.
@@ -36,6 +37,8 @@ def series_of(r):
         return "tree wavefront"
     if p != "persist":
         return None
+    if r.get("persistent_loop", "flat") == "nested":
+        return "persist, nested loop"
     regroup = r.get("persistent_regroup", "off")
     lanes = r.get("persistent_lanes") or 128
     groups, refill = r.get("persistent_groups", 4), r.get("persistent_refill", 1)
@@ -54,7 +57,8 @@ def series_of(r):
 
 
 CAPPED = BASE + ", 64 registers"
-ORDER = ["persist, flat", "persist, flat, whole-warp refill", "persist, flat, 1 group a unit",
+ORDER = ["persist, flat", "persist, flat, whole-warp refill", "persist, nested loop",
+         "persist, flat, 1 group a unit",
          "persist, flat, 64 registers, 8 groups a unit",
          "persist, regrouped by pattern, 128 lanes", "persist, regrouped by material, 128 lanes",
          "persist, regrouped by material, 64 lanes", "persist, regrouped by material, 256 lanes",
@@ -65,6 +69,7 @@ ORDER = ["persist, flat", "persist, flat, whole-warp refill", "persist, flat, 1 
          CAPPED, "tree megakernel", "tree wavefront", "queue wavefront"]
 # The chart draws these; the table lists every series above.
 DRAWN = {"persist, flat": "#56B4E9", "persist, flat, whole-warp refill": "#999999",
+         "persist, nested loop": "#E69F00",
          "persist, flat, 64 registers, 8 groups a unit": "#8fd3f5",
          "persist, regrouped by pattern, 128 lanes": "#0072B2",
          "persist, regrouped by material, 256 lanes": "#002b55",
@@ -164,7 +169,7 @@ def chart(meta, scenes, grid, path):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("rows")
-    ap.add_argument("--out", default=None, help="folder for persist.png and persist.md "
+    ap.add_argument("--out", default=None, help="folder for <sweep>.png and <sweep>.md "
                     "[beside the rows]")
     a = ap.parse_args()
     meta, rows = load(a.rows)
@@ -173,13 +178,14 @@ def main():
         sys.exit(f"{a.rows}: no weighted-megakernel rows to compare the persistent megakernel with")
     out = a.out or os.path.dirname(os.path.abspath(a.rows))
     os.makedirs(out, exist_ok=True)
-    table(meta, scenes, grid, os.path.join(out, "persist.md"))
+    name = os.path.join(out, meta.get("sweep") or "persist")  # persist.md, persist-loop.md
+    table(meta, scenes, grid, name + ".md")
     try:
-        chart(meta, scenes, grid, os.path.join(out, "persist.png"))
+        chart(meta, scenes, grid, name + ".png")
     except ImportError:
         print("charts_persist: no matplotlib (scripts/setup installs it): table only",
               file=sys.stderr)
-    print(os.path.join(out, "persist.md"))
+    print(name + ".md")
 
 
 if __name__ == "__main__":

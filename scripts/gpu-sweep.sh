@@ -171,6 +171,8 @@ import() {
         [ ! -f "$dir/log.txt" ] || cp "$dir/log.txt" "$dest/$sweep-device-log-$n.txt"
     done
     /usr/bin/python3 scripts/charts.py "$dest/$sweep.json"
+    # The persistent megakernel's sweeps have one frame size and many schedules: their own chart.
+    case $sweep in persist*) /usr/bin/python3 scripts/charts_persist.py "$dest/$sweep.json" ;; esac
     /usr/bin/python3 scripts/results-readme.py "$dest/$sweep.json"
     echo "gpu-sweep: $dest/ ready"
 }

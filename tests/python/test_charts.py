@@ -654,6 +654,7 @@ class PersistTest(unittest.TestCase):
                 c("persist", "walls", 1.0, persistent_refill=8),  # a refill scan: no series
                 c("queue", "walls", 2.0),
                 c("mega", "coherent", 1.0, layout="weighted"), c("persist", "coherent", 1.005),
+                c("persist", "coherent", 1.2, persistent_loop="nested"),
                 c("persist", "coherent", 1.5, persistent_regroup="material")]
 
     def run_script(self, rows):
@@ -677,6 +678,9 @@ class PersistTest(unittest.TestCase):
                         walls)
         coherent = next(line for line in md.splitlines() if line.startswith("| `coherent`"))
         self.assertTrue(coherent.endswith("| flat | 1.00x (tie) | 1.00x (tie) |"), coherent)
+        # The nested loop is a series of its own, not taken for the flat loop.
+        self.assertIn("persist, nested loop", md)
+        self.assertIn("| 1.20 |", coherent)
         self.assertNotIn("1.00", walls, "the refill scan is no series")
         if HAVE_MPL:
             self.assertGreater(os.path.getsize(os.path.join(d, "persist.png")), 10000)
