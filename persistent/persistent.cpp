@@ -161,6 +161,14 @@ Image PersistentPipeline::renderFrame(const Scene& scene, const RenderOptions& o
                         regroupOption().choices[regroup] +
                         " (regrouping cuts the flat loop's steps)",
                     FailureKind::InvalidOption);
+    const long long refill = refillOption().integer(o.pipelineOptions);
+    if (refill != 1 && (nested || regroup != 0))
+        throw Error(
+            "--persistent-refill " + std::to_string(refill) + " applies to the flat loop only (" +
+                (nested ? std::string("--persistent-loop nested takes pixels a warp at a time")
+                        : "--persistent-regroup takes a pixel a lane at once") +
+                ")",
+            FailureKind::InvalidOption);
     // Regrouped: the work-group's local arrays are sized by its work-items.
     std::vector<std::string> programDefines = defines;
     if (regroup != 0) programDefines.push_back("RT_PERSIST_REGROUP=" + std::to_string(local));
@@ -183,7 +191,7 @@ Image PersistentPipeline::renderFrame(const Scene& scene, const RenderOptions& o
 
     Kernel kernel(program, regroup != 0 ? "Persistent_RenderRegrouped" : "Persistent_Render");
     kernel.set("image", image_.get()).set("next", next_.get());
-    kernel.set("refill", cl_int(refillOption().integer(o.pipelineOptions)));
+    kernel.set("refill", cl_int(refill));
     const size_t most = workItems(dev, o, local);
     dev::RenderSettings settings = makeSettings(scene, o);
     deviceScene.setArgs(kernel, settings);

@@ -120,6 +120,9 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"render scenes/spheres.json --pipeline persist --persistent-regroup shader "
                 "-o /tmp/x.png",
                 "--persistent-regroup shader: must be off, pattern or material"},
+        BadCase{"render scenes/spheres.json --pipeline persist --persistent-loop nested "
+                "--persistent-refill 8 -o /tmp/x.png",
+                "--persistent-refill 8 applies to the flat loop only"},
         BadCase{"render scenes/spheres.json --pipeline persist --persistent-lanes 8 -o /tmp/x.png",
                 "--persistent-lanes 8: must be in 16..1024"},
         BadCase{"render scenes/spheres.json --pipeline persist --persistent-max-registers 300 "

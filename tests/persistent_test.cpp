@@ -93,7 +93,8 @@ TEST(Persistent, CutTilesAndEveryRefillKeepTheBits) {
         setOption(o, "persistent-refill", refill);
         EXPECT_TRUE(sameBits(m, persist.render(scene, o))) << "refill " << refill;
     }
-    setOption(o, "persistent-loop", std::string("nested"));  // a loop over pixels, no refill
+    setOption(o, "persistent-refill", 1ll);  // the flat loop's option: nested refuses others
+    setOption(o, "persistent-loop", std::string("nested"));  // a loop over pixels
     EXPECT_TRUE(sameBits(m, persist.render(scene, o))) << "nested";
     setGroups(o, 1);
     EXPECT_TRUE(sameBits(m, persist.render(scene, o))) << "nested, 1 group";
