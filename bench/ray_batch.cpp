@@ -35,6 +35,7 @@ BatchTracer::BatchTracer(ClContext& cl, const Scene& scene, const RenderOptions&
         if (!why.empty()) throw Error("--accels " + label + ": " + why);
     }
     program_ = cl.program("trace_rays.cl", programDefines(scene, options, packet));
+    buildLog_ = cl.lastBuildLog();
     closest_ = Kernel(program_, packet ? "Rays_ClosestPacket" : "Rays_Closest");
     occluded_ = Kernel(program_, packet ? "Rays_OccludedPacket" : "Rays_Occluded");
     device_.setArgs(closest_, makeSettings(scene, options));

@@ -32,6 +32,8 @@ class BatchTracer {
     int packet() const { return packet_; }
     const DeviceScene& device() const { return device_; }
     const cl::Program& program() const { return program_; }
+    // Its build log (ClContext::lastBuildLog()), where NVIDIA's registers are read.
+    const std::string& buildLog() const { return buildLog_; }
 
     // Upload, trace and read back in one call (tests).
     std::vector<float> closest(const std::vector<BatchRay>& rays);
@@ -45,6 +47,7 @@ class BatchTracer {
     int packet_;
     DeviceScene device_;
     cl::Program program_;
+    std::string buildLog_;
     Kernel closest_, occluded_;
     double lastDeviceS_ = 0;
 };

@@ -363,7 +363,8 @@ int run(const Args& a) {
         std::string name = std::string("rtlab ") + accelName(o.accel);
         if (packet) name += "-p" + std::to_string(packet);
         peers.push_back({name, rtlab.back()->device().accelStats().buildMs});
-        peers.back().resources = kernelResources(rtlab.back()->program(), cl.device().device);
+        peers.back().resources =
+            kernelResources(rtlab.back()->program(), cl.device().device, rtlab.back()->buildLog());
         p = q + 1;
     }
 

@@ -325,6 +325,7 @@ cl::Program ClContext::program(const std::string& mainFile, const std::vector<st
                       options + "|" + source;
     if (auto it = programs_.find(key); it != programs_.end()) {
         lastSource_ = "memory";
+        lastLog_ = logs_[key];
         ++counts_.fromMemory;
         return it->second;
     }
@@ -338,6 +339,9 @@ cl::Program ClContext::program(const std::string& mainFile, const std::vector<st
     std::snprintf(hash, sizeof hash, "%016llx", (unsigned long long)fnv1a(key));
     std::filesystem::path dir = device_.cachesBuilds ? std::filesystem::path() : cacheDir();
     std::filesystem::path file = dir.empty() ? dir : dir / (std::string(hash) + ".bin");
+    // The source build's log goes beside the binary: a program loaded from a binary has none of
+    // its own, and the log is where NVIDIA's registers and spills are read (kernel_resources.h).
+    std::filesystem::path logFile = file.empty() ? file : dir / (std::string(hash) + ".log");
     auto buildLog = [&](cl::Program& p) {
         try {
             return p.getBuildInfo<CL_PROGRAM_BUILD_LOG>(device_.device);
@@ -355,6 +359,8 @@ cl::Program ClContext::program(const std::string& mainFile, const std::vector<st
                 cl::Program::Binaries bins{bin};
                 cl::Program p(context_, {device_.device}, bins);
                 p.build({device_.device}, options.c_str());
+                std::ifstream logIn(logFile, std::ios::binary);
+                logs_[key] = lastLog_ = std::string(std::istreambuf_iterator<char>(logIn), {});
                 programs_[key] = p;
                 lastSource_ = "disk";
                 ++counts_.fromDisk;
@@ -400,6 +406,7 @@ cl::Program ClContext::program(const std::string& mainFile, const std::vector<st
                     FailureKind::OpenCl);
     }
     programs_[key] = p;
+    logs_[key] = lastLog_ = buildLog(p);
     lastSource_ = "built";
     ++counts_.built;
     if (!file.empty()) {
@@ -408,17 +415,22 @@ cl::Program ClContext::program(const std::string& mainFile, const std::vector<st
             if (!bins.empty() && !bins[0].empty()) {
                 std::error_code ec;
                 std::filesystem::create_directories(dir, ec);
-                // One temporary file per process and thread: sweeps on several devices (and
-                // shards on one machine) build the same program at the same moment.
-                std::filesystem::path tmp = file;
-                tmp += "." + std::to_string(getpid()) + "-" +
-                       std::to_string(std::hash<std::thread::id>()(std::this_thread::get_id())) +
-                       ".tmp";
-                std::ofstream out(tmp, std::ios::binary);
-                out.write(reinterpret_cast<const char*>(bins[0].data()),
-                          std::streamsize(bins[0].size()));
-                out.close();
-                if (out) std::filesystem::rename(tmp, file, ec);
+                // The log first: a process that finds the binary finds its log. One temporary
+                // file per process and thread: sweeps on several devices (and shards on one
+                // machine) build the same program at the same moment.
+                auto write = [&](const std::filesystem::path& to, const char* bytes, size_t n) {
+                    std::filesystem::path tmp = to;
+                    tmp +=
+                        "." + std::to_string(getpid()) + "-" +
+                        std::to_string(std::hash<std::thread::id>()(std::this_thread::get_id())) +
+                        ".tmp";
+                    std::ofstream out(tmp, std::ios::binary);
+                    out.write(bytes, std::streamsize(n));
+                    out.close();
+                    if (out) std::filesystem::rename(tmp, to, ec);
+                };
+                write(logFile, lastLog_.data(), lastLog_.size());
+                write(file, reinterpret_cast<const char*>(bins[0].data()), bins[0].size());
             }
         } catch (const cl::Error&) {
         }

@@ -66,6 +66,9 @@ class ClContext {
                         const std::vector<std::string>& options = {});
     // How the last program() call was satisfied: "memory", "disk" or "built".
     const std::string& lastProgramSource() const { return lastSource_; }
+    // The build log of the last program() call's program: its source build's, also when it came
+    // from memory or from a binary on disk (kept beside it; empty for a binary cached without).
+    const std::string& lastBuildLog() const { return lastLog_; }
     // Every program() call so far, by how it was satisfied, and the wall time spent in builds
     // and binary loads: what a frame's host time holds besides the frame.
     struct ProgramCounts {
@@ -95,7 +98,8 @@ class ClContext {
     cl::Context context_;
     cl::CommandQueue queue_;
     std::map<std::string, cl::Program> programs_;
-    std::string lastSource_;
+    std::map<std::string, std::string> logs_;  // build logs, by the key of programs_
+    std::string lastSource_, lastLog_;
     ProgramCounts counts_;
     size_t allocated_ = 0;
     mutable std::mutex buildingLock_;

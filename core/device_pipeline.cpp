@@ -38,7 +38,7 @@ cl::Program DevicePipeline::program(const std::string& file,
                                     const std::vector<std::string>& defines,
                                     const std::vector<std::string>& options) {
     cl::Program p = cl_.program(file, defines, options);
-    stats_.kernelResources = kernelResources(p, cl_.device().device);
+    stats_.kernelResources = kernelResources(p, cl_.device().device, cl_.lastBuildLog());
     stats_.program = cl_.lastProgramSource();
     return p;
 }

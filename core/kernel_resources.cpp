@@ -34,16 +34,11 @@ std::map<std::string, double> parsePtxasLog(const std::string& log) {
     return out;
 }
 
-std::map<std::string, double> kernelResources(const cl::Program& program,
-                                              const cl::Device& device) {
+std::map<std::string, double> kernelResources(const cl::Program& program, const cl::Device& device,
+                                              const std::string& log) {
     // Keyed by the program handle: a pipeline asks every frame, the answer changes only with it.
     // The log is part of the key, so a handle the driver reuses for another program is no hit.
     static std::map<std::pair<cl_program, std::string>, std::map<std::string, double>> cache;
-    std::string log;
-    try {
-        log = program.getBuildInfo<CL_PROGRAM_BUILD_LOG>(device);
-    } catch (const cl::Error&) {
-    }
     const auto key = std::make_pair(program(), log);
     if (auto it = cache.find(key); it != cache.end()) return it->second;
     std::map<std::string, double> out = parsePtxasLog(log);

@@ -12,9 +12,11 @@
 namespace rt {
 
 // "<Kernel>.registers", "<Kernel>.spill_stores", "<Kernel>.spill_loads", "<Kernel>.stack_bytes"
-// (NVIDIA only) and "<Kernel>.private_bytes" (every device that answers) for each kernel of
-// the program. Computed once per program object.
-std::map<std::string, double> kernelResources(const cl::Program& program, const cl::Device& device);
+// (NVIDIA only, from `buildLog`: ClContext::lastBuildLog(), which a program loaded from a
+// binary does not hold itself) and "<Kernel>.private_bytes" (every device that answers) for each
+// kernel of the program. Computed once per program object and log.
+std::map<std::string, double> kernelResources(const cl::Program& program, const cl::Device& device,
+                                              const std::string& buildLog);
 
 // The NVIDIA part alone, from a build log's ptxas lines (tests feed it a log by hand).
 std::map<std::string, double> parsePtxasLog(const std::string& log);
