@@ -73,6 +73,27 @@ const PipelineOption& loopOption() {
     return o;
 }
 
+// The order pixels are handed out in (persistent.cl, Persistent_PixelOf): strips W columns wide
+// and H rows tall, row by row inside a strip, so that the 32 pixels a warp takes together are a
+// W x (32 / W) block and the ones it takes next lie below them.
+const PipelineOption& tileOption() {
+    static const PipelineOption o{
+        .name = "persistent-tile",
+        .type = PipelineOption::Type::Choice,
+        .help =
+            "Persistent megakernel: the order pixels are taken in, strips WxH (W columns, H "
+            "rows) taken row by row, a warp's 32 pixels a W-wide block; 16x8 hands out the "
+            "megakernel's own "
+            "work-groups (warps of 16x2), 8x4 was the order before 4x16 [4x16]",
+        .defaultValue = "4x16",
+        .choices = {"4x16", "8x4", "4x8", "8x16", "4x32", "8x32", "16x8"},
+        .sweepKey = "persistent-tile",
+        .cellTag = "T",
+        .label = "{} strips",
+    };
+    return o;
+}
+
 // Work-items per work-group; 0 takes the device's default below.
 const PipelineOption& laneOption() {
     static const PipelineOption o{
@@ -174,6 +195,10 @@ Image PersistentPipeline::renderFrame(const Scene& scene, const RenderOptions& o
     if (regroup != 0) programDefines.push_back("RT_PERSIST_REGROUP=" + std::to_string(local));
     if (regroup == 2) programDefines.push_back("RT_PERSIST_REGROUP_CLASS");
     if (nested) programDefines.push_back("RT_PERSIST_NESTED");
+    const std::string& tile = tileOption().choice(o.pipelineOptions);
+    const size_t by = tile.find('x');
+    programDefines.push_back("RT_PERSIST_TILE_W=" + tile.substr(0, by));
+    programDefines.push_back("RT_PERSIST_TILE_H=" + tile.substr(by + 1));
     const std::vector<std::string> buildOptions =
         registerCapBuildOptions(registersOption().integer(o.pipelineOptions), dev.vendor);
     // On NVIDIA the warp's lanes vote and take pixels together (inline PTX, RT_WARP_PTX).
@@ -249,10 +274,11 @@ void registerPersistentMegakernel(PipelineRegistry& registry) {
         "the weighted megakernel with persistent threads: a device-filling launch whose "
         "work-items take pixels from a global counter as their ray trees end "
         "(--persistent-groups N, --persistent-refill N, --persistent-regroup pattern|material, "
-        "--persistent-lanes N, --persistent-max-registers N, --persistent-loop nested)";
+        "--persistent-lanes N, --persistent-max-registers N, --persistent-loop nested, "
+        "--persistent-tile WxH)";
     p.supports = {.adaptiveAa = false, .tiling = false, .rowWindow = true};
-    p.options = {groupsOption(), refillOption(),    regroupOption(),
-                 laneOption(),   registersOption(), loopOption()};
+    p.options = {groupsOption(),    refillOption(), regroupOption(), laneOption(),
+                 registersOption(), loopOption(),   tileOption()};
     // Tests and the smoke check run the default schedule, the regrouped one, whose hits move
     // between lanes through local memory, and the nested loop.
     PipelineVariant regrouped{"regrouped", {}}, nested{"nested", {}};

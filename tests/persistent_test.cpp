@@ -1,9 +1,9 @@
 // Persistent megakernel: the weighted megakernel's image to the bit on every standard scene,
 // whoever renders which pixel (one work-group per compute unit or many, one launch or pieces
-// under --max-launch-ms, a row window, frames whose sides are no multiple of the 8 x 4 tiles it
-// hands out, warps that refill at one idle lane or at all 32, a loop over pixels around the loop
-// over rays, work-groups that regroup hits), the
-// same rays counted, and one clear error per option it refuses.
+// under --max-launch-ms, a row window, frames whose sides are no multiple of the strips it
+// hands pixels out in, warps that refill at one idle lane or at all 32, a loop over pixels around
+// the loop over rays, work-groups that regroup hits), the same rays counted, and one clear error
+// per option it refuses.
 #include "persistent/persistent.h"
 
 #include <gtest/gtest.h>
@@ -86,14 +86,25 @@ TEST(Persistent, CutTilesAndEveryRefillKeepTheBits) {
     MegakernelPipeline mega(test::device());
     PersistentPipeline persist(test::device());
     RenderOptions o = weighted(scene, 3, 2);
-    o.width = 37;   // four strips of 8 columns and one of 5
-    o.height = 23;  // five bands of 4 rows and one of 3
+    o.width = 37;   // strips of 4 columns and one of 1, of 8 and one of 5, of 16 and one of 5
+    o.height = 23;  // bands of 4 rows and one of 3, of 8 and one of 7, one band of 16 and one of 7
     const Image m = mega.render(scene, o);
     for (long long refill : {1, 7, 32}) {
         setOption(o, "persistent-refill", refill);
         EXPECT_TRUE(sameBits(m, persist.render(scene, o))) << "refill " << refill;
     }
     setOption(o, "persistent-refill", 1ll);  // the flat loop's option: nested refuses others
+    int tiles = 0;
+    for (const PipelineOption& option : pipelineInfo("persist").options) {
+        if (option.name != "persistent-tile") continue;
+        for (const std::string& tile : option.choices) {
+            RenderOptions t = o;
+            option.set(t.pipelineOptions, tile);
+            EXPECT_TRUE(sameBits(m, persist.render(scene, t))) << "--persistent-tile " << tile;
+            ++tiles;
+        }
+    }
+    EXPECT_GE(tiles, 2) << "persist has no --persistent-tile to vary";
     setOption(o, "persistent-loop", std::string("nested"));  // a loop over pixels
     EXPECT_TRUE(sameBits(m, persist.render(scene, o))) << "nested";
     setGroups(o, 1);
