@@ -8,6 +8,10 @@ hollow. Also writes a Markdown table beside the chart, both named after the swee
 persist.png), with every time (the 64-lane, tree-megakernel and one-group series too) and the
 best schedule's speed-up per scene. scripts/gpu-sweep.sh import runs it for these sweeps.
 
+A sweep that varies the order pixels are handed out in (--persistent-tile, the persist-tile
+sweep) gets a table and chart by tile instead: for each schedule and scene, the time at each
+order and the speed-up of the best one.
+
 Usage: scripts/charts_persist.py ROWS.jsonl|SWEEP.json [--out DIR]
 Needs Debian's python3-matplotlib for the chart; the table needs nothing.
 """
@@ -37,14 +41,14 @@ def series_of(r):
         return "tree wavefront"
     if p != "persist":
         return None
-    if r.get("persistent_loop", "flat") == "nested":
-        return "persist, nested loop"
     regroup = r.get("persistent_regroup", "off")
     lanes = r.get("persistent_lanes") or 128
     groups, refill = r.get("persistent_groups", 4), r.get("persistent_refill", 1)
     regs = r.get("persistent_max_registers") or 0
     units = (f", {regs} registers" if regs else "") + (
         f", {groups} group{'s' if groups > 1 else ''} a unit")
+    if r.get("persistent_loop", "flat") == "nested":
+        return "persist, nested loop" + (units if groups != 4 or regs else "")
     if regroup == "off":
         if refill == 1:
             return "persist, flat" + (units if groups != 4 or regs else "")
@@ -58,6 +62,8 @@ def series_of(r):
 
 CAPPED = BASE + ", 64 registers"
 ORDER = ["persist, flat", "persist, flat, whole-warp refill", "persist, nested loop",
+         "persist, nested loop, 64 registers, 4 groups a unit",
+         "persist, nested loop, 8 groups a unit",
          "persist, flat, 1 group a unit",
          "persist, flat, 64 registers, 8 groups a unit",
          "persist, regrouped by pattern, 128 lanes", "persist, regrouped by material, 128 lanes",
@@ -166,6 +172,95 @@ def chart(meta, scenes, grid, path):
     plt.close(fig)
 
 
+TILE_COLORS = ["#999999", "#0072B2", "#56B4E9", "#009E73", "#E69F00", "#D55E00", "#CC79A7"]
+
+
+def tile_grid(rows):
+    """(scenes, schedules, tiles, {scene: {(schedule, tile) or series: row}}) of a sweep that
+    varies --persistent-tile; rows without the field ran before it existed (8x4)."""
+    scenes, schedules, tiles, out = [], [], [], {}
+    for r in rows:
+        s = series_of(r)
+        if s is None or r.get("status", "ok") != "ok":
+            continue
+        if r["scene"] not in out:
+            scenes.append(r["scene"])
+        key = s
+        if r["pipeline"] == "persist":
+            schedule, tile = s.replace("persist, ", ""), r.get("persistent_tile", "8x4")
+            schedules += [schedule] if schedule not in schedules else []
+            tiles += [tile] if tile not in tiles else []
+            key = (schedule, tile)
+        out.setdefault(r["scene"], {})[key] = r
+    return scenes, schedules, tiles, out
+
+
+def tile_table(meta, scenes, schedules, tiles, grid, path):
+    lines = [f"# The persistent megakernel's pixel order, {meta.get('device')}", "",
+             f"Driver {meta.get('driver')}, commit `{meta.get('commit')}`, sweep "
+             f"`{meta.get('sweep')}`; median device time of the frames in ms, by the strips "
+             f"pixels are handed out in (`--persistent-tile WxH`). Speed-up: the weighted "
+             f"megakernel's time over the best order's; (tie) inside the frame spread.", "",
+             "| scene | schedule | " + " | ".join(tiles) + " | best | speed-up | "
+             + BASE + " | queue wavefront |", "|---" * (len(tiles) + 6) + "|"]
+    for sc in scenes:
+        g = grid[sc]
+        for schedule in schedules:
+            here = [t for t in tiles if (schedule, t) in g]
+            if not here:
+                continue
+            best = min(here, key=lambda t: g[(schedule, t)]["device_ms"])
+            cols = [f"{g[(schedule, t)]['device_ms']:.3f}" if t in here else "—" for t in tiles]
+            up = speed_up(g[BASE], g[(schedule, best)]) if BASE in g else "—"
+            others = [f"{g[k]['device_ms']:.3f}" if k in g else "—"
+                      for k in (BASE, "queue wavefront")]
+            lines.append(f"| `{short(sc)}` | {schedule} | " + " | ".join(cols) +
+                         f" | {best} | {up} | " + " | ".join(others) + " |")
+    with open(path, "w") as f:
+        f.write("\n".join(lines) + "\n")
+
+
+def tile_chart(meta, scenes, schedules, tiles, grid, path):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.patches import Patch
+    from chart_style import figure, legend_row, log_ticks
+
+    r0 = next(iter(grid[scenes[0]].values()))
+    fig, panels, legend_ax = figure(
+        meta, f"Speed-up over the weighted megakernel by the order pixels are handed out in "
+        f"(--persistent-tile), per schedule ({r0['width']}x{r0['height']}, B = "
+        f"{r0['bounces']}); hollow: a tie", len(schedules), cols=2,
+        panel=(6, 0.09 * len(scenes) * len(tiles) + 1.0), legend_rows=1.0)
+    height = 0.8 / len(tiles)
+    for ax, schedule in zip(panels, schedules):
+        for j, tile in enumerate(tiles):
+            color = TILE_COLORS[j % len(TILE_COLORS)]
+            for i, sc in enumerate(scenes):
+                g = grid[sc]
+                if (schedule, tile) not in g or BASE not in g:
+                    continue
+                row = g[(schedule, tile)]
+                up = g[BASE]["device_ms"] / row["device_ms"]
+                y = i - 0.4 + height * (j + 0.5)
+                ax.barh(y, up - 1 if up >= 1 else -(1 - up), left=1, height=height * 0.9,
+                        color="white" if tied(g[BASE], row) else color, edgecolor=color,
+                        linewidth=1)
+        ax.set_xscale("log")
+        ax.axvline(1, color="black", linewidth=0.8)
+        ax.set_title(schedule, fontsize=9)
+        ax.set_yticks(range(len(scenes)), [short(sc) for sc in scenes], fontsize=8)
+        ax.set_ylim(len(scenes) - 0.5, -0.5)
+        ax.set_xlabel("weighted megakernel's time / this one's (log)", fontsize=8)
+        log_ticks(ax, "x")
+    handles = [Patch(facecolor=TILE_COLORS[j % len(TILE_COLORS)], label=f"{t} strips")
+               for j, t in enumerate(tiles)]
+    legend_row(legend_ax, handles, [h.get_label() for h in handles], ncol=len(tiles))
+    fig.savefig(path)
+    plt.close(fig)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("rows")
@@ -173,12 +268,23 @@ def main():
                     "[beside the rows]")
     a = ap.parse_args()
     meta, rows = load(a.rows)
-    scenes, grid = cells(rows)
-    if not any(BASE in g for g in grid.values()):
-        sys.exit(f"{a.rows}: no weighted-megakernel rows to compare the persistent megakernel with")
     out = a.out or os.path.dirname(os.path.abspath(a.rows))
     os.makedirs(out, exist_ok=True)
     name = os.path.join(out, meta.get("sweep") or "persist")  # persist.md, persist-loop.md
+    tiles = {r.get("persistent_tile", "8x4") for r in rows if r["pipeline"] == "persist"}
+    if len(tiles) > 1:
+        scenes, schedules, tiles, grid = tile_grid(rows)
+        tile_table(meta, scenes, schedules, tiles, grid, name + ".md")
+        try:
+            tile_chart(meta, scenes, schedules, tiles, grid, name + ".png")
+        except ImportError:
+            print("charts_persist: no matplotlib (scripts/setup installs it): table only",
+                  file=sys.stderr)
+        print(name + ".md")
+        return
+    scenes, grid = cells(rows)
+    if not any(BASE in g for g in grid.values()):
+        sys.exit(f"{a.rows}: no weighted-megakernel rows to compare the persistent megakernel with")
     table(meta, scenes, grid, name + ".md")
     try:
         chart(meta, scenes, grid, name + ".png")

@@ -685,6 +685,25 @@ class PersistTest(unittest.TestCase):
         if HAVE_MPL:
             self.assertGreater(os.path.getsize(os.path.join(d, "persist.png")), 10000)
 
+    def test_a_sweep_over_pixel_orders_is_tabled_by_order(self):
+        c = self.cell
+        rows = [c("mega", "walls", 10.0, layout="weighted"), c("queue", "walls", 2.0),
+                c("persist", "walls", 5.0, persistent_tile="8x4"),
+                c("persist", "walls", 4.0, persistent_tile="4x16"),
+                c("persist", "walls", 2.5, persistent_tile="8x4", persistent_regroup="pattern"),
+                c("persist", "walls", 2.55, persistent_tile="4x16", persistent_regroup="pattern")]
+        d, p = self.run_script(rows)
+        self.assertEqual(p.returncode, 0, p.stderr)
+        md = open(os.path.join(d, "persist.md")).read()
+        self.assertIn("| scene | schedule | 8x4 | 4x16 | best | speed-up |", md)
+        lines = md.splitlines()
+        flat = next(line for line in lines if line.startswith("| `walls` | flat |"))
+        self.assertEqual(flat, "| `walls` | flat | 5.000 | 4.000 | 4x16 | 2.50x | 10.000 | 2.000 |")
+        pattern = next(line for line in lines if "regrouped by pattern" in line)
+        self.assertIn("| 2.500 | 2.550 | 8x4 | 4.00x |", pattern)
+        if HAVE_MPL:
+            self.assertGreater(os.path.getsize(os.path.join(d, "persist.png")), 10000)
+
     def test_no_weighted_megakernel_is_one_line(self):
         rows = [r for r in self.rows() if r["pipeline"] != "mega"]
         _, p = self.run_script(rows)
