@@ -123,6 +123,8 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"render scenes/spheres.json --pipeline persist --persistent-loop nested "
                 "--persistent-refill 8 -o /tmp/x.png",
                 "--persistent-refill 8 applies to the flat loop only"},
+        BadCase{"render scenes/spheres.json --pipeline persist --persistent-tile 3x3 -o /tmp/x.png",
+                "--persistent-tile 3x3: must be 4x16, 8x4, 4x8, 8x16, 4x32, 8x32 or 16x8"},
         BadCase{"render scenes/spheres.json --pipeline persist --persistent-lanes 8 -o /tmp/x.png",
                 "--persistent-lanes 8: must be in 16..1024"},
         BadCase{"render scenes/spheres.json --pipeline persist --persistent-max-registers 300 "
