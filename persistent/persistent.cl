@@ -7,14 +7,13 @@
 // loop over rays inside it would gain nothing on a SIMT machine: the lanes that leave the inner
 // loop wait at its end for the warp's deepest ray tree, exactly as in the one-pixel megakernel.
 //
-// Pixels are handed out in strips (Persistent_PixelOf), so that lanes taking pixels at the same
-// time get neighbours, whose rays take the same paths through the scene, and a warp's next
-// pixels lie below its last ones (--persistent-tile; on the H200 the order alone moved the
-// coherent scenes' frame times by 10-25%). On NVIDIA
-// (RT_WARP_PTX) the lanes of a warp without a pixel take consecutive pixels with one atomic add,
-// once `refill` of them are idle (or none is busy): waiting for more trades idle steps for lanes
-// that start together. The host's default, 1, takes at once: on walls of small objects with
-// mirrors and glass, waiting cost more than the coherence it bought.
+// Pixels are handed out in strips (Persistent_PixelOf, --persistent-tile), so that lanes taking
+// pixels at the same time get neighbours, whose rays take the same paths through the scene, and
+// a warp's next pixels lie below its last ones. On NVIDIA (RT_WARP_PTX) the lanes of a warp without
+// a pixel take consecutive pixels with one atomic add, once `refill` of them are idle (or none is
+// busy): waiting for more trades idle steps for lanes that start together. The host's default, 1,
+// takes at once: on walls of small objects with mirrors and glass, waiting cost more than the
+// coherence it bought.
 //
 // The per-ray work is the weighted megakernel's (Megakernel_TraceNext), and each pixel's rays and
 // samples are summed in the same order, so the image is the same to the bit.
