@@ -56,6 +56,8 @@ const PipelineOption& registersOption() {
 }
 
 // The flat loop over rays, or a loop over pixels around the megakernel's loop over rays.
+enum class PersistLoop { Flat, Nested };  // loopOption()'s choices, in order
+
 const PipelineOption& loopOption() {
     static const PipelineOption o{
         .name = "persistent-loop",
@@ -114,6 +116,8 @@ const PipelineOption& laneOption() {
 
 // Whether a work-group sorts its hits before shading them (persistent.cl,
 // Persistent_RenderRegrouped), and by what.
+enum class PersistRegroup { Off, Pattern, Material };  // regroupOption()'s choices, in order
+
 const PipelineOption& regroupOption() {
     static const PipelineOption o{
         .name = "persistent-regroup",
@@ -173,16 +177,17 @@ Image PersistentPipeline::renderFrame(const Scene& scene, const RenderOptions& o
     const DeviceInfo& dev = cl_.device();
     const long long lanes = laneOption().integer(o.pipelineOptions);
     const size_t local = lanes != 0 ? size_t(lanes) : dev.isGpu() ? 128 : 64;
-    const size_t regroup = regroupOption().index(o.pipelineOptions);
-    checkLanes(dev, local, regroup != 0);
-    const bool nested = loopOption().index(o.pipelineOptions) == 1;
-    if (nested && regroup != 0)
+    const auto regroupBy = PersistRegroup(regroupOption().index(o.pipelineOptions));
+    const bool regroup = regroupBy != PersistRegroup::Off;
+    checkLanes(dev, local, regroup);
+    const bool nested = PersistLoop(loopOption().index(o.pipelineOptions)) == PersistLoop::Nested;
+    if (nested && regroup)
         throw Error("--persistent-loop nested does not go with --persistent-regroup " +
-                        regroupOption().choices[regroup] +
+                        regroupOption().choice(o.pipelineOptions) +
                         " (regrouping cuts the flat loop's steps)",
                     FailureKind::InvalidOption);
     const long long refill = refillOption().integer(o.pipelineOptions);
-    if (refill != 1 && (nested || regroup != 0))
+    if (refill != 1 && (nested || regroup))
         throw Error(
             "--persistent-refill " + std::to_string(refill) + " applies to the flat loop only (" +
                 (nested ? std::string("--persistent-loop nested takes pixels a warp at a time")
@@ -191,8 +196,8 @@ Image PersistentPipeline::renderFrame(const Scene& scene, const RenderOptions& o
             FailureKind::InvalidOption);
     // Regrouped: the work-group's local arrays are sized by its work-items.
     std::vector<std::string> programDefines = defines;
-    if (regroup != 0) programDefines.push_back("RT_PERSIST_REGROUP=" + std::to_string(local));
-    if (regroup == 2) programDefines.push_back("RT_PERSIST_REGROUP_CLASS");
+    if (regroup) programDefines.push_back("RT_PERSIST_REGROUP=" + std::to_string(local));
+    if (regroupBy == PersistRegroup::Material) programDefines.push_back("RT_PERSIST_REGROUP_CLASS");
     if (nested) programDefines.push_back("RT_PERSIST_NESTED");
     const std::string& tile = tileOption().choice(o.pipelineOptions);
     const size_t by = tile.find('x');
@@ -213,7 +218,7 @@ Image PersistentPipeline::renderFrame(const Scene& scene, const RenderOptions& o
     }
     stats_.addBuffer("image", bytes);
 
-    Kernel kernel(program, regroup != 0 ? "Persistent_RenderRegrouped" : "Persistent_Render");
+    Kernel kernel(program, regroup ? "Persistent_RenderRegrouped" : "Persistent_Render");
     kernel.set("image", image_.get()).set("next", next_.get());
     kernel.set("refill", cl_int(refill));
     const size_t most = workItems(dev, o, local);
