@@ -8,10 +8,8 @@ kernel void Megakernel_Render(RT_SCENE_PARAMS, global float* image) {
     int x = get_global_id(0), y = get_global_id(1) + settings.rowOffset;
     if (x >= settings.width || y >= settings.height) return;
     RT_SCENE_INIT(sc);
-    int samples = settings.aaSamples * settings.aaSamples;
-    float3 acc = Megakernel_Sample(&sc, x, y, 0);
-    for (int s = 1; s < samples; ++s) acc += Megakernel_Sample(&sc, x, y, s);
-    Megakernel_Store(image, (y * settings.width + x) * 3, acc / (float)samples);
+    const int samples = settings.aaSamples * settings.aaSamples;
+    Megakernel_Store(image, (y * settings.width + x) * 3, Megakernel_PixelMean(&sc, x, y, samples));
 }
 
 // Adaptive anti-aliasing, pass 1: the centre sample of every pixel.
@@ -36,8 +34,6 @@ kernel void Megakernel_RenderEdges(RT_SCENE_PARAMS, global const float* centers,
         image[i + 2] = centers[i + 2];
         return;
     }
-    int samples = settings.aaSamples * settings.aaSamples;
-    float3 acc = Megakernel_Sample(&sc, x, y, 0);
-    for (int s = 1; s < samples; ++s) acc += Megakernel_Sample(&sc, x, y, s);
-    Megakernel_Store(image, i, acc / (float)samples);
+    Megakernel_Store(image, i,
+                     Megakernel_PixelMean(&sc, x, y, settings.aaSamples * settings.aaSamples));
 }
