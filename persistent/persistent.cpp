@@ -64,8 +64,9 @@ const PipelineOption& loopOption() {
         .type = PipelineOption::Type::Choice,
         .help =
             "Persistent megakernel: flat (one loop over rays; a lane takes a pixel when its tree "
-            "ends) or nested (a loop over pixels around the megakernel's loop over rays; the "
-            "lanes that finish together take pixels together); nested does not regroup [flat]",
+            "ends) or nested (a loop over pixels around the megakernel's loop over rays; a "
+            "work-group takes a pixel a lane once all its lanes are done); nested does not "
+            "regroup [flat]",
         .defaultValue = "flat",
         .choices = {"flat", "nested"},
         .sweepKey = "persistent-loop",
@@ -103,7 +104,8 @@ const PipelineOption& laneOption() {
         .help =
             "Persistent megakernel: work-items per work-group, 16..1024, at most what the "
             "device takes (and, regrouped, what its local memory holds): the lanes that "
-            "--persistent-regroup sorts hits among [128 on a GPU, 64 elsewhere]",
+            "--persistent-regroup sorts hits among, or that the nested loop hands pixels to "
+            "together [128 on a GPU, 64 elsewhere]",
         .defaultValue = 0ll,
         .min = 16,
         .max = 1024,
@@ -190,8 +192,9 @@ Image PersistentPipeline::renderFrame(const Scene& scene, const RenderOptions& o
     if (refill != 1 && (nested || regroup))
         throw Error(
             "--persistent-refill " + std::to_string(refill) + " applies to the flat loop only (" +
-                (nested ? std::string("--persistent-loop nested takes pixels a warp at a time")
-                        : "--persistent-regroup takes a pixel a lane at once") +
+                (nested
+                     ? std::string("--persistent-loop nested takes pixels a work-group at a time")
+                     : "--persistent-regroup takes a pixel a lane at once") +
                 ")",
             FailureKind::InvalidOption);
     // Regrouped: the work-group's local arrays are sized by its work-items.
