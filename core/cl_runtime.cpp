@@ -131,10 +131,20 @@ static void widenThreadStacks() {
     });
 }
 
+// NVIDIA's driver keeps a cache of its own of compiled programs (~/.nv/ComputeCache), and a
+// program it serves from there comes without the compiler's -cl-nv-verbose report, where
+// registers and spills are read (kernel_resources.h). A program that another process had built
+// first (the GPU smoke check and a sweep keep separate caches of rtlab's own) was then measured
+// without its registers. rtlab's own cache (ClContext::program) keeps each binary with the log
+// of the build that made it, so the driver's cache is turned off, unless CUDA_CACHE_DISABLE is
+// set already. The driver reads it when the platform is first listed.
+static void disableDriverProgramCache() { setenv("CUDA_CACHE_DISABLE", "1", /*overwrite=*/0); }
+
 std::vector<DeviceInfo> listDevices() {
     std::vector<DeviceInfo> out;
     std::vector<cl::Platform> platforms;
     widenThreadStacks();
+    disableDriverProgramCache();
     try {
         cl::Platform::get(&platforms);
     } catch (const cl::Error& e) {
