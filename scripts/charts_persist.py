@@ -8,8 +8,8 @@ hollow. Also writes a Markdown table beside the chart, both named after the swee
 persist.png), with every time (the 64-lane, tree-megakernel and one-group series too) and the
 best schedule's speed-up per scene. scripts/gpu-sweep.sh import runs it for these sweeps.
 
-A sweep that varies the order pixels are handed out in (--persistent-tile, the persist-tile
-sweep) gets a table and chart by tile instead: for each schedule and scene, the time at each
+A sweep about the order pixels are handed out in (--persistent-tile for two schedules or more,
+the persist-tile sweep) gets a table and chart by tile instead: for each schedule and scene, the time at each
 order and the speed-up of the best one.
 
 Usage: scripts/charts_persist.py ROWS.jsonl|SWEEP.json [--out DIR]
@@ -27,9 +27,11 @@ BASE = "weighted megakernel"
 TARGET = 2.0  # the issue's bar on divergent scenes
 
 
-def series_of(r):
+def series_of(r, strips=True):
     """The series a row belongs to (None: a refill scan the chart and table leave out; names not
-    in ORDER, the other work-group counts, are left out too)."""
+    in ORDER, the other work-group counts, are left out too). With `strips`, an order other than
+    the default 4x16 names a series of its own (rows without the field ran at 8x4 and keep their
+    names)."""
     p = r["pipeline"]
     if p == "mega":
         if r.get("layout") != "weighted":
@@ -47,21 +49,24 @@ def series_of(r):
     regs = r.get("persistent_max_registers") or 0
     units = (f", {regs} registers" if regs else "") + (
         f", {groups} group{'s' if groups > 1 else ''} a unit")
+    tile = r.get("persistent_tile", "4x16")
+    order = f", {tile} strips" if strips and tile != "4x16" else ""
     if r.get("persistent_loop", "flat") == "nested":
-        return "persist, nested loop" + (units if groups != 4 or regs else "")
+        return "persist, nested loop" + (units if groups != 4 or regs else "") + order
     if regroup == "off":
         if refill == 1:
-            return "persist, flat" + (units if groups != 4 or regs else "")
+            return "persist, flat" + (units if groups != 4 or regs else "") + order
         if groups == 4 and refill == 32:
-            return "persist, flat, whole-warp refill"
+            return "persist, flat, whole-warp refill" + order
         return None
     # Work-groups a unit chosen so that each unit is offered 512 work-items, or not.
     return f"persist, regrouped by {regroup}, {lanes} lanes" + (
-        units if groups * lanes != 512 or regs else "")
+        units if groups * lanes != 512 or regs else "") + order
 
 
 CAPPED = BASE + ", 64 registers"
 ORDER = ["persist, flat", "persist, flat, whole-warp refill", "persist, nested loop",
+         "persist, nested loop, 16x8 strips",
          "persist, nested loop, 64 registers, 4 groups a unit",
          "persist, nested loop, 8 groups a unit",
          "persist, flat, 1 group a unit",
@@ -75,7 +80,7 @@ ORDER = ["persist, flat", "persist, flat, whole-warp refill", "persist, nested l
          CAPPED, "tree megakernel", "tree wavefront", "queue wavefront"]
 # The chart draws these; the table lists every series above.
 DRAWN = {"persist, flat": "#56B4E9", "persist, flat, whole-warp refill": "#999999",
-         "persist, nested loop": "#E69F00",
+         "persist, nested loop": "#E69F00", "persist, nested loop, 16x8 strips": "#F0E442",
          "persist, flat, 64 registers, 8 groups a unit": "#8fd3f5",
          "persist, regrouped by pattern, 128 lanes": "#0072B2",
          "persist, regrouped by material, 256 lanes": "#002b55",
@@ -175,12 +180,23 @@ def chart(meta, scenes, grid, path):
 TILE_COLORS = ["#999999", "#0072B2", "#56B4E9", "#009E73", "#E69F00", "#D55E00", "#CC79A7"]
 
 
+def about_order(rows):
+    """Whether a sweep is about the order pixels are handed out in: two schedules or more, each
+    measured in more than one order (the persist sweep runs only the nested loop in two)."""
+    orders = {}
+    for r in rows:
+        s = series_of(r, strips=False) if r["pipeline"] == "persist" else None
+        if s is not None:
+            orders.setdefault(s, set()).add(r.get("persistent_tile", "8x4"))
+    return sum(len(o) > 1 for o in orders.values()) > 1
+
+
 def tile_grid(rows):
     """(scenes, schedules, tiles, {scene: {(schedule, tile) or series: row}}) of a sweep that
     varies --persistent-tile; rows without the field ran before it existed (8x4)."""
     scenes, schedules, tiles, out = [], [], [], {}
     for r in rows:
-        s = series_of(r)
+        s = series_of(r, strips=False)
         if s is None or r.get("status", "ok") != "ok":
             continue
         if r["scene"] not in out:
@@ -271,8 +287,7 @@ def main():
     out = a.out or os.path.dirname(os.path.abspath(a.rows))
     os.makedirs(out, exist_ok=True)
     name = os.path.join(out, meta.get("sweep") or "persist")  # persist.md, persist-loop.md
-    tiles = {r.get("persistent_tile", "8x4") for r in rows if r["pipeline"] == "persist"}
-    if len(tiles) > 1:
+    if about_order(rows):
         scenes, schedules, tiles, grid = tile_grid(rows)
         tile_table(meta, scenes, schedules, tiles, grid, name + ".md")
         try:

@@ -704,6 +704,21 @@ class PersistTest(unittest.TestCase):
         if HAVE_MPL:
             self.assertGreater(os.path.getsize(os.path.join(d, "persist.png")), 10000)
 
+    def test_one_schedule_in_a_second_order_is_a_series_of_its_own(self):
+        # The persist sweep runs the nested loop in 4x16 and 16x8 strips: still tabled by
+        # schedule, the second order a series of its own.
+        c = self.cell
+        rows = self.rows() + [c("persist", "coherent", 0.9, persistent_loop="nested",
+                                persistent_tile="16x8")]
+        d, p = self.run_script(rows)
+        self.assertEqual(p.returncode, 0, p.stderr)
+        md = open(os.path.join(d, "persist.md")).read()
+        self.assertNotIn("| best | speed-up |", md.splitlines()[4], "not tabled by order")
+        self.assertIn("persist, nested loop, 16x8 strips", md)
+        coherent = next(line for line in md.splitlines() if line.startswith("| `coherent`"))
+        self.assertTrue(coherent.endswith("| nested loop, 16x8 strips | 1.11x | 1.11x |"),
+                        coherent)
+
     def test_no_weighted_megakernel_is_one_line(self):
         rows = [r for r in self.rows() if r["pipeline"] != "mega"]
         _, p = self.run_script(rows)
