@@ -77,6 +77,12 @@ ORDER = ["persist, flat", "persist, flat, whole-warp refill", "persist, nested l
          "persist, regrouped by pattern, 128 lanes, 1 group a unit",
          "persist, regrouped by pattern, 128 lanes, 96 registers, 5 groups a unit",
          "persist, regrouped by pattern, 128 lanes, 64 registers, 8 groups a unit",
+         "persist, regrouped by pattern, 256 lanes, 128 registers, 2 groups a unit",
+         "persist, regrouped by material, 256 lanes, 128 registers, 2 groups a unit",
+         "persist, regrouped by material, 192 lanes, 2 groups a unit",
+         "persist, regrouped by pattern, 256 lanes, 120 registers, 2 groups a unit",
+         "persist, regrouped by pattern, 128 lanes, 128 registers, 4 groups a unit",
+         "persist, regrouped by pattern, 128 lanes, 96 registers, 4 groups a unit",
          CAPPED, "tree megakernel", "tree wavefront", "queue wavefront"]
 # The chart draws these; the table lists every series above.
 DRAWN = {"persist, flat": "#56B4E9", "persist, flat, whole-warp refill": "#999999",
@@ -84,6 +90,7 @@ DRAWN = {"persist, flat": "#56B4E9", "persist, flat, whole-warp refill": "#99999
          "persist, flat, 64 registers, 8 groups a unit": "#8fd3f5",
          "persist, regrouped by pattern, 128 lanes": "#0072B2",
          "persist, regrouped by material, 256 lanes": "#002b55",
+         "persist, regrouped by pattern, 256 lanes, 128 registers, 2 groups a unit": "#7b3294",
          CAPPED: "#009E73", "tree wavefront": "#D55E00", "queue wavefront": "#CC79A7"}
 
 
