@@ -95,6 +95,15 @@ TEST(Runtime, RepeatBuildsComeFromTheCache) {
     fs::remove_all(dir);
 }
 
+TEST(Runtime, DriverProgramCacheIsOffOnceDevicesAreListed) {
+    // NVIDIA's own program cache would serve a build without its register report; listing the
+    // devices turns it off (CUDA_CACHE_DISABLE=1) unless the caller set the variable.
+    listDevices();
+    const char* v = std::getenv("CUDA_CACHE_DISABLE");
+    ASSERT_NE(v, nullptr);
+    EXPECT_STRNE(v, "");
+}
+
 TEST(Runtime, BuildFailureCarriesTheBuildLog) {
     // A copy of the kernel tree with a syntax error injected into intersect.cl.
     fs::path dir = rt::test::scratchPath("broken_kernels/");
