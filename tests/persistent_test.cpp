@@ -66,19 +66,23 @@ TEST(Persistent, PiecesAndRowWindowsKeepTheBits) {
     MegakernelPipeline mega(test::device());
     PersistentPipeline persist(test::device());
     const Image m = mega.render(scene, o);
-    RenderOptions capped = o;
-    capped.maxLaunchMs = 1e-6;  // every launch over the cap: a row, or part of one, at a time
-    const Image pieces = persist.render(scene, capped);
-    EXPECT_GT(persist.stats().launches, o.height);
-    EXPECT_TRUE(sameBits(m, pieces));
-    RenderOptions window = o;
-    window.rowBegin = 7;
-    window.rowEnd = 19;
-    const Image part = persist.render(scene, window);
-    for (int y = 7; y < 19; ++y)
-        for (int i = 0; i < o.width * 3; ++i)
-            ASSERT_EQ(part.rgb[size_t(y * o.width * 3 + i)], m.rgb[size_t(y * o.width * 3 + i)])
-                << "row " << y;
+    // The nested loop's work-group takes a pixel a lane: a piece of one row leaves lanes without.
+    for (const char* loop : {"flat", "nested"}) {
+        setOption(o, "persistent-loop", std::string(loop));
+        RenderOptions capped = o;
+        capped.maxLaunchMs = 1e-6;  // every launch over the cap: a row, or part of one, at a time
+        const Image pieces = persist.render(scene, capped);
+        EXPECT_GT(persist.stats().launches, o.height) << loop;
+        EXPECT_TRUE(sameBits(m, pieces)) << loop;
+        RenderOptions window = o;
+        window.rowBegin = 7;
+        window.rowEnd = 19;
+        const Image part = persist.render(scene, window);
+        for (int y = 7; y < 19; ++y)
+            for (int i = 0; i < o.width * 3; ++i)
+                ASSERT_EQ(part.rgb[size_t(y * o.width * 3 + i)], m.rgb[size_t(y * o.width * 3 + i)])
+                    << loop << ", row " << y;
+    }
 }
 
 TEST(Persistent, CutTilesAndEveryRefillKeepTheBits) {
