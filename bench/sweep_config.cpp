@@ -373,10 +373,7 @@ std::string Cell::label() const {
     if (accelApplies) l << ' ' << accelName(o.accel);
     if (o.adaptiveAa) l << " adaptive";
     for (const PipelineOption* opt : pipelineRegistry().options()) {
-        if (opt->isDefault(o.pipelineOptions)) continue;
-        std::string text = opt->label;
-        text.replace(text.find("{}"), 2, opt->text(opt->value(o.pipelineOptions)));
-        l << ' ' << text;
+        if (!opt->isDefault(o.pipelineOptions)) l << ' ' << opt->describe(o.pipelineOptions);
     }
     if (o.memoryBudget)
         l << " budget "

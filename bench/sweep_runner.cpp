@@ -165,17 +165,22 @@ nlohmann::json rowJson(const SweepConfig& config, const Cell& c, const Measureme
     };
     // Every registered pipeline option, as the cell set it (its default where it did not), under
     // its row field: "layout": "weighted", "pool": 4096. And under "options" the ones the cell's
-    // own pipeline declares, which tell its variants apart in charts and tables.
+    // own pipeline declares, which tell its variants apart in charts and tables; under
+    // "option_labels" those of them the cell set away from their defaults, as the registry words
+    // them ("nested loop"), which the charts name a variant by.
     auto json = [](const OptionValue& v) {
         const long long* n = std::get_if<long long>(&v);
         return n ? nlohmann::json(*n) : nlohmann::json(std::get<std::string>(v));
     };
     for (const PipelineOption* opt : pipelineRegistry().options())
         row[opt->field()] = json(opt->value(o.pipelineOptions));
-    nlohmann::json own = nlohmann::json::object();
-    for (const PipelineOption& opt : pipelineInfo(c.pipeline).options)
+    nlohmann::json own = nlohmann::json::object(), labels = nlohmann::json::object();
+    for (const PipelineOption& opt : pipelineInfo(c.pipeline).options) {
         own[opt.name] = json(opt.value(o.pipelineOptions));
+        if (!opt.isDefault(o.pipelineOptions)) labels[opt.name] = opt.describe(o.pipelineOptions);
+    }
     row["options"] = own;
+    row["option_labels"] = labels;
     if (c.stopAfterFailure) row["stop_after_failure"] = true;
     if (c.maxFrameS > 0) row["max_frame_s"] = c.maxFrameS;
     if (!skipped.empty()) row["skip_reason"] = skipped;

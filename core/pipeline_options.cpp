@@ -44,6 +44,13 @@ std::string PipelineOption::text(const OptionValue& v) const {
     return std::get<std::string>(v);
 }
 
+std::string PipelineOption::describe(const PipelineOptionValues& values) const {
+    std::string out = label;
+    const size_t at = out.find("{}");
+    if (at != std::string::npos) out.replace(at, 2, text(value(values)));
+    return out;
+}
+
 size_t PipelineOption::indexOf(const std::string& choice) const {
     auto it = std::find(choices.begin(), choices.end(), choice);
     if (it == choices.end())

@@ -73,6 +73,8 @@ struct PipelineOption {
     bool isDefault(const PipelineOptionValues& values) const;
     // "4096", "device".
     std::string text(const OptionValue& value) const;
+    // `label` with the value in `values` in it: "256 lanes a group", "nested loop".
+    std::string describe(const PipelineOptionValues& values) const;
 
     // Checks a value and stores it; throws rt::Error naming the flag:
     // "--pool 0: must be in 1..67108864", "--queue-launch up: must be readback or device".

@@ -80,6 +80,15 @@ class Series:
         for r in rows:
             self.first.setdefault(self.key(r), r)
         self.keys = sorted(self.first)
+        # Where a pipeline's rows vary in more than one option, a series is named by the options
+        # its cells set away from their defaults, as the registry words them (the rows'
+        # "option_labels": "nested loop", "256 lanes a group"), not by every value.
+        self.described = {}
+        for k, r in self.first.items():
+            names = self.varying.get(r["pipeline"], ())
+            if len(names) > 1 and "option_labels" in r:
+                self.described[k] = [r["option_labels"][n] for n in names
+                                     if n in r["option_labels"]] or ["defaults"]
 
     def key(self, r):
         k = r["pipeline"]
@@ -93,7 +102,7 @@ class Series:
     def label(self, key):
         parts = key.split("/")
         text = self.titles.get(parts[0], parts[0])
-        extra = [p for p in parts[1:] if not p[0].isdigit()]
+        extra = self.described.get(key) or [p for p in parts[1:] if not p[0].isdigit()]
         budget = [p for p in parts[1:] if p[0].isdigit()]
         if extra:
             text += f" ({', '.join(extra)})"

@@ -14,6 +14,7 @@
 #include <string>
 
 #include "bench/sweep_config.h"
+#include "bench/sweep_runner.h"
 #include "core/accel.h"
 #include "core/error.h"
 #include "core/pipeline_options.h"
@@ -260,8 +261,29 @@ TEST(Registry, SweepFilesTakeEveryDeclaredOption) {
         EXPECT_NE(cells[0].key().find("|" + opt->cellTag + value), std::string::npos)
             << cells[0].key();
         EXPECT_NE(cells[0].label().find(label), std::string::npos) << cells[0].label();
+        EXPECT_EQ(opt->describe(c.groups[0].pipelineOptions), label);
         EXPECT_EQ(cells[1].key().find("|" + opt->cellTag), std::string::npos) << cells[1].key();
     }
+}
+
+// A sweep's rows name the options a cell set away from their defaults in the registry's words
+// ("option_labels"), by which the charts name a variant; a cell at the defaults names none.
+TEST(Registry, RowsNameTheOptionsACellSet) {
+    bench::SweepConfig c = bench::parseSweep(
+        "repeats = 1\nwarmup = 0\n[a]\nscenes = spheres\npipelines = persist\nsizes = 8x6\n"
+        "bounces = 1\n[b]\nscenes = spheres\npipelines = persist\nsizes = 8x6\nbounces = 1\n"
+        "persistent-loop = nested\npersistent-groups = 2\n",
+        "labels-test");
+    bench::SweepRunOptions o;
+    o.device = std::to_string(test::device().device().index);
+    std::vector<nlohmann::json> rows;
+    bench::runSweep(c, o, nullptr,
+                    [&](const nlohmann::json& row, const Image*) { rows.push_back(row); });
+    ASSERT_EQ(rows.size(), 2u);
+    EXPECT_EQ(rows[0]["option_labels"], nlohmann::json::object());
+    const nlohmann::json set = {{"persistent-groups", "2 groups per unit"},
+                                {"persistent-loop", "nested loop"}};
+    EXPECT_EQ(rows[1]["option_labels"], set);
 }
 
 // Rows already in results/ were written when the queue's options and the megakernel's layout were

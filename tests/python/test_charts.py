@@ -145,6 +145,21 @@ class RowsTest(unittest.TestCase):
         self.assertEqual(sweep_rows.own_options(old), {})
         self.assertEqual(sweep_rows.family(old), "wavefront")
 
+    def test_a_series_of_several_options_is_named_by_those_set(self):
+        # Two options vary among the rows: each series is named by the options its cells set
+        # away from their defaults, in the registry's words, and the all-default one says so.
+        def persist(ms, options, labels):
+            return dict(row("persist", "persistent megakernel", "tree", "s", 2, device_ms=ms),
+                        family="megakernel", options=options, option_labels=labels)
+        rows = [persist(5.0, {"loop": "flat", "lanes": 0}, {}),
+                persist(4.0, {"loop": "nested", "lanes": 0}, {"loop": "nested loop"}),
+                persist(3.0, {"loop": "flat", "lanes": 256}, {"lanes": "256 lanes a group"})]
+        series = sweep_rows.Series(rows)
+        self.assertEqual([series.label(k) for k in series.keys],
+                         ["persistent megakernel (defaults)",
+                          "persistent megakernel (256 lanes a group)",
+                          "persistent megakernel (nested loop)"])
+
     def test_failure_is_read_from_the_field_not_the_message(self):
         rows = [row("mega", "megakernel", "tree", "s", b, group="limits") for b in range(3)]
         rows[2].update(status="error", failure="opencl", error="tree in private memory")
