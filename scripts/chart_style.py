@@ -5,6 +5,7 @@ holds the legend (so that no legend covers data), log axes labelled in one style
 must not overlap, and how a missing cell is marked.
 Needs Debian's python3-matplotlib (scripts/setup).
 """
+import colorsys
 import math
 import textwrap
 import zlib
@@ -60,6 +61,27 @@ def series_style(series, key):
     same = [k for k in series.keys if base_style(series.first[k]) == (color, marker)]
     return {"color": color, "marker": marker,
             "linestyle": LINESTYLES[same.index(key) % len(LINESTYLES)]}
+
+
+# Lightness of the keys after the first that share a palette colour, where a chart fills areas
+# and a line style cannot tell them apart (the map's cells): darker, lighter, and so on.
+SHADES = [1.0, 0.6, 1.3, 0.42, 1.45]
+
+
+def series_fill(series, key):
+    """A fill colour of a series key: its palette colour, darkened or lightened for each further
+    key that shares it (several schedules of one pipeline on one map)."""
+    color, marker = base_style(series.first[key])
+    same = [k for k in series.keys if base_style(series.first[k]) == (color, marker)]
+    h, l, s = colorsys.rgb_to_hls(*matplotlib.colors.to_rgb(color))
+    shaded = colorsys.hls_to_rgb(h, min(0.88, l * SHADES[same.index(key) % len(SHADES)]), s)
+    return matplotlib.colors.to_hex(shaded)
+
+
+def text_on(fill):
+    """Black or white, whichever reads better on a fill colour."""
+    r, g, b = matplotlib.colors.to_rgb(fill)
+    return "black" if 0.299 * r + 0.587 * g + 0.114 * b > 0.6 else "white"
 
 
 def footer_text(meta):

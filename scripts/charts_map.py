@@ -114,7 +114,7 @@ def chart(meta, series, grid, keys, path):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from matplotlib.patches import Patch
-    from chart_style import TIE_COLOR, figure, legend_row, series_style
+    from chart_style import TIE_COLOR, figure, legend_row, series_fill, text_on
 
     # A panel per (triangles an object, octaves): one per shading cost on the sphere map.
     kinds = sorted({(g[4], g[2]) for g in grid})
@@ -138,20 +138,19 @@ def chart(meta, series, grid, keys, path):
                     ax.text(i, j, "missing", ha="center", va="center", fontsize=7, color="#555555")
                     continue
                 winner, runner, margin, tie = v
-                ax.add_patch(plt.Rectangle((i - 0.5, j - 0.5), 1, 1,
-                                           facecolor=TIE_COLOR if tie else
-                                           series_style(series, winner)["color"],
+                fill = TIE_COLOR if tie else series_fill(series, winner)
+                ax.add_patch(plt.Rectangle((i - 0.5, j - 0.5), 1, 1, facecolor=fill,
                                            edgecolor="white", hatch="//" if tie else None))
                 text = "tie" if tie else f"{margin:.2f}x"
                 ax.text(i, j, text, ha="center", va="center", fontsize=9,
-                        color="black" if tie else "white", fontweight="bold")
+                        color="black" if tie else text_on(fill), fontweight="bold")
         ax.set_xticks(range(len(sizes)), [f"{s} px" for s in sizes])
         ax.set_yticks(range(len(specials)), [f"{x}%" for x in specials])
         ax.set_xlabel("icosphere size on screen" if t else "sphere size on screen")
         ax.set_ylabel("mirrors and glass")
         ax.set_title(f"{t} triangles an object, {o} octaves" if t else f"{o} noise octaves",
                      fontsize=10)
-    handles = [Patch(facecolor=series_style(series, k)["color"], label=series.label(k))
+    handles = [Patch(facecolor=series_fill(series, k), label=series.label(k))
                for k in keys]
     handles.append(Patch(facecolor=TIE_COLOR, hatch="//", label="tie (inside the frame spread)"))
     legend_row(legend_ax, handles, [h.get_label() for h in handles], ncol=len(handles))

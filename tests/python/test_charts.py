@@ -160,6 +160,22 @@ class RowsTest(unittest.TestCase):
                           "persistent megakernel (256 lanes a group)",
                           "persistent megakernel (nested loop)"])
 
+    @unittest.skipUnless(HAVE_MPL, "needs matplotlib")
+    def test_series_of_one_pipeline_get_fills_of_their_own(self):
+        # A map fills cells, where line styles cannot tell one pipeline's schedules apart: the
+        # first keeps the palette colour, the others are shades of it, every fill distinct.
+        rows = [dict(row("persist", "persistent megakernel", "tree", "s", 2, device_ms=ms),
+                     family="megakernel", options={"loop": loop, "lanes": lanes})
+                for loop, lanes, ms in (("flat", 0, 5.0), ("nested", 0, 4.0), ("flat", 256, 3.0))]
+        rows.append(dict(row("queue", "queue wavefront", "weighted", "s", 2), options={}))
+        series = sweep_rows.Series(rows)
+        fills = [chart_style.series_fill(series, k) for k in series.keys]
+        self.assertEqual(len(set(fills)), 4, fills)
+        self.assertEqual(fills[0].lower(), "#56b4e9")  # the persistent megakernel's own
+        self.assertEqual(fills[3].lower(), "#cc79a7")  # the queue's, unshaded
+        self.assertEqual(chart_style.text_on("#dddddd"), "black")
+        self.assertEqual(chart_style.text_on("#0072B2"), "white")
+
     def test_failure_is_read_from_the_field_not_the_message(self):
         rows = [row("mega", "megakernel", "tree", "s", b, group="limits") for b in range(3)]
         rows[2].update(status="error", failure="opencl", error="tree in private memory")
