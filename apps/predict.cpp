@@ -87,7 +87,8 @@ int runPredict() {
                 {"objects", scene.spheres.size() + scene.planes.size() + scene.triangles.size()},
                 {"predicted", p.design},
                 {"threshold", a.threshold},
-                {"reason", p.reason}};
+                {"reason", p.reason},
+                {"commit", RTLAB_COMMIT}};
             std::printf("%s\n", j.dump().c_str());
         } else {
             if (std::exchange(header, false))  // after the first scene loads, not before an error

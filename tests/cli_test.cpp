@@ -299,6 +299,7 @@ TEST(Cli, PredictSaysADesignPerScene) {
     EXPECT_EQ(empty.at("warps"), 32);
     EXPECT_EQ(empty.at("width"), 64);
     EXPECT_EQ(empty.at("predicted"), "tree-per-work-item");  // 32 is at the threshold, not below
+    EXPECT_EQ(empty.at("commit"), RTLAB_COMMIT);             // what the figures came from
     const nlohmann::json& spheres = strict[1];
     EXPECT_GT(spheres.at("largest_tree").get<int>(), 1);  // mirrors and glass branch
     EXPECT_LT(spheres.at("busy_lanes").get<double>(), 32.0);
