@@ -16,6 +16,7 @@
 #include "megakernel/megakernel_options.h"
 #include "pipelines/registry.h"
 #include "test_device.h"
+#include "test_sweep.h"
 #include "wavefront/tree/wavefront.h"
 
 namespace rt {
@@ -138,20 +139,14 @@ TEST(LimitsSweep, SkipsOnlySettingsNoSmallerThanAFailure) {
 // Runs a sweep file's text on the test device; rows by "pipeline WxH bB".
 std::map<std::string, nlohmann::json> run(const std::string& text,
                                           bench::SweepSummary* out = nullptr) {
-    SweepConfig c = bench::parseSweep(text, "limits-test");
-    bench::SweepRunOptions o;
-    o.device = test::device().device().name;
     std::map<std::string, nlohmann::json> rows;
-    bench::SweepSummary s =
-        bench::runSweep(c, o, nullptr, [&](const nlohmann::json& r, const Image*) {
-            std::string key = r["pipeline"].get<std::string>() + " " +
-                              std::to_string(r["width"].get<int>()) + "x" +
-                              std::to_string(r["height"].get<int>()) + " b" +
-                              std::to_string(r["bounces"].get<int>());
-            EXPECT_FALSE(rows.count(key)) << key;
-            rows[key] = r;
-        });
-    if (out) *out = s;
+    for (const nlohmann::json& r : test::sweepRows(text, "limits-test", out)) {
+        std::string key =
+            r["pipeline"].get<std::string>() + " " + std::to_string(r["width"].get<int>()) + "x" +
+            std::to_string(r["height"].get<int>()) + " b" + std::to_string(r["bounces"].get<int>());
+        EXPECT_FALSE(rows.count(key)) << key;
+        rows[key] = r;
+    }
     return rows;
 }
 

@@ -14,7 +14,6 @@
 #include <string>
 
 #include "bench/sweep_config.h"
-#include "bench/sweep_runner.h"
 #include "core/accel.h"
 #include "core/error.h"
 #include "core/pipeline_options.h"
@@ -24,6 +23,7 @@
 #include "megakernel/megakernel_options.h"
 #include "test_device.h"
 #include "test_images.h"
+#include "test_sweep.h"
 
 namespace rt {
 namespace {
@@ -269,16 +269,11 @@ TEST(Registry, SweepFilesTakeEveryDeclaredOption) {
 // A sweep's rows name the options a cell set away from their defaults in the registry's words
 // ("option_labels"), by which the charts name a variant; a cell at the defaults names none.
 TEST(Registry, RowsNameTheOptionsACellSet) {
-    bench::SweepConfig c = bench::parseSweep(
+    const std::vector<nlohmann::json> rows = test::sweepRows(
         "repeats = 1\nwarmup = 0\n[a]\nscenes = spheres\npipelines = persist\nsizes = 8x6\n"
         "bounces = 1\n[b]\nscenes = spheres\npipelines = persist\nsizes = 8x6\nbounces = 1\n"
         "persistent-loop = nested\npersistent-groups = 2\n",
         "labels-test");
-    bench::SweepRunOptions o;
-    o.device = std::to_string(test::device().device().index);
-    std::vector<nlohmann::json> rows;
-    bench::runSweep(c, o, nullptr,
-                    [&](const nlohmann::json& row, const Image*) { rows.push_back(row); });
     ASSERT_EQ(rows.size(), 2u);
     EXPECT_EQ(rows[0]["option_labels"], nlohmann::json::object());
     const nlohmann::json set = {{"persistent-groups", "2 groups per unit"},

@@ -12,6 +12,7 @@
 #include "core/error.h"
 #include "core/scene_loader.h"
 #include "test_device.h"
+#include "test_sweep.h"
 
 namespace rt {
 namespace {
@@ -178,15 +179,10 @@ TEST(SweepDevices, DeviceListsAreResolvedOrRefusedByName) {
 // follows them (its atomics slow it): the queue's span less its idle time is the last timed
 // frame's kernel time, while the rays are counted.
 TEST(SweepRows, TimingExtrasComeFromTheTimedFrames) {
-    bench::SweepConfig config = bench::parseSweep(
+    const std::vector<nlohmann::json> rows = test::sweepRows(
         "repeats = 3\nwarmup = 1\ncount-rays = yes\n[q]\nscenes = cornell\npipelines = queue\n"
         "sizes = 64x36\nbounces = 4\n",
         "extras-test");
-    bench::SweepRunOptions o;
-    o.device = std::to_string(test::device().device().index);
-    std::vector<nlohmann::json> rows;
-    bench::runSweep(config, o, nullptr,
-                    [&](const nlohmann::json& row, const Image*) { rows.push_back(row); });
     ASSERT_EQ(rows.size(), 1u);
     const nlohmann::json& r = rows[0];
     ASSERT_EQ(r["status"], "ok") << r.dump();
