@@ -86,7 +86,7 @@ const PipelineOption& tileOption() {
         .help =
             "Persistent megakernel: the order pixels are taken in, strips WxH (W columns, H "
             "rows) taken row by row, a warp's 32 pixels a W-wide block; 16x8 hands out the "
-            "megakernel's own work-groups (warps of 16x2), 8x4 was the order before 4x16 [4x16]",
+            "megakernel's own work-groups (warps of 16x2) [4x16]",
         .defaultValue = "4x16",
         .choices = {"4x16", "8x4", "4x8", "8x16", "4x32", "8x32", "16x8"},
         .sweepKey = "persistent-tile",
