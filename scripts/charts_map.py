@@ -72,11 +72,12 @@ def table(meta, series, grid, keys, path):
              f"commit {meta.get('commit', '?')})", "",
              "Device time of a frame (median of the timed frames, ms); the "
              "winner's margin is the runner-up's time over the winner's, a tie when the medians "
-             "differ by no more than the larger of the two cells' frame spreads (scripts/compare.py). Lanes: the megakernel's mean busy lanes of a 32-lane warp over the "
+             "differ by no more than the larger of the two cells' frame spreads (scripts/compare.py). In "
+             "brackets after a megakernel's time: its mean busy lanes of a 32-lane warp over the "
              "steps of its ray loop (counted on NVIDIA only).", ""]
     mesh = any(g[4] for g in grid)  # a triangles column only for mesh walls
     head = "| size px | " + ("triangles | " if mesh else "") + "mirrors+glass | octaves | " + \
-           " | ".join(series.label(k) for k in keys) + " | winner | margin | lanes (tree / weighted) |"
+           " | ".join(series.label(k) for k in keys) + " | winner | margin |"
     lines += [head, "|" + "---|" * (head.count("|") - 1)]
     wins, settings = {}, 0
     for (size, special, octaves, materials, triangles) in sorted(grid):
@@ -85,13 +86,11 @@ def table(meta, series, grid, keys, path):
         times = []
         for k in keys:
             r = by_key.get(k)
-            times.append(f"{r['device_ms']:.3f}" if r and r.get("status") == "ok" else "missing")
-        lanes = []
-        for k in keys:
-            r = by_key.get(k)
-            x = (r or {}).get("extras", {}).get("warp_lanes_active")
-            if x is not None:
-                lanes.append(f"{x:.1f}")
+            if not r or r.get("status") != "ok":
+                times.append("missing")
+                continue
+            lanes = r.get("extras", {}).get("warp_lanes_active")
+            times.append(f"{r['device_ms']:.3f}" + (f" ({lanes:.1f})" if lanes is not None else ""))
         if v:
             settings += 1
             winner, _, margin, tie = v
@@ -101,7 +100,7 @@ def table(meta, series, grid, keys, path):
             who, by = "not all ran", "-"
         lines.append(f"| {size} | " + (f"{triangles} | " if mesh else "") +
                      f"{special}% | {octaves} | " + " | ".join(times) +
-                     f" | {who} | {by} | {' / '.join(lanes) or '-'} |")
+                     f" | {who} | {by} |")
     lines += ["", f"Settings where every design ran: {settings}. Wins there: " +
               ", ".join(f"{series.label(k) if k != 'tie' else 'ties'} {n}"
                         for k, n in sorted(wins.items(), key=lambda kv: -kv[1])) + "."]
