@@ -2,6 +2,8 @@
 #include "persistent/persistent.h"
 
 #include <algorithm>
+#include <chrono>
+#include <cstdio>
 
 #include "core/error.h"
 #include "core/pipeline_registry.h"
@@ -138,6 +140,27 @@ const PipelineOption& regroupOption() {
     return o;
 }
 
+// Whether the flags above set the schedule, or the predicted busy lanes choose it.
+enum class PersistScheduleChoice { Flags, Auto };  // scheduleOption()'s choices, in order
+
+const PipelineOption& scheduleOption() {
+    static const PipelineOption o{
+        .name = "persistent-schedule",
+        .type = PipelineOption::Type::Choice,
+        .help =
+            "Persistent megakernel: flags (the schedule the other --persistent-* flags set) or "
+            "auto (busy lanes predicted on the CPU, as `rtlab predict` counts them, choose: "
+            "below 27.8 of 32, two work-groups of 256 lanes a compute unit at most 128 "
+            "registers, regrouped by pattern; at or above, the nested loop) [flags]",
+        .defaultValue = "flags",
+        .choices = {"flags", "auto"},
+        .sweepKey = "persistent-schedule",
+        .cellTag = "H",
+        .label = "{} schedule",
+    };
+    return o;
+}
+
 // Bytes of local memory a regrouped lane keeps: persistent.cl's RegroupSlot, a union of a hit
 // (Node, 48, and Pending, 64 with its float3 alignment) and a shading result (a float3 term, two
 // Pendings and a child mask, 148, padded to 160).
@@ -157,7 +180,37 @@ void checkLanes(const DeviceInfo& dev, size_t local, bool regroup) {
                     FailureKind::InvalidOption);
 }
 
+// The options --persistent-schedule auto sets itself.
+const std::vector<const PipelineOption*>& scheduledOptions() {
+    static const std::vector<const PipelineOption*> options{
+        &groupsOption(), &refillOption(),    &regroupOption(), &laneOption(),
+        &loopOption(),   &registersOption(), &tileOption()};
+    return options;
+}
+
+// The regrouped schedule's work-group: 256 lanes, or the most whose hits fit the device's local
+// memory and work-group size, a power of two.
+long long regroupLanes(const DeviceInfo& dev) {
+    long long lanes = 256;
+    while (lanes > 16 &&
+           (size_t(lanes) > dev.maxWorkGroup || size_t(lanes) * kRegroupSlotBytes > dev.localMem))
+        lanes /= 2;
+    return lanes;
+}
+
 }  // namespace
+
+PersistSchedule choosePersistentSchedule(const LaneEstimate& e) {
+    char lanes[64];
+    std::snprintf(lanes, sizeof lanes, "%.1f busy lanes of %d predicted", e.busyLanes, e.lanes);
+    char threshold[16];
+    std::snprintf(threshold, sizeof threshold, "%.1f", kRegroupBelowLanes);
+    if (e.busyLanes < kRegroupBelowLanes)
+        return {true, std::string(lanes) + " (below " + threshold +
+                          "): trees disagree, so work-groups regroup their hits by pattern"};
+    return {false, std::string(lanes) + " (at least " + threshold +
+                       "): trees agree, so the nested loop keeps a work-group on neighbours"};
+}
 
 size_t PersistentPipeline::workItems(const DeviceInfo& device, const RenderOptions& o,
                                      size_t local) {
@@ -165,7 +218,49 @@ size_t PersistentPipeline::workItems(const DeviceInfo& device, const RenderOptio
     return std::max<cl_uint>(device.computeUnits, 1) * groups * local;
 }
 
+RenderOptions PersistentPipeline::chooseSchedule(const Scene& scene, const RenderOptions& o) {
+    for (const PipelineOption* option : scheduledOptions())
+        if (!option->isDefault(o.pipelineOptions))
+            throw Error("--persistent-schedule auto chooses " + option->flag() +
+                            " itself; leave it out or use --persistent-schedule flags",
+                        FailureKind::InvalidOption);
+    const EstimateKey key{scene.id.value(), o.width, o.height, o.bounces, o.aa, o.shadowSamples};
+    if (busyLanes_ < 0 || !(estimateKey_ == key)) {
+        const auto start = std::chrono::steady_clock::now();
+        busyLanes_ = estimateBusyLanes(scene, o).busyLanes;
+        estimateKey_ = key;
+        predictMs_ =
+            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+                .count();
+    }
+    LaneEstimate estimate;
+    estimate.busyLanes = busyLanes_;
+    const PersistSchedule schedule = choosePersistentSchedule(estimate);
+    RenderOptions out = o;
+    if (schedule.regroup) {
+        regroupOption().set(out.pipelineOptions, std::string("pattern"));
+        laneOption().set(out.pipelineOptions, regroupLanes(cl_.device()));
+        groupsOption().set(out.pipelineOptions, 2ll);
+        registersOption().set(out.pipelineOptions, 128ll);
+    } else {
+        loopOption().set(out.pipelineOptions, std::string("nested"));
+    }
+    stats_.extras["persist_busy_lanes"] = busyLanes_;
+    stats_.extras["persist_predict_ms"] = predictMs_;
+    stats_.extras["persist_schedule"] = schedule.regroup ? "regrouped" : "nested";
+    stats_.note = "persistent schedule: " + std::string(schedule.regroup ? "regrouped" : "nested") +
+                  ": " + schedule.reason;
+    return out;
+}
+
 Image PersistentPipeline::renderFrame(const Scene& scene, const RenderOptions& o) {
+    const auto choice = PersistScheduleChoice(scheduleOption().index(o.pipelineOptions));
+    if (choice == PersistScheduleChoice::Auto)
+        return renderScheduled(scene, chooseSchedule(scene, o));
+    return renderScheduled(scene, o);
+}
+
+Image PersistentPipeline::renderScheduled(const Scene& scene, const RenderOptions& o) {
     if (o.adaptiveAa && o.aa > 1)
         throw Error(
             "--adaptive: the persistent megakernel has no adaptive anti-aliasing (use "
@@ -282,10 +377,11 @@ void registerPersistentMegakernel(PipelineRegistry& registry) {
         "work-items take pixels from a global counter as their ray trees end "
         "(--persistent-groups N, --persistent-refill N, --persistent-regroup pattern|material, "
         "--persistent-lanes N, --persistent-max-registers N, --persistent-loop nested, "
-        "--persistent-tile WxH)";
+        "--persistent-tile WxH, or --persistent-schedule auto to let predicted busy lanes "
+        "choose)";
     p.supports = {.adaptiveAa = false, .tiling = false, .rowWindow = true};
     p.options = {groupsOption(),    refillOption(), regroupOption(), laneOption(),
-                 registersOption(), loopOption(),   tileOption()};
+                 registersOption(), loopOption(),   tileOption(),    scheduleOption()};
     // Tests and the smoke check run the default schedule, the regrouped one, whose hits move
     // between lanes through local memory, and the nested loop.
     PipelineVariant regrouped{"regrouped", {}}, nested{"nested", {}};

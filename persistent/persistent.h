@@ -2,10 +2,30 @@
 // work-groups sized to fill the device, each work-item taking pixels from a global counter.
 #pragma once
 
+#include <cstdint>
+#include <string>
+
 #include "core/device_pipeline.h"
 #include "core/launch_planner.h"
+#include "core/predict.h"
 
 namespace rt {
+
+// --persistent-schedule auto: the schedule the busy lanes predicted for a scene call for
+// (core/predict.h). Where neighbouring pixels' trees disagree (below the predictor's queue
+// threshold), two regrouped work-groups of 256 lanes a compute unit, capped at 128 registers so
+// that both fit on NVIDIA, sort their hits by pattern each step; where they agree, the nested
+// loop keeps a work-group's lanes on neighbouring pixels. Fitted on the H200's map: the nested
+// loop was the best schedule on every scene at 29.5 or more predicted lanes, a regrouped one on
+// every wall at 26.5 or fewer.
+inline constexpr double kRegroupBelowLanes = kQueueBelowLanes;
+
+struct PersistSchedule {
+    bool regroup = false;  // else the nested loop
+    std::string reason;    // one sentence with the lanes it rests on
+};
+
+PersistSchedule choosePersistentSchedule(const LaneEstimate& estimate);
 
 class PersistentPipeline : public DevicePipeline {
   public:
@@ -17,9 +37,22 @@ class PersistentPipeline : public DevicePipeline {
 
   private:
     Image renderFrame(const Scene& scene, const RenderOptions& options) override;
+    // The frame in the schedule the options name, --persistent-schedule auto resolved.
+    Image renderScheduled(const Scene& scene, const RenderOptions& options);
+    // The options with --persistent-schedule auto's choice set, estimated once per scene and
+    // the settings the estimate depends on.
+    RenderOptions chooseSchedule(const Scene& scene, const RenderOptions& options);
 
     DeviceBuffer image_, next_;
     LaunchPlanner planner_;
+    // What the estimate depends on, the lanes it gave (negative: none yet) and its CPU time.
+    struct EstimateKey {
+        std::uint64_t scene = 0;
+        int width = 0, height = 0, bounces = 0, aa = 0, shadowSamples = 0;
+        bool operator==(const EstimateKey&) const = default;
+    };
+    EstimateKey estimateKey_;
+    double busyLanes_ = -1, predictMs_ = 0;
 };
 
 }  // namespace rt

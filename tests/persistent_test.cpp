@@ -8,6 +8,8 @@
 
 #include <gtest/gtest.h>
 
+#include <tuple>
+
 #include "core/error.h"
 #include "megakernel/megakernel.h"
 #include "megakernel/megakernel_options.h"
@@ -181,6 +183,57 @@ TEST(Persistent, CountsTheRaysTheMegakernelCounts) {
     ASSERT_TRUE(persist.stats().raysCounted);
     EXPECT_EQ(persist.stats().rays, mega.stats().rays);
     EXPECT_GT(persist.stats().rays[RT_RAY_PRIMARY], 0u);
+}
+
+TEST(Persistent, AutoScheduleRegroupsBelowTheThresholdAndNestsAtOrAbove) {
+    LaneEstimate e;
+    e.busyLanes = kRegroupBelowLanes - 0.01;
+    EXPECT_TRUE(choosePersistentSchedule(e).regroup);
+    e.busyLanes = kRegroupBelowLanes;
+    EXPECT_FALSE(choosePersistentSchedule(e).regroup);
+    EXPECT_EQ(choosePersistentSchedule(e).reason.rfind("27.8 busy lanes of 32 predicted", 0), 0u)
+        << choosePersistentSchedule(e).reason;
+}
+
+// --persistent-schedule auto on a frame whose warps all miss (32 busy lanes: the nested loop) and
+// on one of mirrors and glass at 40x30 (fewer: regrouped), each the weighted megakernel's bits.
+TEST(Persistent, AutoScheduleKeepsTheBitsOnBothSides) {
+    MegakernelPipeline mega(test::device());
+    PersistentPipeline persist(test::device());
+    for (const auto& [name, width, height] :
+         {std::tuple{"empty", 64, 32}, std::tuple{"spheres", 40, 30}}) {
+        Scene scene = load(name);
+        RenderOptions o = weighted(scene, 4, 1);
+        o.width = width;
+        o.height = height;
+        o.countRays = true;
+        const bool regroup = choosePersistentSchedule(estimateBusyLanes(scene, o)).regroup;
+        EXPECT_EQ(regroup, std::string(name) == "spheres") << name;
+        setOption(o, "persistent-schedule", std::string("auto"));
+        EXPECT_TRUE(sameBits(mega.render(scene, o), persist.render(scene, o))) << name;
+        EXPECT_EQ(persist.stats().extras.value("persist_schedule", ""),
+                  regroup ? "regrouped" : "nested")
+            << name;
+        ASSERT_TRUE(persist.stats().raysCounted) << name;
+        EXPECT_EQ(persist.stats().rays, mega.stats().rays) << name;
+    }
+}
+
+TEST(Persistent, AutoScheduleRefusesTheFlagsItSets) {
+    Scene scene = load("spheres");
+    PersistentPipeline persist(test::device());
+    RenderOptions o = weighted(scene, 2, 1);
+    setOption(o, "persistent-schedule", std::string("auto"));
+    setOption(o, "persistent-loop", std::string("nested"));
+    try {
+        persist.render(scene, o);
+        ADD_FAILURE() << "no error for --persistent-schedule auto with --persistent-loop";
+    } catch (const Error& e) {
+        EXPECT_EQ(e.kind(), FailureKind::InvalidOption);
+        EXPECT_STREQ(e.what(),
+                     "--persistent-schedule auto chooses --persistent-loop itself; leave it out "
+                     "or use --persistent-schedule flags");
+    }
 }
 
 TEST(Persistent, RefusesAdaptiveAntiAliasingAndOptionsOutOfRange) {
