@@ -149,9 +149,10 @@ const PipelineOption& scheduleOption() {
         .type = PipelineOption::Type::Choice,
         .help =
             "Persistent megakernel: flags (the schedule the other --persistent-* flags set) or "
-            "auto (busy lanes predicted on the CPU, as `rtlab predict` counts them, choose: "
-            "below 27.8 of 32, two work-groups of 256 lanes a compute unit at most 128 "
-            "registers, regrouped by pattern; at or above, the nested loop) [flags]",
+            "auto (warps traced on the CPU, as `rtlab predict` does, choose: below 27.8 busy "
+            "lanes of 32 or from 1.6 objects a warp, two work-groups of 256 lanes a compute "
+            "unit at most 128 registers, regrouped by pattern; otherwise the nested loop) "
+            "[flags]",
         .defaultValue = "flags",
         .choices = {"flags", "auto"},
         .sweepKey = "persistent-schedule",
@@ -201,15 +202,25 @@ long long regroupLanes(const DeviceInfo& dev) {
 }  // namespace
 
 PersistSchedule choosePersistentSchedule(const LaneEstimate& e) {
-    char lanes[64];
+    char lanes[80], objects[80];
     std::snprintf(lanes, sizeof lanes, "%.1f busy lanes of %d predicted", e.busyLanes, e.lanes);
-    char threshold[16];
-    std::snprintf(threshold, sizeof threshold, "%.1f", kRegroupBelowLanes);
-    if (e.busyLanes < kRegroupBelowLanes)
-        return {true, std::string(lanes) + " (below " + threshold +
-                          "): trees disagree, so work-groups regroup their hits by pattern"};
-    return {false, std::string(lanes) + " (at least " + threshold +
-                       "): trees agree, so the nested loop keeps a work-group on neighbours"};
+    std::snprintf(objects, sizeof objects, "%.1f objects a warp", e.objectsPerWarp);
+    if (e.busyLanes < kRegroupBelowLanes) {
+        char why[64];
+        std::snprintf(why, sizeof why, " (below %.1f)", kRegroupBelowLanes);
+        return {true, std::string(lanes) + why +
+                          ": trees disagree, so work-groups regroup their hits by pattern"};
+    }
+    if (e.objectsPerWarp >= kRegroupFromObjects) {
+        char why[64];
+        std::snprintf(why, sizeof why, " (at least %.1f)", kRegroupFromObjects);
+        return {true, std::string(objects) + why +
+                          ": a warp shades several patterns, so work-groups regroup their "
+                          "hits by pattern"};
+    }
+    return {false, std::string(lanes) + " and " + objects +
+                       ": trees and patterns agree, so the nested loop keeps a work-group on "
+                       "neighbours"};
 }
 
 size_t PersistentPipeline::workItems(const DeviceInfo& device, const RenderOptions& o,
@@ -225,17 +236,16 @@ RenderOptions PersistentPipeline::chooseSchedule(const Scene& scene, const Rende
                             " itself; leave it out or use --persistent-schedule flags",
                         FailureKind::InvalidOption);
     const EstimateKey key{scene.id.value(), o.width, o.height, o.bounces, o.aa, o.shadowSamples};
-    if (busyLanes_ < 0 || !(estimateKey_ == key)) {
+    if (!estimated_ || !(estimateKey_ == key)) {
         const auto start = std::chrono::steady_clock::now();
-        busyLanes_ = estimateBusyLanes(scene, o).busyLanes;
+        estimate_ = estimateBusyLanes(scene, o);
         estimateKey_ = key;
+        estimated_ = true;
         predictMs_ =
             std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
                 .count();
     }
-    LaneEstimate estimate;
-    estimate.busyLanes = busyLanes_;
-    const PersistSchedule schedule = choosePersistentSchedule(estimate);
+    const PersistSchedule schedule = choosePersistentSchedule(estimate_);
     RenderOptions out = o;
     if (schedule.regroup) {
         regroupOption().set(out.pipelineOptions, std::string("pattern"));
@@ -245,7 +255,8 @@ RenderOptions PersistentPipeline::chooseSchedule(const Scene& scene, const Rende
     } else {
         loopOption().set(out.pipelineOptions, std::string("nested"));
     }
-    stats_.extras["persist_busy_lanes"] = busyLanes_;
+    stats_.extras["persist_busy_lanes"] = estimate_.busyLanes;
+    stats_.extras["persist_objects_per_warp"] = estimate_.objectsPerWarp;
     stats_.extras["persist_predict_ms"] = predictMs_;
     stats_.extras["persist_schedule"] = schedule.regroup ? "regrouped" : "nested";
     stats_.note = "persistent schedule: " + std::string(schedule.regroup ? "regrouped" : "nested") +

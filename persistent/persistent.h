@@ -11,18 +11,21 @@
 
 namespace rt {
 
-// --persistent-schedule auto: the schedule the busy lanes predicted for a scene call for
-// (core/predict.h). Where neighbouring pixels' trees disagree (below the predictor's queue
-// threshold), two regrouped work-groups of 256 lanes a compute unit, capped at 128 registers so
-// that both fit on NVIDIA, sort their hits by pattern each step; where they agree, the nested
-// loop keeps a work-group's lanes on neighbouring pixels. Fitted on the H200's map: the nested
-// loop was the best schedule on every scene at 29.5 or more predicted lanes, a regrouped one on
-// every wall at 26.5 or fewer.
+// --persistent-schedule auto: the schedule a scene's predicted warps call for (core/predict.h).
+// Where neighbouring pixels' trees disagree (fewer busy lanes than the predictor's queue
+// threshold), or where a warp's camera rays hit several objects and so shade several procedural
+// patterns, two regrouped work-groups of 256 lanes a compute unit, capped at 128 registers so that
+// both fit on NVIDIA, sort their hits by pattern each step; elsewhere the nested loop keeps a
+// work-group's lanes on neighbouring pixels. Fitted on the H200's map: the nested loop was the
+// best schedule on every scene at 29.5 predicted lanes or more and at most 1.4 objects a warp, a
+// regrouped one on every wall at 26.5 lanes or fewer and on the two coherent walls of 16 px
+// spheres (1.8 objects a warp).
 inline constexpr double kRegroupBelowLanes = kQueueBelowLanes;
+inline constexpr double kRegroupFromObjects = 1.6;
 
 struct PersistSchedule {
     bool regroup = false;  // else the nested loop
-    std::string reason;    // one sentence with the lanes it rests on
+    std::string reason;    // one sentence with the lanes or objects it rests on
 };
 
 PersistSchedule choosePersistentSchedule(const LaneEstimate& estimate);
@@ -45,14 +48,16 @@ class PersistentPipeline : public DevicePipeline {
 
     DeviceBuffer image_, next_;
     LaunchPlanner planner_;
-    // What the estimate depends on, the lanes it gave (negative: none yet) and its CPU time.
+    // What the estimate depends on, the estimate and its CPU time.
     struct EstimateKey {
         std::uint64_t scene = 0;
         int width = 0, height = 0, bounces = 0, aa = 0, shadowSamples = 0;
         bool operator==(const EstimateKey&) const = default;
     };
     EstimateKey estimateKey_;
-    double busyLanes_ = -1, predictMs_ = 0;
+    LaneEstimate estimate_;
+    double predictMs_ = 0;
+    bool estimated_ = false;
 };
 
 }  // namespace rt

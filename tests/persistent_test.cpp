@@ -185,13 +185,20 @@ TEST(Persistent, CountsTheRaysTheMegakernelCounts) {
     EXPECT_GT(persist.stats().rays[RT_RAY_PRIMARY], 0u);
 }
 
-TEST(Persistent, AutoScheduleRegroupsBelowTheThresholdAndNestsAtOrAbove) {
+TEST(Persistent, AutoScheduleRegroupsWhereLanesOrPatternsDisagree) {
     LaneEstimate e;
+    e.objectsPerWarp = 1.0;
     e.busyLanes = kRegroupBelowLanes - 0.01;
     EXPECT_TRUE(choosePersistentSchedule(e).regroup);
     e.busyLanes = kRegroupBelowLanes;
     EXPECT_FALSE(choosePersistentSchedule(e).regroup);
-    EXPECT_EQ(choosePersistentSchedule(e).reason.rfind("27.8 busy lanes of 32 predicted", 0), 0u)
+    EXPECT_EQ(choosePersistentSchedule(e).reason.rfind(
+                  "27.8 busy lanes of 32 predicted and 1.0 objects a warp", 0),
+              0u)
+        << choosePersistentSchedule(e).reason;
+    e.objectsPerWarp = kRegroupFromObjects;  // busy lanes, but several patterns a warp
+    EXPECT_TRUE(choosePersistentSchedule(e).regroup);
+    EXPECT_EQ(choosePersistentSchedule(e).reason.rfind("1.6 objects a warp (at least 1.6)", 0), 0u)
         << choosePersistentSchedule(e).reason;
 }
 
