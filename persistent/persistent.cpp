@@ -394,11 +394,13 @@ void registerPersistentMegakernel(PipelineRegistry& registry) {
     p.options = {groupsOption(),    refillOption(), regroupOption(), laneOption(),
                  registersOption(), loopOption(),   tileOption(),    scheduleOption()};
     // Tests and the smoke check run the default schedule, the regrouped one, whose hits move
-    // between lanes through local memory, and the nested loop.
-    PipelineVariant regrouped{"regrouped", {}}, nested{"nested", {}};
+    // between lanes through local memory, the nested loop, and the schedule auto chooses (256
+    // regrouped lanes a group where it regroups).
+    PipelineVariant regrouped{"regrouped", {}}, nested{"nested", {}}, automatic{"auto", {}};
     regroupOption().set(regrouped.values, std::string("material"));
     loopOption().set(nested.values, std::string("nested"));
-    p.variants = {PipelineVariant{"", {}}, regrouped, nested};
+    scheduleOption().set(automatic.values, std::string("auto"));
+    p.variants = {PipelineVariant{"", {}}, regrouped, nested, automatic};
     p.make = [](ClContext* cl) { return std::make_unique<PersistentPipeline>(*cl); };
     registry.add(std::move(p));
 }

@@ -171,14 +171,30 @@ def commits_of(meta, rows):
     return seen[0] if seen else meta.get("commit", "?")
 
 
+def drop_rows(rows, drops):
+    """The rows whose fields match none of the FIELD=VALUE strings in `drops` (values compared as
+    text, so that persistent_groups=2 matches the number 2)."""
+    pairs = []
+    for d in drops:
+        field, sep, value = d.partition("=")
+        if not sep or not field:
+            sys.exit(f"--drop {d}: expected FIELD=VALUE")
+        pairs.append((field, value))
+    return [r for r in rows if not any(str(r.get(f)) == v for f, v in pairs)]
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("rows", nargs="+")
     ap.add_argument("--out", default=None, help="folder for map.png and map.md [beside the first]")
+    ap.add_argument("--drop", action="append", default=[], metavar="FIELD=VALUE",
+                    help="leave out the rows whose FIELD is VALUE (persistent_schedule=auto); "
+                         "repeat for more")
     a = ap.parse_args()
     meta, rows = load(a.rows[0])
     for more in a.rows[1:]:
         rows += load(more)[1]
+    rows = drop_rows(rows, a.drop)
     meta = dict(meta, commit=commits_of(meta, rows))
     series, grid = cells(rows)
     if not grid:

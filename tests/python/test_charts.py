@@ -537,6 +537,17 @@ class MapTest(unittest.TestCase):
         # A megakernel's busy lanes sit in brackets beside its own time.
         self.assertIn("| 4 | 50% | 8 | 9.000 (7.2) | 3.000 | queue | 3.00x |", text)
 
+    def test_drop_leaves_out_rows_by_a_field(self):
+        spec = importlib.util.spec_from_file_location("charts_map", os.path.join(SCRIPTS, "charts_map.py"))
+        m = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(m)
+        rows = [{"pipeline": "persist", "persistent_schedule": "auto", "persistent_groups": 2},
+                {"pipeline": "persist", "persistent_schedule": "flags", "persistent_groups": 4},
+                {"pipeline": "mega"}]
+        kept = m.drop_rows(rows, ["persistent_schedule=auto"])
+        self.assertEqual([r.get("persistent_schedule") for r in kept], ["flags", None])
+        self.assertEqual(len(m.drop_rows(rows, ["persistent_groups=4", "pipeline=mega"])), 1)
+
     def test_mesh_walls_are_their_own_settings_with_a_triangles_column(self):
         spec = importlib.util.spec_from_file_location("charts_map", os.path.join(SCRIPTS, "charts_map.py"))
         m = importlib.util.module_from_spec(spec)
