@@ -14,6 +14,7 @@
 #include "core/error.h"
 #include "core/scene_loader.h"
 #include "image/image_io.h"
+#include "persistent/persistent.h"
 
 namespace rt::cli {
 namespace {
@@ -37,7 +38,8 @@ void addPredict(CLI::App& app) {
         "predict",
         "Say which design should win on a GPU, before any runs: traces the ray trees of a sample\n"
         "of warps (16x2 pixels) on the CPU, without shading, and counts how many of a warp's 32\n"
-        "lanes would be busy a step in a megakernel that gives each work-item a whole tree");
+        "lanes would be busy a step in a megakernel that gives each work-item a whole tree; also\n"
+        "names the schedule --persistent-schedule auto would take (persist: regrouped or nested)");
     predictCmd->add_option("scenes", a.scenes, "Scene files (.json) or models")->required();
     predictCmd->add_option("--size", a.size, "Image size WxH (default: the scene's)");
     predictCmd->add_option("--bounces", a.bounces, "Bounce limit B (default: the scene's)")
@@ -70,6 +72,9 @@ int runPredict() {
         if (a.aa) o.aa = *a.aa;
         const LaneEstimate e = estimateBusyLanes(scene, o, a.warps);
         const Prediction p = predictDesign(e, a.threshold);
+        // What --pipeline persist --persistent-schedule auto would render with (its own rule).
+        const PersistSchedule persist = choosePersistentSchedule(e);
+        const char* schedule = persist.regroup ? "regrouped" : "nested";
         if (a.json) {
             nlohmann::json j = {
                 {"scene", file},
@@ -88,15 +93,17 @@ int runPredict() {
                 {"predicted", p.design},
                 {"threshold", a.threshold},
                 {"reason", p.reason},
+                {"persist_schedule", schedule},
+                {"persist_reason", persist.reason},
                 {"commit", RTLAB_COMMIT}};
             std::printf("%s\n", j.dump().c_str());
         } else {
             if (std::exchange(header, false))  // after the first scene loads, not before an error
-                std::printf("%-40s %10s %10s %8s %9s %9s  %s\n", "scene", "size", "busy/32",
-                            "rays/px", "largest", "obj/warp", "predicted");
-            std::printf("%-40s %10s %10.1f %8.2f %9d %9.1f  %s\n", scene.name.c_str(),
+                std::printf("%-40s %10s %10s %8s %9s %9s %10s  %s\n", "scene", "size", "busy/32",
+                            "rays/px", "largest", "obj/warp", "persist", "predicted");
+            std::printf("%-40s %10s %10.1f %8.2f %9d %9.1f %10s  %s\n", scene.name.c_str(),
                         (std::to_string(o.width) + "x" + std::to_string(o.height)).c_str(),
-                        e.busyLanes, e.raysPerPixel, e.largestTree, e.objectsPerWarp,
+                        e.busyLanes, e.raysPerPixel, e.largestTree, e.objectsPerWarp, schedule,
                         p.reason.c_str());
         }
         std::fflush(stdout);

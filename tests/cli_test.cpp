@@ -300,11 +300,13 @@ TEST(Cli, PredictSaysADesignPerScene) {
     EXPECT_EQ(empty.at("width"), 64);
     EXPECT_EQ(empty.at("predicted"), "tree-per-work-item");  // 32 is at the threshold, not below
     EXPECT_EQ(empty.at("commit"), RTLAB_COMMIT);             // what the figures came from
+    EXPECT_EQ(empty.at("persist_schedule"), "nested");       // every lane busy, one object
     const nlohmann::json& spheres = strict[1];
     EXPECT_GT(spheres.at("largest_tree").get<int>(), 1);  // mirrors and glass branch
     EXPECT_LT(spheres.at("busy_lanes").get<double>(), 32.0);
     EXPECT_GT(spheres.at("rays_per_pixel").get<double>(), 1.0);
     EXPECT_EQ(spheres.at("predicted"), "queue");
+    EXPECT_EQ(spheres.at("persist_schedule"), "regrouped");  // below 27.8 busy lanes
     const std::vector<nlohmann::json> lenient = predict("0");
     ASSERT_EQ(lenient.size(), 2u);
     EXPECT_EQ(lenient[1].at("predicted"), "tree-per-work-item");
