@@ -130,6 +130,12 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"render scenes/spheres.json --pipeline persist --persistent-max-registers 300 "
                 "-o /tmp/x.png",
                 "--persistent-max-registers 300: must be in 16..255"},
+        BadCase{"render scenes/spheres.json --pipeline persist --persistent-schedule often "
+                "-o /tmp/x.png",
+                "--persistent-schedule often: must be flags or auto"},
+        BadCase{"render scenes/spheres.json --size 16x8 --pipeline persist --persistent-schedule "
+                "auto --persistent-loop nested -o /tmp/x.png",
+                "--persistent-schedule auto chooses --persistent-loop itself"},
         BadCase{"render scenes/spheres.json --pipeline queue --pool 8 --bounces 6 -o /tmp/x.png",
                 "use --pool 64 or more"},
         BadCase{"render scenes/spheres.json --pipeline queue --queue-launch sideways -o /tmp/x.png",
