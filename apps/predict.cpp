@@ -74,7 +74,7 @@ int runPredict() {
         const Prediction p = predictDesign(e, a.threshold);
         // What --pipeline persist --persistent-schedule auto would render with (its own rule).
         const PersistSchedule persist = choosePersistentSchedule(e);
-        const char* schedule = persist.regroup ? "regrouped" : "nested";
+        const char* schedule = persist.name();
         if (a.json) {
             nlohmann::json j = {
                 {"scene", file},

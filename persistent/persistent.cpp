@@ -148,11 +148,17 @@ const PipelineOption& scheduleOption() {
         .name = "persistent-schedule",
         .type = PipelineOption::Type::Choice,
         .help =
-            "Persistent megakernel: flags (the schedule the other --persistent-* flags set) or "
-            "auto (warps traced on the CPU, as `rtlab predict` does, choose: below 27.8 busy "
-            "lanes of 32 or from 1.6 objects a warp, two work-groups of 256 lanes a compute "
-            "unit at most 128 registers, regrouped by pattern; otherwise the nested loop) "
-            "[flags]",
+            [] {
+                char rule[96];
+                std::snprintf(rule, sizeof rule,
+                              "below %.1f busy lanes of 32 or from %.1f objects a warp",
+                              kRegroupBelowLanes, kRegroupFromObjects);
+                return "Persistent megakernel: flags (the schedule the other --persistent-* flags "
+                       "set) or auto (warps traced on the CPU, as `rtlab predict` does, choose: " +
+                       std::string(rule) +
+                       ", two work-groups of 256 lanes a compute unit at most 128 registers, "
+                       "regrouped by pattern; otherwise the nested loop) [flags]";
+            }(),
         .defaultValue = "flags",
         .choices = {"flags", "auto"},
         .sweepKey = "persistent-schedule",
@@ -258,9 +264,8 @@ RenderOptions PersistentPipeline::chooseSchedule(const Scene& scene, const Rende
     stats_.extras["persist_busy_lanes"] = estimate_.busyLanes;
     stats_.extras["persist_objects_per_warp"] = estimate_.objectsPerWarp;
     stats_.extras["persist_predict_ms"] = predictMs_;
-    stats_.extras["persist_schedule"] = schedule.regroup ? "regrouped" : "nested";
-    stats_.note = "persistent schedule: " + std::string(schedule.regroup ? "regrouped" : "nested") +
-                  ": " + schedule.reason;
+    stats_.extras["persist_schedule"] = schedule.name();
+    stats_.note = "persistent schedule: " + std::string(schedule.name()) + ": " + schedule.reason;
     return out;
 }
 
@@ -388,7 +393,7 @@ void registerPersistentMegakernel(PipelineRegistry& registry) {
         "work-items take pixels from a global counter as their ray trees end "
         "(--persistent-groups N, --persistent-refill N, --persistent-regroup pattern|material, "
         "--persistent-lanes N, --persistent-max-registers N, --persistent-loop nested, "
-        "--persistent-tile WxH, or --persistent-schedule auto to let predicted busy lanes "
+        "--persistent-tile WxH, or --persistent-schedule auto to let warps traced on the CPU "
         "choose)";
     p.supports = {.adaptiveAa = false, .tiling = false, .rowWindow = true};
     p.options = {groupsOption(),    refillOption(), regroupOption(), laneOption(),

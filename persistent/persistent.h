@@ -26,6 +26,7 @@ inline constexpr double kRegroupFromObjects = 1.6;
 struct PersistSchedule {
     bool regroup = false;  // else the nested loop
     std::string reason;    // one sentence with the lanes or objects it rests on
+    const char* name() const { return regroup ? "regrouped" : "nested"; }
 };
 
 PersistSchedule choosePersistentSchedule(const LaneEstimate& estimate);
