@@ -2,6 +2,7 @@
 #include "core/predict.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <numeric>
 #include <random>
@@ -80,6 +81,20 @@ LaneEstimate estimateBusyLanes(const Scene& scene, const RenderOptions& options,
     e.largestTree = traced.empty() ? 0 : *std::max_element(traced.begin(), traced.end());
     e.objectsPerWarp = e.warps ? double(objects) / e.warps : 0.0;
     return e;
+}
+
+const LaneEstimate& LaneEstimateCache::get(const Scene& scene, const RenderOptions& o) {
+    const Key key{scene.id.value(), o.width,      o.height, o.bounces, o.aa,
+                  o.robustSphere,   o.watertight, o.offset};
+    if (!valid_ || !(key_ == key)) {
+        const auto start = std::chrono::steady_clock::now();
+        estimate_ = estimateBusyLanes(scene, o);
+        ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+                  .count();
+        key_ = key;
+        valid_ = true;
+    }
+    return estimate_;
 }
 
 Prediction predictDesign(const LaneEstimate& estimate, double queueBelowLanes) {

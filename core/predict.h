@@ -45,6 +45,28 @@ struct LaneEstimate {
 LaneEstimate estimateBusyLanes(const Scene& scene, const RenderOptions& options, int warps = 2048,
                                WarpShape shape = {}, std::uint64_t seed = 1, int threads = 0);
 
+// The estimate of the last scene and settings asked for, traced again only when what it depends
+// on changes (the scene object, the frame's size, bounces, anti-aliasing and the intersection
+// tests), so that a pipeline that chooses from it each frame traces once per scene.
+class LaneEstimateCache {
+  public:
+    const LaneEstimate& get(const Scene& scene, const RenderOptions& options);
+    double lastMs() const { return ms_; }  // CPU time of the trace the estimate came from
+
+  private:
+    struct Key {
+        std::uint64_t scene = 0;
+        int width = 0, height = 0, bounces = 0, aa = 0;
+        bool robustSphere = false, watertight = false;
+        RenderOptions::Offset offset{};
+        bool operator==(const Key&) const = default;
+    };
+    Key key_;
+    LaneEstimate estimate_;
+    double ms_ = 0;
+    bool valid_ = false;
+};
+
 // The rule: below `queueBelowLanes` busy lanes of 32, the queue wavefront wins; at or above it a
 // design that gives each work-item a whole tree (the megakernel or the report's tree wavefront)
 // does. The default is fitted to the crossover map measured on an NVIDIA H200

@@ -2,7 +2,6 @@
 #include "persistent/persistent.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cstdio>
 
 #include "core/error.h"
@@ -241,17 +240,8 @@ RenderOptions PersistentPipeline::chooseSchedule(const Scene& scene, const Rende
             throw Error("--persistent-schedule auto chooses " + option->flag() +
                             " itself; leave it out or use --persistent-schedule flags",
                         FailureKind::InvalidOption);
-    const EstimateKey key{scene.id.value(), o.width, o.height, o.bounces, o.aa, o.shadowSamples};
-    if (!estimated_ || !(estimateKey_ == key)) {
-        const auto start = std::chrono::steady_clock::now();
-        estimate_ = estimateBusyLanes(scene, o);
-        estimateKey_ = key;
-        estimated_ = true;
-        predictMs_ =
-            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
-                .count();
-    }
-    const PersistSchedule schedule = choosePersistentSchedule(estimate_);
+    const LaneEstimate& estimate = estimates_.get(scene, o);
+    const PersistSchedule schedule = choosePersistentSchedule(estimate);
     RenderOptions out = o;
     if (schedule.regroup) {
         regroupOption().set(out.pipelineOptions, std::string("pattern"));
@@ -261,9 +251,9 @@ RenderOptions PersistentPipeline::chooseSchedule(const Scene& scene, const Rende
     } else {
         loopOption().set(out.pipelineOptions, std::string("nested"));
     }
-    stats_.extras["persist_busy_lanes"] = estimate_.busyLanes;
-    stats_.extras["persist_objects_per_warp"] = estimate_.objectsPerWarp;
-    stats_.extras["persist_predict_ms"] = predictMs_;
+    stats_.extras["persist_busy_lanes"] = estimate.busyLanes;
+    stats_.extras["persist_objects_per_warp"] = estimate.objectsPerWarp;
+    stats_.extras["persist_predict_ms"] = estimates_.lastMs();
     stats_.extras["persist_schedule"] = schedule.name();
     stats_.note = "persistent schedule: " + std::string(schedule.name()) + ": " + schedule.reason;
     return out;

@@ -2,7 +2,6 @@
 // work-groups sized to fill the device, each work-item taking pixels from a global counter.
 #pragma once
 
-#include <cstdint>
 #include <string>
 
 #include "core/device_pipeline.h"
@@ -43,22 +42,12 @@ class PersistentPipeline : public DevicePipeline {
     Image renderFrame(const Scene& scene, const RenderOptions& options) override;
     // The frame in the schedule the options name, --persistent-schedule auto resolved.
     Image renderScheduled(const Scene& scene, const RenderOptions& options);
-    // The options with --persistent-schedule auto's choice set, estimated once per scene and
-    // the settings the estimate depends on.
+    // The options with --persistent-schedule auto's choice set.
     RenderOptions chooseSchedule(const Scene& scene, const RenderOptions& options);
 
     DeviceBuffer image_, next_;
     LaunchPlanner planner_;
-    // What the estimate depends on, the estimate and its CPU time.
-    struct EstimateKey {
-        std::uint64_t scene = 0;
-        int width = 0, height = 0, bounces = 0, aa = 0, shadowSamples = 0;
-        bool operator==(const EstimateKey&) const = default;
-    };
-    EstimateKey estimateKey_;
-    LaneEstimate estimate_;
-    double predictMs_ = 0;
-    bool estimated_ = false;
+    LaneEstimateCache estimates_;  // --persistent-schedule auto's, one trace per scene
 };
 
 }  // namespace rt

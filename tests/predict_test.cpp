@@ -96,6 +96,25 @@ TEST(LaneEstimate, TheSameSceneGivesTheSameEstimate) {
     EXPECT_GT(a.largestTree, 1) << "the spheres scene has mirrors";
 }
 
+// The cache traces again when a setting the trees depend on changes, and gives back what it
+// traced for the settings asked for.
+TEST(LaneEstimate, TheCacheFollowsTheSettings) {
+    const Scene scene = test::load("spheres");
+    RenderOptions o = scene.defaults;
+    o.width = 64, o.height = 32;
+    o.bounces = 4;
+    LaneEstimateCache cache;
+    const LaneEstimate four = cache.get(scene, o);
+    EXPECT_GT(four.largestTree, 1) << "mirrors and glass branch";
+    o.bounces = 0;
+    EXPECT_EQ(cache.get(scene, o).largestTree, 1) << "no bounces: a camera ray a tree";
+    o.bounces = 4;
+    EXPECT_DOUBLE_EQ(cache.get(scene, o).busyLanes, four.busyLanes);
+    const Scene other = test::load("empty");
+    EXPECT_EQ(cache.get(other, o).busyLanes, 32.0) << "a new scene is traced, not the last one";
+    EXPECT_GE(cache.lastMs(), 0.0);
+}
+
 TEST(Predict, TheRuleSplitsAtTheThreshold) {
     LaneEstimate e;
     e.lanes = 32;
