@@ -5,12 +5,14 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <optional>
 #include <utility>
 #include <vector>
 
 #include "core/error.h"
 #include "core/pipeline_registry.h"
 #include "megakernel/megakernel.h"
+#include "persistent/persistent.h"
 #include "wavefront/queue/queue.h"
 #include "wavefront/tree/wavefront.h"
 
@@ -116,13 +118,15 @@ AutoKind chooseKind(const LaneEstimate& e, const AutoContext& c) {
         if (queueSide) k.designs.push_back({"queue", MegaLayout::Weighted, ""});
         k.designs.push_back({"mega", MegaLayout::Weighted, ""});
         if (c.waveFits) k.designs.push_back({"wave", MegaLayout::Weighted, ""});
+        k.designs.push_back({"persist", MegaLayout::Weighted, ""});
         if (!queueSide) k.designs.push_back({"queue", MegaLayout::Weighted, ""});
         return k;
     }
     if (e.busyLanes < kQueueBelowLanes)
-        return {{{"queue", MegaLayout::Weighted, ""}},
-                lanes + format(" (below %.1f): neighbouring pixels' trees disagree, so "
-                               "compacted queues keep lanes busy",
+        return {{{"queue", MegaLayout::Weighted, ""}, {"persist", MegaLayout::Weighted, ""}},
+                lanes + format(" (below %.1f): neighbouring pixels' trees disagree, so a "
+                               "design that keeps lanes busy: compacted queues or "
+                               "regrouped persistent threads",
                                kQueueBelowLanes)};
     AutoKind k{{{"mega", MegaLayout::Weighted, ""}},
                lanes + format(" (at least %.1f): one tree a work-item", kQueueBelowLanes)};
@@ -130,6 +134,7 @@ AutoKind chooseKind(const LaneEstimate& e, const AutoContext& c) {
         k.designs.push_back({"wave", MegaLayout::Weighted, ""});
     else
         k.reason += "; the tree wavefront's tree would need row tiles";
+    k.designs.push_back({"persist", MegaLayout::Weighted, ""});
     return k;
 }
 
@@ -138,12 +143,22 @@ struct AutoPipeline::Impl {
 
     ClContext& cl;
     std::unique_ptr<Pipeline> mega, wave, queue;
+    std::unique_ptr<PersistentPipeline> persist;
+    // The predictor's estimate of the scene the choice was last made for, which the persistent
+    // megakernel's own schedule choice reuses.
+    std::optional<LaneEstimate> estimate;
+    double estimateMs = 0;
     DecisionKey key;
     AutoDesign design;
     nlohmann::json extras;  // what the decision found, carried into every frame's statistics
     bool decided = false;
 
     Pipeline& pipeline(const std::string& name, const Pipeline::Progress& progress) {
+        if (name == "persist") {
+            if (!persist) persist = std::make_unique<PersistentPipeline>(cl);
+            persist->setProgress(progress);
+            return *persist;
+        }
         std::unique_ptr<Pipeline>& p = name == "mega" ? mega : name == "wave" ? wave : queue;
         if (!p) {
             if (name == "mega")
@@ -157,9 +172,15 @@ struct AutoPipeline::Impl {
         return *p;
     }
 
-    static RenderOptions optionsFor(const RenderOptions& o, const AutoDesign& d) {
+    // The options a design renders with; the persistent megakernel chooses its own schedule,
+    // from the estimate auto made when it made one.
+    RenderOptions optionsFor(const Scene& scene, const RenderOptions& o, const AutoDesign& d) {
         RenderOptions out = o;
         if (d.pipeline == "mega") setMegaLayout(out, d.layout);
+        if (d.pipeline == "persist") {
+            setPersistentScheduleAuto(out);
+            if (estimate && persist) persist->useEstimate(scene, out, *estimate, estimateMs);
+        }
         return out;
     }
 
@@ -197,6 +218,7 @@ Image AutoPipeline::render(const Scene& scene, const RenderOptions& o) {
     if (decideNow) {
         m.decided = false;
         m.extras = nlohmann::json::object();
+        m.estimate.reset();
         const auto choice = AutoChoice(choiceOption().index(o.pipelineOptions));
         const auto rule = AutoRule(ruleOption().index(o.pipelineOptions));
         const AutoContext context = m.context(scene, o, rule);
@@ -209,15 +231,17 @@ Image AutoPipeline::render(const Scene& scene, const RenderOptions& o) {
             if (!context.adaptive) {
                 if (context.waveFits) candidates.push_back({"wave", MegaLayout::Weighted, ""});
                 candidates.push_back({"queue", MegaLayout::Weighted, ""});
+                candidates.push_back({"persist", MegaLayout::Weighted, ""});
             }
         } else {
             const auto start = std::chrono::steady_clock::now();
-            const LaneEstimate estimate = estimateBusyLanes(scene, o);
-            m.extras["auto_predict_ms"] =
+            m.estimate = estimateBusyLanes(scene, o);
+            m.estimateMs =
                 std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
                     .count();
-            m.extras["auto_busy_lanes"] = estimate.busyLanes;
-            AutoKind kind = chooseKind(estimate, context);
+            m.extras["auto_predict_ms"] = m.estimateMs;
+            m.extras["auto_busy_lanes"] = m.estimate->busyLanes;
+            AutoKind kind = chooseKind(*m.estimate, context);
             reason = kind.reason;
             candidates = std::move(kind.designs);
             if (choice == AutoChoice::Lanes) candidates.resize(1);
@@ -232,7 +256,7 @@ Image AutoPipeline::render(const Scene& scene, const RenderOptions& o) {
             nlohmann::json trials = nlohmann::json::object();
             for (const AutoDesign& d : candidates) {
                 Pipeline& p = m.pipeline(d.pipeline, forward);
-                const RenderOptions options = Impl::optionsFor(o, d);
+                const RenderOptions options = m.optionsFor(scene, o, d);
                 double ms = std::numeric_limits<double>::infinity();
                 Image frame;
                 for (int i = 0; i < 2; ++i) {
@@ -259,14 +283,17 @@ Image AutoPipeline::render(const Scene& scene, const RenderOptions& o) {
     const AutoDesign& d = m.design;
     if (!rendered) {
         Pipeline& p = m.pipeline(d.pipeline, forward);
-        image = p.render(scene, Impl::optionsFor(o, d));
+        image = p.render(scene, m.optionsFor(scene, o, d));
         stats_ = p.stats();
     }
     stats_.extras["auto_design"] = d.name();
     stats_.extras["auto_reason"] = d.reason;
     stats_.extras["auto_decided"] = decideNow;
     for (auto& [k, v] : m.extras.items()) stats_.extras[k] = v;
+    // The chosen design's own note (the persistent megakernel's schedule) after auto's.
+    const std::string designNote = stats_.note;
     stats_.note = "auto: " + d.name() + ": " + d.reason;
+    if (!designNote.empty()) stats_.note += "; " + designNote;
     return image;
 }
 

@@ -17,10 +17,10 @@ namespace rt {
 
 // A design auto renders with: a registered pipeline, and the megakernel's layout when it is one.
 struct AutoDesign {
-    std::string pipeline;  // "mega", "wave" or "queue"
+    std::string pipeline;  // "mega", "wave", "queue" or "persist" (its schedule chosen: auto)
     MegaLayout layout = MegaLayout::Weighted;
     std::string reason;        // one sentence, with the numbers it rests on
-    std::string name() const;  // "mega-weighted", "wave", "queue"
+    std::string name() const;  // "mega-weighted", "wave", "queue", "persist"
 };
 
 // What the choice knows besides the lanes: the device kind whose fitted rule applies, and the
@@ -42,10 +42,15 @@ struct AutoKind {
     std::string reason;
 };
 
-// The rule. On a GPU: the queue wavefront below kQueueBelowLanes busy lanes; at or above it one
-// tree a work-item, the weighted megakernel or the report's tree wavefront (when its tree fits one
-// tile). Which of those two wins the lanes do not say: on the H200 the tree wavefront won most of
-// the map's coherent walls and the weighted megakernel every standard scene, so auto times both.
+// The rule. On a GPU: below kQueueBelowLanes busy lanes, a design that keeps lanes busy where
+// neighbouring pixels' trees disagree: the queue wavefront, or the persistent megakernel, whose
+// schedule (--persistent-schedule auto, from the same lanes) then regroups hits among the lanes
+// of a work-group; on the H200's map the queue won most such walls and the regrouped persistent
+// megakernel the plain 4 px ones, so auto times both. At or above it, one tree a work-item: the
+// weighted megakernel, the report's tree wavefront (when its tree fits one tile) or the
+// persistent megakernel (the nested loop on such scenes); the lanes do not say which (the tree
+// wavefront won most of the map's coherent walls, the weighted megakernel and the persistent
+// one the standard scenes), so auto times them.
 // On a CPU, whose work-items run without lock-step lanes: the megakernel (the queue never won the
 // CPU map), in the tree layout when it fits. Adaptive anti-aliasing: the megakernel, the only
 // design that has it.

@@ -83,9 +83,21 @@ LaneEstimate estimateBusyLanes(const Scene& scene, const RenderOptions& options,
     return e;
 }
 
+LaneEstimateCache::Key LaneEstimateCache::keyOf(const Scene& scene, const RenderOptions& o) {
+    return {scene.id.value(), o.width,      o.height, o.bounces, o.aa,
+            o.robustSphere,   o.watertight, o.offset};
+}
+
+void LaneEstimateCache::put(const Scene& scene, const RenderOptions& o,
+                            const LaneEstimate& estimate, double ms) {
+    key_ = keyOf(scene, o);
+    estimate_ = estimate;
+    ms_ = ms;
+    valid_ = true;
+}
+
 const LaneEstimate& LaneEstimateCache::get(const Scene& scene, const RenderOptions& o) {
-    const Key key{scene.id.value(), o.width,      o.height, o.bounces, o.aa,
-                  o.robustSphere,   o.watertight, o.offset};
+    const Key key = keyOf(scene, o);
     if (!valid_ || !(key_ == key)) {
         const auto start = std::chrono::steady_clock::now();
         estimate_ = estimateBusyLanes(scene, o);

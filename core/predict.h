@@ -51,6 +51,10 @@ LaneEstimate estimateBusyLanes(const Scene& scene, const RenderOptions& options,
 class LaneEstimateCache {
   public:
     const LaneEstimate& get(const Scene& scene, const RenderOptions& options);
+    // Keeps an estimate traced elsewhere (in `ms`) for these scene and settings, so that a
+    // pipeline handed one by another does not trace the same warps again.
+    void put(const Scene& scene, const RenderOptions& options, const LaneEstimate& estimate,
+             double ms);
     double lastMs() const { return ms_; }  // CPU time of the trace the estimate came from
 
   private:
@@ -61,6 +65,7 @@ class LaneEstimateCache {
         RenderOptions::Offset offset{};
         bool operator==(const Key&) const = default;
     };
+    static Key keyOf(const Scene& scene, const RenderOptions& options);
     Key key_;
     LaneEstimate estimate_;
     double ms_ = 0;

@@ -228,6 +228,10 @@ PersistSchedule choosePersistentSchedule(const LaneEstimate& e) {
                        "neighbours"};
 }
 
+void setPersistentScheduleAuto(RenderOptions& o) {
+    scheduleOption().set(o.pipelineOptions, std::string("auto"));
+}
+
 size_t PersistentPipeline::workItems(const DeviceInfo& device, const RenderOptions& o,
                                      size_t local) {
     const size_t groups = size_t(groupsOption().integer(o.pipelineOptions));

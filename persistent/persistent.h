@@ -30,6 +30,10 @@ struct PersistSchedule {
 
 PersistSchedule choosePersistentSchedule(const LaneEstimate& estimate);
 
+// Sets --persistent-schedule auto in `options` (what `--pipeline auto` renders the persistent
+// megakernel with).
+void setPersistentScheduleAuto(RenderOptions& options);
+
 class PersistentPipeline : public DevicePipeline {
   public:
     explicit PersistentPipeline(ClContext& cl) : DevicePipeline(cl) {}
@@ -37,6 +41,13 @@ class PersistentPipeline : public DevicePipeline {
 
     // Work-items of one launch: --persistent-groups work-groups of `local` per compute unit.
     static size_t workItems(const DeviceInfo& device, const RenderOptions& options, size_t local);
+
+    // --persistent-schedule auto: chooses from this estimate of the scene's warps (traced in
+    // `ms`) instead of tracing them again, while the scene and settings stay the same.
+    void useEstimate(const Scene& scene, const RenderOptions& options, const LaneEstimate& estimate,
+                     double ms) {
+        estimates_.put(scene, options, estimate, ms);
+    }
 
   private:
     Image renderFrame(const Scene& scene, const RenderOptions& options) override;

@@ -9,6 +9,7 @@
 #include <random>
 
 #include "core/error.h"
+#include "persistent/persistent.h"
 #include "pipelines/registry.h"
 #include "test_device.h"
 #include "test_images.h"
@@ -67,6 +68,7 @@ Image renderAs(const std::string& design, const Scene& scene, RenderOptions o) {
         pipeline = "mega";
         setMegaLayout(o, design == "mega-tree" ? MegaLayout::Tree : MegaLayout::Weighted);
     }
+    if (design == "persist") setPersistentScheduleAuto(o);
     return makePipeline(pipeline, &test::device())->render(scene, o);
 }
 
@@ -82,20 +84,20 @@ TEST(AutoRule, EachBranchNamesItsDesignsAndWhy) {
     e.lanes = 32;
     AutoContext gpu;
     e.busyLanes = kQueueBelowLanes - kUncertainLanes;
-    EXPECT_EQ(names(chooseKind(e, gpu)), V{"queue"});
+    EXPECT_EQ(names(chooseKind(e, gpu)), (V{"queue", "persist"}));
     EXPECT_NE(chooseKind(e, gpu).reason.find("busy lanes of 32"), std::string::npos);
     e.busyLanes = kQueueBelowLanes + kUncertainLanes;
-    EXPECT_EQ(names(chooseKind(e, gpu)), (V{"mega-weighted", "wave"}));
+    EXPECT_EQ(names(chooseKind(e, gpu)), (V{"mega-weighted", "wave", "persist"}));
     // Near the threshold every design is timed, the predictor's side first.
     e.busyLanes = kQueueBelowLanes - 0.1;
-    EXPECT_EQ(names(chooseKind(e, gpu)), (V{"queue", "mega-weighted", "wave"}));
+    EXPECT_EQ(names(chooseKind(e, gpu)), (V{"queue", "mega-weighted", "wave", "persist"}));
     EXPECT_NE(chooseKind(e, gpu).reason.find("too close to call"), std::string::npos);
     e.busyLanes = kQueueBelowLanes;
-    EXPECT_EQ(names(chooseKind(e, gpu)), (V{"mega-weighted", "wave", "queue"}));
+    EXPECT_EQ(names(chooseKind(e, gpu)), (V{"mega-weighted", "wave", "persist", "queue"}));
     e.busyLanes = kQueueBelowLanes + kUncertainLanes;
     AutoContext tiled = gpu;
     tiled.waveFits = false;
-    EXPECT_EQ(names(chooseKind(e, tiled)), V{"mega-weighted"});
+    EXPECT_EQ(names(chooseKind(e, tiled)), (V{"mega-weighted", "persist"}));
     EXPECT_NE(chooseKind(e, tiled).reason.find("row tiles"), std::string::npos);
     AutoContext cpu = gpu;
     cpu.gpuRule = false;
@@ -119,10 +121,12 @@ TEST(Auto, RendersTheDesignItNamesToTheBit) {
         std::vector<std::string> designs;  // what it may pick
         size_t trials;                     // trial designs timed
     };
-    // The wall's lanes are far below the GPU threshold; in the empty scene every pixel's tree is
-    // one ray, all 32 lanes busy, and the two one-tree designs are timed.
-    for (const Case& c : {Case{&wall, "predict", "gpu", {"queue"}, 0},
-                          Case{&empty, "predict", "gpu", {"mega-weighted", "wave"}, 2},
+    // The wall's lanes are far below the GPU threshold, and the queue and the regrouped
+    // persistent megakernel are timed; in the empty scene every pixel's tree is one ray, all 32
+    // lanes busy, and the three one-tree designs are timed.
+    for (const Case& c : {Case{&wall, "predict", "gpu", {"queue", "persist"}, 2},
+                          Case{&wall, "lanes", "gpu", {"queue"}, 0},
+                          Case{&empty, "predict", "gpu", {"mega-weighted", "wave", "persist"}, 3},
                           Case{&empty, "lanes", "gpu", {"mega-weighted"}, 0},
                           Case{&wall, "predict", "cpu", {"mega-tree"}, 0}}) {
         SCOPED_TRACE(std::string(c.scene->name) + " " + c.choice + ", rule " + c.rule);
@@ -139,8 +143,12 @@ TEST(Auto, RendersTheDesignItNamesToTheBit) {
         EXPECT_EQ(x.contains("auto_trials_ms") ? x["auto_trials_ms"].size() : 0u, c.trials);
         const double lanes = x.value("auto_busy_lanes", -1.0);
         if (std::string(c.rule) == "gpu" && std::abs(lanes - kQueueBelowLanes) >= kUncertainLanes)
-            EXPECT_EQ(x.value("auto_busy_lanes", -1.0) < kQueueBelowLanes, design == "queue");
+            EXPECT_EQ(x.value("auto_busy_lanes", -1.0) < kQueueBelowLanes,
+                      design == "queue" || x.value("persist_schedule", "") == "regrouped");
         EXPECT_TRUE(sameBits(first, renderAs(design, *c.scene, o)));
+        // The persistent megakernel chose its schedule from auto's estimate, not a second trace.
+        if (design == "persist")
+            EXPECT_EQ(x.value("persist_predict_ms", -1.0), x.value("auto_predict_ms", -2.0));
         // The next frame keeps the choice without predicting or timing again.
         const Image second = autoPipeline.render(*c.scene, o);
         const nlohmann::json& y = autoPipeline.stats().extras;
@@ -160,7 +168,7 @@ TEST(Auto, MeasureRendersTheFastestTrial) {
     const Image image = autoPipeline.render(scene, o);
     const nlohmann::json& x = autoPipeline.stats().extras;
     const nlohmann::json& trials = x.at("auto_trials_ms");
-    ASSERT_EQ(trials.size(), 4u) << trials.dump();  // both layouts, wave and queue
+    ASSERT_EQ(trials.size(), 5u) << trials.dump();  // both layouts, wave, queue and persist
     const std::string design = x.at("auto_design");
     for (const auto& [name, ms] : trials.items())
         EXPECT_LE(trials.at(design).get<double>(), ms.get<double>()) << name;

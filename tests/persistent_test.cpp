@@ -226,6 +226,30 @@ TEST(Persistent, AutoScheduleKeepsTheBitsOnBothSides) {
     }
 }
 
+// An estimate handed in (as `--pipeline auto` hands its own) decides the schedule while the scene
+// and settings stay the same: here one that says the spheres' warps agree, so the nested loop,
+// where the scene's own warps would regroup. Other settings trace the scene again.
+TEST(Persistent, AutoScheduleUsesAnEstimateHandedIn) {
+    Scene scene = load("spheres");
+    PersistentPipeline persist(test::device());
+    RenderOptions o = weighted(scene, 4, 1);
+    setPersistentScheduleAuto(o);
+    ASSERT_TRUE(choosePersistentSchedule(estimateBusyLanes(scene, o)).regroup);
+    LaneEstimate agree;
+    agree.lanes = 32;
+    agree.busyLanes = 32;
+    agree.objectsPerWarp = 1;
+    persist.useEstimate(scene, o, agree, 123.0);
+    persist.render(scene, o);
+    EXPECT_EQ(persist.stats().extras.value("persist_schedule", ""), "nested");
+    EXPECT_EQ(persist.stats().extras.value("persist_predict_ms", 0.0), 123.0);
+    EXPECT_EQ(persist.stats().extras.value("persist_busy_lanes", 0.0), 32.0);
+    o.bounces = 3;
+    persist.render(scene, o);
+    EXPECT_EQ(persist.stats().extras.value("persist_schedule", ""), "regrouped");
+    EXPECT_NE(persist.stats().extras.value("persist_predict_ms", 0.0), 123.0);
+}
+
 TEST(Persistent, AutoScheduleRefusesTheFlagsItSets) {
     Scene scene = load("spheres");
     PersistentPipeline persist(test::device());
