@@ -63,36 +63,6 @@ std::string format(const char* fmt, double a, double b = 0) {
     return buf;
 }
 
-// What a decision depends on: the scene (by its SceneId, as DeviceScene keeps it) and every setting
-// but the row window, the launch cap and ray counting, which change how a frame is cut or
-// counted, not which design is fastest for it.
-struct DecisionKey {
-    uint64_t scene = 0;
-    int width = 0, height = 0, bounces = 0, shadowSamples = 0, aa = 0;
-    bool adaptive = false, robustSphere = false, watertight = false;
-    RenderOptions::Offset offset{};
-    RenderOptions::Accel accel{};
-    size_t memoryBudget = 0;
-    PipelineOptionValues pipelineOptions;
-    bool operator==(const DecisionKey&) const = default;
-
-    DecisionKey() = default;
-    DecisionKey(const Scene& s, const RenderOptions& o)
-        : scene(s.id.value()),
-          width(o.width),
-          height(o.height),
-          bounces(o.bounces),
-          shadowSamples(o.shadowSamples),
-          aa(o.aa),
-          adaptive(o.adaptiveAa && o.aa > 1),
-          robustSphere(o.robustSphere),
-          watertight(o.watertight),
-          offset(o.offset),
-          accel(o.accel),
-          memoryBudget(o.memoryBudget),
-          pipelineOptions(o.pipelineOptions) {}
-};
-
 }  // namespace
 
 std::string AutoDesign::name() const {
@@ -148,7 +118,7 @@ struct AutoPipeline::Impl {
     // megakernel's own schedule choice reuses.
     std::optional<LaneEstimate> estimate;
     double estimateMs = 0;
-    DecisionKey key;
+    FrameKey key;
     AutoDesign design;
     nlohmann::json extras;  // what the decision found, carried into every frame's statistics
     bool decided = false;
@@ -211,7 +181,7 @@ Image AutoPipeline::render(const Scene& scene, const RenderOptions& o) {
     const Progress forward = [this](long long done, long long total) {
         reportProgress(done, total);
     };
-    const DecisionKey key(scene, o);
+    const FrameKey key(scene, o);
     const bool decideNow = !m.decided || !(m.key == key);
     Image image;
     bool rendered = false;

@@ -28,4 +28,19 @@ long long treeNodeCount(int branching, int bounces) {
     return n;
 }
 
+FrameKey::FrameKey(const Scene& s, const RenderOptions& o)
+    : scene(s.id.value()),
+      width(o.width),
+      height(o.height),
+      bounces(o.bounces),
+      shadowSamples(o.shadowSamples),
+      aa(o.aa),
+      adaptive(o.adaptiveAa && o.aa > 1),
+      robustSphere(o.robustSphere),
+      watertight(o.watertight),
+      offset(o.offset),
+      accel(o.accel),
+      memoryBudget(o.memoryBudget),
+      pipelineOptions(o.pipelineOptions) {}
+
 }  // namespace rt

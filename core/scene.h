@@ -104,4 +104,22 @@ struct Scene {
 // Nodes per pixel tree: N = (C^(B+1) - 1) / (C - 1), or B + 1 when C = 1.
 long long treeNodeCount(int branching, int bounces);
 
+// What a choice made from trial frames depends on: the scene object (its SceneId) and every
+// setting but the row window, the launch cap and ray counting, which change how a frame is cut or
+// counted, not which way of rendering it is fastest. `--pipeline auto` keeps its design, and the
+// persistent megakernel its pixel order, while the key stays the same.
+struct FrameKey {
+    uint64_t scene = 0;
+    int width = 0, height = 0, bounces = 0, shadowSamples = 0, aa = 0;
+    bool adaptive = false, robustSphere = false, watertight = false;
+    RenderOptions::Offset offset{};
+    RenderOptions::Accel accel{};
+    size_t memoryBudget = 0;
+    PipelineOptionValues pipelineOptions;
+
+    FrameKey() = default;
+    FrameKey(const Scene& scene, const RenderOptions& options);
+    bool operator==(const FrameKey&) const = default;
+};
+
 }  // namespace rt

@@ -2,6 +2,7 @@
 // work-groups sized to fill the device, each work-item taking pixels from a global counter.
 #pragma once
 
+#include <optional>
 #include <string>
 
 #include "core/device_pipeline.h"
@@ -55,10 +56,17 @@ class PersistentPipeline : public DevicePipeline {
     Image renderScheduled(const Scene& scene, const RenderOptions& options);
     // The options with --persistent-schedule auto's choice set.
     RenderOptions chooseSchedule(const Scene& scene, const RenderOptions& options);
+    // The nested loop's strip order under --persistent-schedule auto: the faster of two trial
+    // frames each in 4x16 and 16x8 strips, timed once per scene and settings.
+    void chooseOrder(const Scene& scene, RenderOptions& nested);
 
     DeviceBuffer image_, next_;
     LaunchPlanner planner_;
     LaneEstimateCache estimates_;  // --persistent-schedule auto's, one trace per scene
+    // The strip order chooseOrder found, for the scene and settings of orderKey_.
+    std::optional<FrameKey> orderKey_;
+    std::string order_;
+    nlohmann::json orderTrials_;
 };
 
 }  // namespace rt

@@ -250,6 +250,36 @@ TEST(Persistent, AutoScheduleUsesAnEstimateHandedIn) {
     EXPECT_NE(persist.stats().extras.value("persist_predict_ms", 0.0), 123.0);
 }
 
+// The nested loop's strip order under auto: timed once per scene and settings, in both orders,
+// the faster kept and said; the frame is the weighted megakernel's either way.
+TEST(Persistent, AutoScheduleTimesTheNestedLoopsStripOrders) {
+    Scene scene = load("empty");  // every warp's lanes busy: the nested loop
+    MegakernelPipeline mega(test::device());
+    PersistentPipeline persist(test::device());
+    RenderOptions o = weighted(scene, 2, 1);
+    o.width = 64;
+    o.height = 32;
+    setPersistentScheduleAuto(o);
+    const Image first = persist.render(scene, o);
+    const nlohmann::json x = persist.stats().extras;
+    ASSERT_EQ(x.value("persist_schedule", ""), "nested");
+    const nlohmann::json trials = x.at("persist_tile_trials_ms");
+    ASSERT_EQ(trials.size(), 2u) << trials.dump();
+    const std::string order = x.value("persist_tile", "");
+    ASSERT_TRUE(trials.contains(order)) << x.dump();
+    for (const auto& [name, ms] : trials.items())
+        EXPECT_LE(trials.at(order).get<double>(), ms.get<double>()) << name;
+    EXPECT_NE(persist.stats().note.find(order + " strips"), std::string::npos)
+        << persist.stats().note;
+    EXPECT_TRUE(sameBits(mega.render(scene, o), first));
+    // The next frame keeps the order without timing again; other settings time again.
+    persist.render(scene, o);
+    EXPECT_EQ(persist.stats().extras.at("persist_tile_trials_ms"), trials);
+    o.bounces = 3;
+    persist.render(scene, o);
+    EXPECT_NE(persist.stats().extras.at("persist_tile_trials_ms"), trials);
+}
+
 TEST(Persistent, AutoScheduleRefusesTheFlagsItSets) {
     Scene scene = load("spheres");
     PersistentPipeline persist(test::device());
