@@ -43,6 +43,8 @@ def series_of(r, strips=True):
         return "tree wavefront"
     if p != "persist":
         return None
+    if r.get("persistent_schedule", "flags") == "auto":
+        return AUTO  # the schedule it chose is in the row's extras, not its flags
     regroup = r.get("persistent_regroup", "off")
     lanes = r.get("persistent_lanes") or 128
     groups, refill = r.get("persistent_groups", 4), r.get("persistent_refill", 1)
@@ -64,6 +66,7 @@ def series_of(r, strips=True):
         units if groups * lanes != 512 or regs else "") + order
 
 
+AUTO = "persist, auto schedule"
 CAPPED = BASE + ", 64 registers"
 ORDER = ["persist, flat", "persist, flat, whole-warp refill", "persist, nested loop",
          "persist, nested loop, 16x8 strips",
@@ -83,6 +86,11 @@ ORDER = ["persist, flat", "persist, flat, whole-warp refill", "persist, nested l
          "persist, regrouped by pattern, 256 lanes, 120 registers, 2 groups a unit",
          "persist, regrouped by pattern, 128 lanes, 128 registers, 4 groups a unit",
          "persist, regrouped by pattern, 128 lanes, 96 registers, 4 groups a unit",
+         "persist, regrouped by pattern, 256 lanes, 80 registers, 3 groups a unit",
+         "persist, regrouped by pattern, 256 lanes, 64 registers, 4 groups a unit",
+         "persist, regrouped by pattern, 128 lanes, 80 registers, 6 groups a unit",
+         "persist, flat, 2 groups a unit", "persist, flat, 8 groups a unit",
+         "persist, flat, 16 groups a unit", AUTO,
          CAPPED, "tree megakernel", "tree wavefront", "queue wavefront"]
 # The chart draws these; the table lists every series above.
 DRAWN = {"persist, flat": "#56B4E9", "persist, flat, whole-warp refill": "#999999",
@@ -91,6 +99,9 @@ DRAWN = {"persist, flat": "#56B4E9", "persist, flat, whole-warp refill": "#99999
          "persist, regrouped by pattern, 128 lanes": "#0072B2",
          "persist, regrouped by material, 256 lanes": "#002b55",
          "persist, regrouped by pattern, 256 lanes, 128 registers, 2 groups a unit": "#7b3294",
+         "persist, regrouped by pattern, 256 lanes, 80 registers, 3 groups a unit": "#c2a5cf",
+         "persist, regrouped by pattern, 256 lanes, 64 registers, 4 groups a unit": "#a6dba0",
+         AUTO: "#000000",
          CAPPED: "#009E73", "tree wavefront": "#D55E00", "queue wavefront": "#CC79A7"}
 
 

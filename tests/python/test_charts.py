@@ -765,6 +765,19 @@ class PersistTest(unittest.TestCase):
         self.assertTrue(coherent.endswith("| nested loop, 16x8 strips | 1.11x | 1.11x |"),
                         coherent)
 
+    def test_the_auto_schedule_is_a_series_of_its_own(self):
+        # An auto row keeps the flags' defaults (flat, no regrouping): it must not be taken for
+        # the flat loop, whose time it would replace.
+        c = self.cell
+        rows = self.rows() + [c("persist", "walls", 3.0, persistent_schedule="auto")]
+        d, p = self.run_script(rows)
+        self.assertEqual(p.returncode, 0, p.stderr)
+        md = open(os.path.join(d, "persist.md")).read()
+        self.assertIn("persist, auto schedule", md.splitlines()[4])
+        walls = next(line for line in md.splitlines() if line.startswith("| `walls`"))
+        self.assertIn("| 5.00 |", walls, "the flat loop's time stays")
+        self.assertTrue(walls.endswith("| auto schedule | 3.33x | 2.67x |"), walls)
+
     def test_no_weighted_megakernel_is_one_line(self):
         rows = [r for r in self.rows() if r["pipeline"] != "mega"]
         _, p = self.run_script(rows)
