@@ -135,9 +135,64 @@ kernel void Persistent_Render(RT_SCENE_PARAMS, global float* image, global int* 
         }
     }
 }
+#elif defined(RT_PERSIST_LOCKSTEP) && defined(RT_WARP_PTX)
+// The lockstep form (--persistent-loop lockstep, NVIDIA): the flat loop below, with the warp's 32
+// lanes starting every step together. In the flat loop a warp's lanes part ways inside a step
+// (a mirror's lane in its reflection code, a plain one in its pattern's) and need not meet again
+// at the top, so the lanes that trace together are fewer than the lanes holding rays. Here two
+// votes of the whole warp (vote.sync naming every lane, which waits for all of them) open each
+// step: the idle lanes take consecutive pixels, then every lane holding a ray traces it. The
+// regrouped form gets its full steps from work-group barriers and local memory; this one needs
+// neither, and does not sort the shading. The votes name the warp's lanes (all 32, or fewer in the
+// last warp of a work-group of 16 or 48 lanes), and no lane leaves before the warp does, as
+// vote.sync requires. Same pixels, same sums, same bits; `refill` does not apply (the host
+// refuses it).
+
+// The lanes of `warp` for which `p` holds; every lane of `warp` must call it.
+inline uint Persistent_WarpBallot(bool p, uint warp) {
+    uint lanes;
+    __asm__ volatile("{ .reg .pred q; setp.ne.u32 q, %1, 0; vote.sync.ballot.b32 %0, q, %2; }"
+                     : "=r"(lanes)
+                     : "r"((uint)p), "r"(warp));
+    return lanes;
+}
+
+kernel void Persistent_Render(RT_SCENE_PARAMS, global float* image, global int* next, int first,
+                              int count, int refill) {
+    RT_SCENE_INIT(sc);
+    const int samples = settings.aaSamples * settings.aaSamples;
+    RT_STACK_RECORD stack[RT_STACK_SIZE];
+    int top = 0;
+    PersistentLane l;
+    l.pixel = -1;
+    bool drained = false;  // the counter has no pixel left for this lane
+    // The warp's lanes: a one-dimensional work-group fills its warps 32 work-items at a time, so
+    // only its last warp may have fewer.
+    const int warpFirst = (int)get_local_id(0) & ~31;
+    const int warpLanes = min(32, (int)get_local_size(0) - warpFirst);
+    const uint warp = warpLanes == 32 ? 0xffffffffu : (1u << warpLanes) - 1u;
+    for (;;) {
+        Persistent_EndOfTree(&sc, image, &l, stack, &top, samples);
+        const bool wants = l.pixel < 0 && !drained;
+        const uint wanting = Persistent_WarpBallot(wants, warp);
+        if (wants) {
+            const int k = Persistent_TakeTogether(next, wanting);
+            if (k >= count)
+                drained = true;
+            else
+                Persistent_Begin(&sc, &l, stack, &top, k, first, count);
+        }
+        if (Persistent_WarpBallot(l.pixel >= 0, warp) == 0u) return;  // the warp leaves together
+        if (l.pixel >= 0) {
+            RT_COUNT_WARP_STEP(&sc);  // the lanes that trace a ray this step
+            l.color += Megakernel_TraceNext(&sc, stack, &top, l.xy.x, l.xy.y, l.sample);
+        }
+    }
+}
 #elif !defined(RT_PERSIST_REGROUP)
 // Pixels [first, first + count) of the frame; *next counts the ones taken (zeroed by the host
-// before each launch). `refill`: RT_WARP_PTX only, the idle lanes a warp waits for.
+// before each launch). `refill`: RT_WARP_PTX only, the idle lanes a warp waits for. Also the
+// lockstep form's, elsewhere than on NVIDIA: there each work-item is a warp of its own.
 kernel void Persistent_Render(RT_SCENE_PARAMS, global float* image, global int* next, int first,
                               int count, int refill) {
     RT_SCENE_INIT(sc);

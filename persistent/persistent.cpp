@@ -58,7 +58,7 @@ const PipelineOption& registersOption() {
 }
 
 // The flat loop over rays, or a loop over pixels around the megakernel's loop over rays.
-enum class PersistLoop { Flat, Nested };  // loopOption()'s choices, in order
+enum class PersistLoop { Flat, Nested, Lockstep };  // loopOption()'s choices, in order
 
 const PipelineOption& loopOption() {
     static const PipelineOption o{
@@ -66,11 +66,12 @@ const PipelineOption& loopOption() {
         .type = PipelineOption::Type::Choice,
         .help =
             "Persistent megakernel: flat (one loop over rays; a lane takes a pixel when its tree "
-            "ends) or nested (a loop over pixels around the megakernel's loop over rays; a "
-            "work-group takes a pixel a lane once all its lanes are done); nested does not "
-            "regroup [flat]",
+            "ends), nested (a loop over pixels around the megakernel's loop over rays; a "
+            "work-group takes a pixel a lane once all its lanes are done) or lockstep (the flat "
+            "loop with a warp's 32 lanes starting every step together, NVIDIA; elsewhere the "
+            "flat loop); nested and lockstep do not regroup [flat]",
         .defaultValue = "flat",
-        .choices = {"flat", "nested"},
+        .choices = {"flat", "nested", "lockstep"},
         .sweepKey = "persistent-loop",
         .cellTag = "L",
         .label = "{} loop",
@@ -321,19 +322,22 @@ Image PersistentPipeline::renderScheduled(const Scene& scene, const RenderOption
     const auto regroupBy = PersistRegroup(regroupOption().index(o.pipelineOptions));
     const bool regroup = regroupBy != PersistRegroup::Off;
     checkLanes(dev, local, regroup);
-    const bool nested = PersistLoop(loopOption().index(o.pipelineOptions)) == PersistLoop::Nested;
-    if (nested && regroup)
-        throw Error("--persistent-loop nested does not go with --persistent-regroup " +
+    const auto loop = PersistLoop(loopOption().index(o.pipelineOptions));
+    const bool nested = loop == PersistLoop::Nested, lockstep = loop == PersistLoop::Lockstep;
+    if ((nested || lockstep) && regroup)
+        throw Error("--persistent-loop " + loopOption().choice(o.pipelineOptions) +
+                        " does not go with --persistent-regroup " +
                         regroupOption().choice(o.pipelineOptions) +
                         " (regrouping cuts the flat loop's steps)",
                     FailureKind::InvalidOption);
     const long long refill = refillOption().integer(o.pipelineOptions);
-    if (refill != 1 && (nested || regroup))
+    if (refill != 1 && (nested || lockstep || regroup))
         throw Error(
             "--persistent-refill " + std::to_string(refill) + " applies to the flat loop only (" +
                 (nested
                      ? std::string("--persistent-loop nested takes pixels a work-group at a time")
-                     : "--persistent-regroup takes a pixel a lane at once") +
+                 : lockstep ? std::string("--persistent-loop lockstep takes them at once")
+                            : "--persistent-regroup takes a pixel a lane at once") +
                 ")",
             FailureKind::InvalidOption);
     // Regrouped: the work-group's local arrays are sized by its work-items.
@@ -341,6 +345,7 @@ Image PersistentPipeline::renderScheduled(const Scene& scene, const RenderOption
     if (regroup) programDefines.push_back("RT_PERSIST_REGROUP=" + std::to_string(local));
     if (regroupBy == PersistRegroup::Material) programDefines.push_back("RT_PERSIST_REGROUP_CLASS");
     if (nested) programDefines.push_back("RT_PERSIST_NESTED");
+    if (lockstep) programDefines.push_back("RT_PERSIST_LOCKSTEP");
     const std::string& tile = tileOption().choice(o.pipelineOptions);
     const size_t by = tile.find('x');
     programDefines.push_back("RT_PERSIST_TILE_W=" + tile.substr(0, by));
@@ -420,20 +425,24 @@ void registerPersistentMegakernel(PipelineRegistry& registry) {
         "the weighted megakernel with persistent threads: a device-filling launch whose "
         "work-items take pixels from a global counter as their ray trees end "
         "(--persistent-groups N, --persistent-refill N, --persistent-regroup pattern|material, "
-        "--persistent-lanes N, --persistent-max-registers N, --persistent-loop nested, "
-        "--persistent-tile WxH, or --persistent-schedule auto to let warps traced on the CPU "
+        "--persistent-lanes N, --persistent-max-registers N, --persistent-loop "
+        "nested|lockstep, --persistent-tile WxH, or --persistent-schedule auto to let warps traced "
+        "on the CPU "
         "choose)";
     p.supports = {.adaptiveAa = false, .tiling = false, .rowWindow = true};
     p.options = {groupsOption(),    refillOption(), regroupOption(), laneOption(),
                  registersOption(), loopOption(),   tileOption(),    scheduleOption()};
     // Tests and the smoke check run the default schedule, the regrouped one, whose hits move
-    // between lanes through local memory, the nested loop, and the schedule auto chooses (256
-    // regrouped lanes a group where it regroups).
-    PipelineVariant regrouped{"regrouped", {}}, nested{"nested", {}}, automatic{"auto", {}};
+    // between lanes through local memory, the nested loop, the lockstep loop (whose warp votes
+    // only NVIDIA runs), and the schedule auto chooses (256 regrouped lanes a group where it
+    // regroups).
+    PipelineVariant regrouped{"regrouped", {}}, nested{"nested", {}}, lockstep{"lockstep", {}},
+        automatic{"auto", {}};
     regroupOption().set(regrouped.values, std::string("material"));
     loopOption().set(nested.values, std::string("nested"));
+    loopOption().set(lockstep.values, std::string("lockstep"));
     scheduleOption().set(automatic.values, std::string("auto"));
-    p.variants = {PipelineVariant{"", {}}, regrouped, nested, automatic};
+    p.variants = {PipelineVariant{"", {}}, regrouped, nested, lockstep, automatic};
     p.make = [](ClContext* cl) { return std::make_unique<PersistentPipeline>(*cl); };
     registry.add(std::move(p));
 }

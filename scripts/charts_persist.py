@@ -1,12 +1,12 @@
 #!/usr/bin/env python3
 """Draws the persistent megakernel's schedules against the weighted megakernel, whose per-pixel
 code they share, from a `persist` or `persist-loop` sweep (bench/sweeps/): for each scene, the
-speed-up of each schedule (flat, nested, regrouped by pattern or by material, among 128 or 256
-lanes) and of the other designs over the weighted megakernel, on a log axis with the issue's 2x
-target marked. A speed-up inside the measured frame spread (compare.py's tie rule) is drawn
-hollow. Also writes a Markdown table beside the chart, both named after the sweep (persist.md,
-persist.png), with every time (the 64-lane, tree-megakernel and one-group series too) and the
-best schedule's speed-up per scene. scripts/gpu-sweep.sh import runs it for these sweeps.
+speed-up of each schedule (flat, nested, lockstep, regrouped by pattern or by material, among
+128 or 256 lanes) and of the other designs over the weighted megakernel, on a log axis with the
+issue's 2x target marked. A speed-up inside the measured frame spread (compare.py's tie rule) is
+drawn hollow. Also writes a Markdown table beside the chart, both named after the sweep
+(persist.md, persist.png), with every time (the 64-lane, tree-megakernel and one-group series
+too) and the best schedule's speed-up per scene. scripts/gpu-sweep.sh import runs it for these sweeps.
 
 A sweep about the order pixels are handed out in (--persistent-tile for two schedules or more,
 the persist-tile sweep) gets a table and chart by tile instead: for each schedule and scene, the time at each
@@ -55,6 +55,8 @@ def series_of(r, strips=True):
     order = f", {tile} strips" if strips and tile != "4x16" else ""
     if r.get("persistent_loop", "flat") == "nested":
         return "persist, nested loop" + (units if groups != 4 or regs else "") + order
+    if r.get("persistent_loop", "flat") == "lockstep":
+        return "persist, lockstep loop" + (units if groups != 4 or regs else "") + order
     if regroup == "off":
         if refill == 1:
             return "persist, flat" + (units if groups != 4 or regs else "") + order
@@ -90,7 +92,9 @@ ORDER = ["persist, flat", "persist, flat, whole-warp refill", "persist, nested l
          "persist, regrouped by pattern, 256 lanes, 64 registers, 4 groups a unit",
          "persist, regrouped by pattern, 128 lanes, 80 registers, 6 groups a unit",
          "persist, flat, 2 groups a unit", "persist, flat, 8 groups a unit",
-         "persist, flat, 16 groups a unit", AUTO,
+         "persist, flat, 16 groups a unit", AUTO, "persist, lockstep loop",
+         "persist, lockstep loop, 128 registers, 4 groups a unit",
+         "persist, lockstep loop, 64 registers, 8 groups a unit",
          CAPPED, "tree megakernel", "tree wavefront", "queue wavefront"]
 # The chart draws these; the table lists every series above.
 DRAWN = {"persist, flat": "#56B4E9", "persist, flat, whole-warp refill": "#999999",
@@ -101,7 +105,8 @@ DRAWN = {"persist, flat": "#56B4E9", "persist, flat, whole-warp refill": "#99999
          "persist, regrouped by pattern, 256 lanes, 128 registers, 2 groups a unit": "#7b3294",
          "persist, regrouped by pattern, 256 lanes, 80 registers, 3 groups a unit": "#c2a5cf",
          "persist, regrouped by pattern, 256 lanes, 64 registers, 4 groups a unit": "#a6dba0",
-         AUTO: "#000000",
+         AUTO: "#000000", "persist, lockstep loop": "#b15928",
+         "persist, lockstep loop, 128 registers, 4 groups a unit": "#fdbf6f",
          CAPPED: "#009E73", "tree wavefront": "#D55E00", "queue wavefront": "#CC79A7"}
 
 

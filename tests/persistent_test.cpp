@@ -69,7 +69,7 @@ TEST(Persistent, PiecesAndRowWindowsKeepTheBits) {
     PersistentPipeline persist(test::device());
     const Image m = mega.render(scene, o);
     // The nested loop's work-group takes a pixel a lane: a piece of one row leaves lanes without.
-    for (const char* loop : {"flat", "nested"}) {
+    for (const char* loop : {"flat", "nested", "lockstep"}) {
         setOption(o, "persistent-loop", std::string(loop));
         RenderOptions capped = o;
         capped.maxLaunchMs = 1e-6;  // every launch over the cap: a row, or part of one, at a time
@@ -115,6 +115,10 @@ TEST(Persistent, CutTilesAndEveryRefillKeepTheBits) {
     EXPECT_TRUE(sameBits(m, persist.render(scene, o))) << "nested";
     setGroups(o, 1);
     EXPECT_TRUE(sameBits(m, persist.render(scene, o))) << "nested, 1 group";
+    setOption(o, "persistent-loop", std::string("lockstep"));  // a warp's lanes step together
+    EXPECT_TRUE(sameBits(m, persist.render(scene, o))) << "lockstep, 1 group";
+    setGroups(o, 4);
+    EXPECT_TRUE(sameBits(m, persist.render(scene, o))) << "lockstep";
 }
 
 // Regrouped, a lane shades other lanes' hits: the divergence scene mixes procedural patterns,
@@ -335,6 +339,24 @@ TEST(Persistent, RefusesAdaptiveAntiAliasingAndOptionsOutOfRange) {
                                               0),
                   0u)
             << e.what();
+    }
+    for (const char* loop : {"nested", "lockstep"}) {
+        RenderOptions refill = weighted(scene, 2, 1);
+        setOption(refill, "persistent-loop", std::string(loop));
+        setOption(refill, "persistent-refill", 8ll);
+        try {
+            persist.render(scene, refill);
+            ADD_FAILURE() << "no error for --persistent-loop " << loop << " with a refill";
+        } catch (const Error& e) {
+            EXPECT_EQ(e.kind(), FailureKind::InvalidOption);
+            EXPECT_EQ(
+                std::string(e.what()).rfind(
+                    "--persistent-refill 8 applies to the flat loop only (--persistent-loop " +
+                        std::string(loop),
+                    0),
+                0u)
+                << e.what();
+        }
     }
     try {
         setOption(g, "persistent-lanes", 8);

@@ -334,8 +334,8 @@ TEST(Registry, RecordedRowsKeepTheirCellKeys) {
 }
 
 // Tests and the smoke check run every pipeline in each of its variants: the megakernel in both
-// layouts, the persistent megakernel flat, regrouped, nested and in the schedule auto chooses, the
-// others once at their defaults.
+// layouts, the persistent megakernel flat, regrouped, nested, in lockstep and in the schedule auto
+// chooses, the others once at their defaults.
 TEST(Registry, VariantsCoverTheMegakernelsLayoutsAndSchedules) {
     std::vector<std::string> names;
     for (const PipelineVariantRun& v : pipelineRegistry().variants(true)) {
@@ -350,7 +350,8 @@ TEST(Registry, VariantsCoverTheMegakernelsLayoutsAndSchedules) {
     EXPECT_EQ(std::count(names.begin(), names.end(), "mega-tree"), 1) << names.size();
     EXPECT_EQ(std::count(names.begin(), names.end(), "mega-weighted"), 1) << names.size();
     EXPECT_EQ(std::count(names.begin(), names.end(), "wave"), 1) << names.size();
-    for (const char* persist : {"persist", "persist-regrouped", "persist-nested", "persist-auto"})
+    for (const char* persist :
+         {"persist", "persist-regrouped", "persist-nested", "persist-lockstep", "persist-auto"})
         EXPECT_EQ(std::count(names.begin(), names.end(), persist), 1) << persist;
     EXPECT_EQ(std::count(names.begin(), names.end(), "cpu"), 0) << "devices only";
 }

@@ -767,13 +767,17 @@ class PersistTest(unittest.TestCase):
 
     def test_the_auto_schedule_is_a_series_of_its_own(self):
         # An auto row keeps the flags' defaults (flat, no regrouping): it must not be taken for
-        # the flat loop, whose time it would replace.
+        # the flat loop, whose time it would replace; nor must the lockstep loop.
         c = self.cell
-        rows = self.rows() + [c("persist", "walls", 3.0, persistent_schedule="auto")]
+        rows = self.rows() + [c("persist", "walls", 3.0, persistent_schedule="auto"),
+                              c("persist", "walls", 3.5, persistent_loop="lockstep")]
         d, p = self.run_script(rows)
         self.assertEqual(p.returncode, 0, p.stderr)
         md = open(os.path.join(d, "persist.md")).read()
         self.assertIn("persist, auto schedule", md.splitlines()[4])
+        self.assertIn("persist, lockstep loop", md.splitlines()[4])
+        self.assertIn("| 3.50 |", next(line for line in md.splitlines()
+                                        if line.startswith("| `walls`")))
         walls = next(line for line in md.splitlines() if line.startswith("| `walls`"))
         self.assertIn("| 5.00 |", walls, "the flat loop's time stays")
         self.assertTrue(walls.endswith("| auto schedule | 3.33x | 2.67x |"), walls)
