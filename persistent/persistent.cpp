@@ -271,7 +271,8 @@ void PersistentPipeline::chooseOrder(const Scene& scene, RenderOptions& nested) 
     // which the traced warps do not see: on the H200, 16x8 strips (the megakernel's own
     // work-groups) ran spheres 4-7% faster than 4x16, and cornell, mesh and envmap 4-8% slower.
     const FrameKey key(scene, nested);
-    if (!orderKey_ || !(*orderKey_ == key)) {
+    const bool decide = !orderKey_ || !(*orderKey_ == key);
+    if (decide) {
         const FrameStats schedule = stats_;  // the schedule's extras and note, kept
         double best = std::numeric_limits<double>::infinity();
         orderTrials_ = nlohmann::json::object();
@@ -293,6 +294,7 @@ void PersistentPipeline::chooseOrder(const Scene& scene, RenderOptions& nested) 
     tileOption().set(nested.pipelineOptions, order_);
     stats_.extras["persist_tile"] = order_;
     stats_.extras["persist_tile_trials_ms"] = orderTrials_;
+    stats_.extras["persist_tile_decided"] = decide;  // this frame timed the orders
     stats_.note += "; " + order_ + " strips, the faster of two trial frames each";
 }
 

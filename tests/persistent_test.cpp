@@ -276,12 +276,15 @@ TEST(Persistent, AutoScheduleTimesTheNestedLoopsStripOrders) {
     EXPECT_NE(persist.stats().note.find(order + " strips"), std::string::npos)
         << persist.stats().note;
     EXPECT_TRUE(sameBits(mega.render(scene, o), first));
+    EXPECT_TRUE(x.value("persist_tile_decided", false));
     // The next frame keeps the order without timing again; other settings time again.
     persist.render(scene, o);
+    EXPECT_FALSE(persist.stats().extras.value("persist_tile_decided", true));
+    EXPECT_EQ(persist.stats().extras.value("persist_tile", ""), order);
     EXPECT_EQ(persist.stats().extras.at("persist_tile_trials_ms"), trials);
     o.bounces = 3;
     persist.render(scene, o);
-    EXPECT_NE(persist.stats().extras.at("persist_tile_trials_ms"), trials);
+    EXPECT_TRUE(persist.stats().extras.value("persist_tile_decided", false));
 }
 
 TEST(Persistent, AutoScheduleRefusesTheFlagsItSets) {
@@ -336,6 +339,20 @@ TEST(Persistent, RefusesAdaptiveAntiAliasingAndOptionsOutOfRange) {
         EXPECT_EQ(e.kind(), FailureKind::InvalidOption);
         EXPECT_EQ(std::string(e.what()).rfind("--persistent-loop nested does not go with "
                                               "--persistent-regroup pattern",
+                                              0),
+                  0u)
+            << e.what();
+    }
+    try {
+        RenderOptions both = weighted(scene, 2, 1);
+        setOption(both, "persistent-loop", std::string("lockstep"));
+        setOption(both, "persistent-regroup", std::string("material"));
+        persist.render(scene, both);
+        ADD_FAILURE() << "no error for --persistent-loop lockstep with --persistent-regroup";
+    } catch (const Error& e) {
+        EXPECT_EQ(e.kind(), FailureKind::InvalidOption);
+        EXPECT_EQ(std::string(e.what()).rfind("--persistent-loop lockstep does not go with "
+                                              "--persistent-regroup material",
                                               0),
                   0u)
             << e.what();
