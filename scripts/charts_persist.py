@@ -8,8 +8,8 @@ drawn hollow. Also writes a Markdown table beside the chart, both named after th
 (persist.md, persist.png), with every time (the 64-lane, tree-megakernel and one-group series
 too) and the best schedule's speed-up per scene. scripts/gpu-sweep.sh import runs it for these sweeps.
 
-A sweep about the order pixels are handed out in (--persistent-tile for two schedules or more,
-the persist-tile sweep) gets a table and chart by tile instead: for each schedule and scene, the time at each
+A sweep about the order pixels are handed out in (every schedule it runs in several
+--persistent-tile orders: persist-tile, persist-regroup-order) gets a table and chart by tile instead: for each schedule and scene, the time at each
 order and the speed-up of the best one.
 
 Usage: scripts/charts_persist.py ROWS.jsonl|SWEEP.json [--out DIR]
@@ -204,14 +204,15 @@ TILE_COLORS = ["#999999", "#0072B2", "#56B4E9", "#009E73", "#E69F00", "#D55E00",
 
 
 def about_order(rows):
-    """Whether a sweep is about the order pixels are handed out in: two schedules or more, each
-    measured in more than one order (the persist sweep runs only the nested loop in two)."""
+    """Whether a sweep is about the order pixels are handed out in: every persistent schedule it
+    runs is measured in more than one order (the persist sweep runs only the nested loop in
+    two, beside schedules in one)."""
     orders = {}
     for r in rows:
         s = series_of(r, strips=False) if r["pipeline"] == "persist" else None
         if s is not None:
             orders.setdefault(s, set()).add(r.get("persistent_tile", "8x4"))
-    return sum(len(o) > 1 for o in orders.values()) > 1
+    return bool(orders) and all(len(o) > 1 for o in orders.values())
 
 
 def tile_grid(rows):

@@ -750,6 +750,19 @@ class PersistTest(unittest.TestCase):
         if HAVE_MPL:
             self.assertGreater(os.path.getsize(os.path.join(d, "persist.png")), 10000)
 
+    def test_a_sweep_of_one_schedule_over_orders_is_tabled_by_order(self):
+        c = self.cell
+        rows = [c("mega", "walls", 10.0, layout="weighted"),
+                c("persist", "walls", 2.5, persistent_tile="4x16", persistent_regroup="pattern"),
+                c("persist", "walls", 2.6, persistent_tile="8x4", persistent_regroup="pattern"),
+                c("persist", "walls", 2.4, persistent_tile="16x8", persistent_regroup="pattern")]
+        d, p = self.run_script(rows)
+        self.assertEqual(p.returncode, 0, p.stderr)
+        md = open(os.path.join(d, "persist.md")).read()
+        self.assertIn("| scene | schedule | 4x16 | 8x4 | 16x8 | best | speed-up |", md)
+        pattern = next(line for line in md.splitlines() if "regrouped by pattern" in line)
+        self.assertIn("| 2.500 | 2.600 | 2.400 | 16x8 | 4.17x |", pattern)
+
     def test_one_schedule_in_a_second_order_is_a_series_of_its_own(self):
         # The persist sweep runs the nested loop in 4x16 and 16x8 strips: still tabled by
         # schedule, the second order a series of its own.
