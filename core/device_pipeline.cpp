@@ -91,6 +91,13 @@ void DevicePipeline::finishRayCount(const RenderOptions& options) {
         stats_.extras["warp_steps"] = double(w.steps);
         stats_.extras["warp_lanes_active"] =
             w.steps ? double(w.lanesActive) / double(w.steps) : 0.0;
+        // The regrouped persistent loop's phase clocks, where it was built with them (in
+        // millions of cycles, summed over warps; RT_PHASE_* order).
+        static const char* phases[RT_PHASES] = {"bookkeeping", "trace", "trace_wait",
+                                                "file",        "shade", "shade_wait"};
+        const std::vector<uint64_t> c = scene_->readPhaseCounts(cl_.queue());
+        for (int i = 0; i < RT_PHASES; ++i)
+            if (c[i] != 0) stats_.extras[std::string("phase_mcycles_") + phases[i]] = c[i] * 64e-6;
     }
 }
 

@@ -221,6 +221,12 @@ RayCounts DeviceScene::readRayCounts(cl::CommandQueue& queue) const {
     return out;
 }
 
+std::vector<uint64_t> DeviceScene::readPhaseCounts(cl::CommandQueue& queue) const {
+    cl_uint c[RT_PHASES];
+    queue.enqueueReadBuffer(rayCounts_, CL_TRUE, RT_COUNT_PHASES * sizeof(cl_uint), sizeof c, c);
+    return std::vector<uint64_t>(c, c + RT_PHASES);
+}
+
 WarpCounts DeviceScene::readWarpCounts(cl::CommandQueue& queue) const {
     cl_uint c[2];
     queue.enqueueReadBuffer(rayCounts_, CL_TRUE, RT_RAY_TYPES * sizeof(cl_uint), sizeof c, c);

@@ -132,6 +132,8 @@ class DeviceScene {
     void resetRayCounts(cl::CommandQueue& queue) const;
     RayCounts readRayCounts(cl::CommandQueue& queue) const;
     WarpCounts readWarpCounts(cl::CommandQueue& queue) const;  // zeroed by resetRayCounts
+    // The RT_PHASES phase clocks (core/types.h); zero unless a kernel was built to keep them.
+    std::vector<uint64_t> readPhaseCounts(cl::CommandQueue& queue) const;
     // The counters themselves (RT_RAY_TYPES ray counters, then the warp counters), for a kernel
     // that adds to them outside RT_SCENE_PARAMS.
     const cl::Buffer& rayCountBuffer() const { return rayCounts_; }

@@ -283,6 +283,30 @@ inline RegroupShade Regroup_Shade(const SceneData* sc, const Node* n, const Pend
     return s;
 }
 
+#if defined(RT_PERSIST_PHASE_CLOCKS) && defined(RT_WARP_PTX) && defined(RT_COUNT_RAYS) && \
+    defined(RT_COUNT_LANES)
+// The phase clocks (RT_PERSIST_PHASE_CLOCKS, a diagnostic; the counting frame only, on NVIDIA):
+// at each mark the warp's lanes meet (bar.warp.sync) and its first lane adds the cycles since the
+// last mark to phase `slot` (RT_PHASE_*, core/types.h). The meetings are the clocks' own: read
+// the phases' shares, not their cycles (scripts/charts_phases.py).
+inline ulong Phase_Clock(void) {
+    ulong c;
+    __asm__ volatile("mov.u64 %0, %%clock64;" : "=l"(c));
+    return c;
+}
+#define PHASE_MARK(sc, slot, t, warp, first)                                                   \
+    do {                                                                                       \
+        __asm__ volatile("bar.warp.sync %0;" ::"r"(warp));                                     \
+        const ulong now_ = Phase_Clock();                                                      \
+        if (first)                                                                             \
+            atomic_add(&(sc)->rayCounts[RT_COUNT_PHASES + (slot)], (uint)((now_ - (t)) >> 6)); \
+        (t) = now_;                                                                            \
+    } while (0)
+#define PHASE_CLOCKS 1
+#else
+#define PHASE_MARK(sc, slot, t, warp, first)
+#endif
+
 kernel void Persistent_RenderRegrouped(RT_SCENE_PARAMS, global float* image, global int* next,
                                        int first, int count, int refill) {
     RT_SCENE_INIT(sc);
@@ -300,6 +324,12 @@ kernel void Persistent_RenderRegrouped(RT_SCENE_PARAMS, global float* image, glo
     bool drained = false;  // the counter has no pixel left for this lane
     if (lane < RG_KEYS) keys[0][lane] = 0;
     barrier(CLK_LOCAL_MEM_FENCE);
+#ifdef PHASE_CLOCKS
+    const int phaseLanes = min(32, RG_LANES - (lane & ~31));  // this lane's warp
+    const uint phaseWarp = phaseLanes == 32 ? 0xffffffffu : (1u << phaseLanes) - 1u;
+    const bool phaseFirst = (lane & 31) == 0;
+    ulong phaseT = Phase_Clock();
+#endif
     for (int step = 0;; step = step == 2 ? 0 : step + 1) {
         Persistent_EndOfTree(&sc, image, &l, stack, &top, samples);
         if (l.pixel < 0 && !drained) {
@@ -309,6 +339,7 @@ kernel void Persistent_RenderRegrouped(RT_SCENE_PARAMS, global float* image, glo
             else
                 Persistent_Begin(&sc, &l, stack, &top, k, first, count);
         }
+        PHASE_MARK(&sc, RT_PHASE_BOOKKEEPING, phaseT, phaseWarp, phaseFirst);
         local int* counts = keys[step];
         if (lane < RG_KEYS) keys[step == 2 ? 0 : step + 1][lane] = 0;
 
@@ -324,7 +355,9 @@ kernel void Persistent_RenderRegrouped(RT_SCENE_PARAMS, global float* image, glo
             key = Regroup_KeyOf(&sc, &node);
         }
         const int rank = atomic_inc(&counts[key]);
+        PHASE_MARK(&sc, RT_PHASE_TRACE, phaseT, phaseWarp, phaseFirst);
         barrier(CLK_LOCAL_MEM_FENCE);
+        PHASE_MARK(&sc, RT_PHASE_TRACE_WAIT, phaseT, phaseWarp, phaseFirst);
         // The whole work-group leaves together, once none of its lanes holds a ray: every lane
         // must reach every barrier.
         if (counts[RG_IDLE] == RG_LANES) break;
@@ -340,6 +373,7 @@ kernel void Persistent_RenderRegrouped(RT_SCENE_PARAMS, global float* image, glo
             slots[slot].hit.p = p;
         }
         barrier(CLK_LOCAL_MEM_FENCE);
+        PHASE_MARK(&sc, RT_PHASE_FILE, phaseT, phaseWarp, phaseFirst);
 
         // Shade the lane-th hit of that order.
         if (lane < busy) {
@@ -347,7 +381,9 @@ kernel void Persistent_RenderRegrouped(RT_SCENE_PARAMS, global float* image, glo
             const Pending q = slots[lane].hit.p;
             slots[lane].shade = Regroup_Shade(&sc, &n, &q);
         }
+        PHASE_MARK(&sc, RT_PHASE_SHADE, phaseT, phaseWarp, phaseFirst);
         barrier(CLK_LOCAL_MEM_FENCE);
+        PHASE_MARK(&sc, RT_PHASE_SHADE_WAIT, phaseT, phaseWarp, phaseFirst);
 
         // Take back this lane's own result, in Megakernel_TraceNext's order.
         if (l.pixel >= 0) {
