@@ -803,5 +803,57 @@ class PersistTest(unittest.TestCase):
         self.assertEqual(len(p.stderr.strip().splitlines()), 1, p.stderr)
 
 
+class PhasesTest(unittest.TestCase):
+    """scripts/charts_phases.py: the regrouped persistent megakernel's phase clocks turned into
+    milliseconds, beside the queue wavefront's kernels."""
+
+    @staticmethod
+    def write(d, name, rows):
+        path = os.path.join(d, name)
+        with open(path, "w") as f:
+            f.write("\n".join(json.dumps(r) for r in rows) + "\n")
+        return path
+
+    def run_script(self, persist_extras, queue=True, queue_arg=None):
+        d = tempfile.mkdtemp()
+        base = {"scene": "map/map-s16-x25-o0-m16", "status": "ok", "width": 64, "height": 32}
+        rows = [dict(base, pipeline="mega", layout="weighted", device_ms=8.0),
+                dict(base, pipeline="persist", layout="weighted", device_ms=4.0,
+                     extras=persist_extras)]
+        path = self.write(d, "rows.jsonl", rows)
+        with open(os.path.join(d, "sweep.json"), "w") as f:
+            json.dump(dict(META, sweep="persist-phase"), f)
+        args = [sys.executable, os.path.join(SCRIPTS, "charts_phases.py"), path]
+        if queue:
+            q = self.write(d, "queue.jsonl", [dict(base, pipeline="queue", device_ms=2.0, kernel_ms={
+                "extend": 0.5, "shadow": 0.25, "shade glass": 0.5, "shade miss": 0.25,
+                "compact": 0.25})])
+            args += ["--queue", queue_arg or f"queue={q}"]
+        return d, subprocess.run(args, capture_output=True, text=True)
+
+    def test_phase_shares_of_the_device_time_and_queue_parts(self):
+        # Cycles 1:4:1:0:2:0 of 4 ms: 0.5, 2, 0.5, 0, 1, 0 ms.
+        extras = {"phase_mcycles_bookkeeping": 10.0, "phase_mcycles_trace": 40.0,
+                  "phase_mcycles_trace_wait": 10.0, "phase_mcycles_shade": 20.0}
+        d, p = self.run_script(extras)
+        self.assertEqual(p.returncode, 0, p.stderr)
+        line = next(x for x in open(os.path.join(d, "phases.md")) if x.startswith("| `s16"))
+        self.assertEqual(line.strip(), "| `s16-x25-o0` | 8.000 | 4.000 (2.00x) | 0.50 | 2.00 | "
+                         "0.50 | 0.00 | 1.00 | 0.00 | 2.000 (4.00x) | 0.50 | 0.25 | 0.75 | 0.50 |")
+        if HAVE_MPL:
+            self.assertGreater(os.path.getsize(os.path.join(d, "phases.png")), 10000)
+
+    def test_rows_without_clocks_are_one_line(self):
+        _, p = self.run_script({"warp_steps": 5.0}, queue=False)
+        self.assertEqual(p.returncode, 1)
+        self.assertIn("no persistent rows with phase clocks", p.stderr)
+        self.assertEqual(len(p.stderr.strip().splitlines()), 1, p.stderr)
+
+    def test_a_queue_argument_without_a_label_is_one_line(self):
+        _, p = self.run_script({"phase_mcycles_trace": 1.0}, queue_arg="rows.jsonl")
+        self.assertEqual(p.returncode, 1)
+        self.assertIn("--queue rows.jsonl: expected LABEL=ROWS.jsonl", p.stderr)
+
+
 if __name__ == "__main__":
     unittest.main()
