@@ -8,9 +8,9 @@ drawn hollow. Also writes a Markdown table beside the chart, both named after th
 (persist.md, persist.png), with every time (the 64-lane, tree-megakernel and one-group series
 too) and the best schedule's speed-up per scene. scripts/gpu-sweep.sh import runs it for these sweeps.
 
-A sweep about the order pixels are handed out in (every schedule it runs in several
---persistent-tile orders: persist-tile, persist-regroup-order) gets a table and chart by tile instead: for each schedule and scene, the time at each
-order and the speed-up of the best one.
+A sweep about the order pixels are handed out in (every schedule it runs is in several
+--persistent-tile orders, as in the persist-tile sweep) gets a table and chart by tile instead:
+for each schedule and scene, the time at each order and the speed-up of the best one.
 
 Usage: scripts/charts_persist.py ROWS.jsonl|SWEEP.json [--out DIR]
 Needs Debian's python3-matplotlib for the chart; the table needs nothing.
