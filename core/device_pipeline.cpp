@@ -95,9 +95,9 @@ void DevicePipeline::finishRayCount(const RenderOptions& options) {
         // millions of cycles, summed over warps; RT_PHASE_* order).
         static const char* phases[RT_PHASES] = {"bookkeeping", "trace", "trace_wait",
                                                 "file",        "shade", "shade_wait"};
-        const std::vector<uint64_t> c = scene_->readPhaseCounts(cl_.queue());
         for (int i = 0; i < RT_PHASES; ++i)
-            if (c[i] != 0) stats_.extras[std::string("phase_mcycles_") + phases[i]] = c[i] * 64e-6;
+            if (w.phases[i] != 0)
+                stats_.extras[std::string("phase_mcycles_") + phases[i]] = w.phases[i] * 64e-6;
     }
 }
 

@@ -221,16 +221,15 @@ RayCounts DeviceScene::readRayCounts(cl::CommandQueue& queue) const {
     return out;
 }
 
-std::vector<uint64_t> DeviceScene::readPhaseCounts(cl::CommandQueue& queue) const {
-    cl_uint c[RT_PHASES];
-    queue.enqueueReadBuffer(rayCounts_, CL_TRUE, RT_COUNT_PHASES * sizeof(cl_uint), sizeof c, c);
-    return std::vector<uint64_t>(c, c + RT_PHASES);
-}
-
 WarpCounts DeviceScene::readWarpCounts(cl::CommandQueue& queue) const {
-    cl_uint c[2];
+    // The warp counters and the phase clocks after them, in one read.
+    cl_uint c[RT_COUNTERS - RT_RAY_TYPES];
     queue.enqueueReadBuffer(rayCounts_, CL_TRUE, RT_RAY_TYPES * sizeof(cl_uint), sizeof c, c);
-    return {c[0], c[1]};
+    WarpCounts w;
+    w.lanesActive = c[RT_COUNT_LANES_ACTIVE - RT_RAY_TYPES];
+    w.steps = c[RT_COUNT_WARP_STEPS - RT_RAY_TYPES];
+    for (int i = 0; i < RT_PHASES; ++i) w.phases[i] = c[RT_COUNT_PHASES - RT_RAY_TYPES + i];
+    return w;
 }
 
 void DeviceScene::setArgs(Kernel& k, const dev::RenderSettings& settings) const {

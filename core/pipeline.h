@@ -29,6 +29,9 @@ using RayCounts = std::array<uint64_t, RT_RAY_TYPES>;
 // steps, and the steps; lanesActive / steps is the mean number of busy lanes of a warp.
 struct WarpCounts {
     uint64_t lanesActive = 0, steps = 0;
+    // The regrouped persistent loop's phase clocks (RT_PHASE_*, core/types.h), in units of 64
+    // cycles; zero unless it was built with RT_PERSIST_PHASE_CLOCKS.
+    uint64_t phases[RT_PHASES] = {};
 };
 const char* rayTypeName(int type);  // "primary", "reflection", "refraction", "shadow"
 // --offset names: fixed, scaled, bound. parseOffset throws rt::Error naming the flag.
@@ -132,10 +135,8 @@ class DeviceScene {
     void resetRayCounts(cl::CommandQueue& queue) const;
     RayCounts readRayCounts(cl::CommandQueue& queue) const;
     WarpCounts readWarpCounts(cl::CommandQueue& queue) const;  // zeroed by resetRayCounts
-    // The RT_PHASES phase clocks (core/types.h); zero unless a kernel was built to keep them.
-    std::vector<uint64_t> readPhaseCounts(cl::CommandQueue& queue) const;
-    // The counters themselves (RT_RAY_TYPES ray counters, then the warp counters), for a kernel
-    // that adds to them outside RT_SCENE_PARAMS.
+    // The counters themselves (RT_RAY_TYPES ray counters, then the warp counters and the phase
+    // clocks), for a kernel that adds to them outside RT_SCENE_PARAMS.
     const cl::Buffer& rayCountBuffer() const { return rayCounts_; }
     // True when this copy was made from `scene` with `accel` (by its SceneId: scenes are not
     // mutated while a pipeline holds them, except the camera, which travels in the settings).
