@@ -272,6 +272,26 @@ typedef struct CwbvhPrim {
     float pad2;
 } CwbvhPrim;
 
+// The persistent megakernel's bounce loop (--persistent-loop bounce, persistent/persistent.cl)
+// keeps each work-group's rays of one bounce in global memory, in these records: the weighted
+// megakernel's pending ray (core/cl/pathstate.cl) packed without float3 padding, the pixel (its
+// index among the batch the work-group holds) and the ray's slot in that pixel's tree (children
+// of slot i at i*C + 1 + k, as Node's).
+typedef struct BounceRay {
+    Float3 origin, dir, weight;
+    int32_t depthType;  // depth << 8 | RT_RAY_* type
+    int32_t pixel;
+    int32_t slot;
+} BounceRay;
+
+// What a traced ray added to its pixel, and which children it spawned (bit 0 reflection, bit 1
+// refraction): one per slot of every pixel's tree, so that the pixel's terms can be summed in the
+// weighted megakernel's order once the tree is done.
+typedef struct BounceTerm {
+    Float3 term;
+    int32_t children;
+} BounceTerm;
+
 // Bounding volume of 7 slab pairs around a mesh (report 3.6.2, Kay and Kajiya 1986): slab k
 // holds the points p with lo[k] <= dot(RT_SLAB_k, p) <= hi[k], for the unnormalized normals
 // x, y, z, (1,1,1), (-1,1,1), (1,-1,1), (1,1,-1).
@@ -300,6 +320,7 @@ static_assert(sizeof(Camera) == 32);
 static_assert(sizeof(RenderSettings) == 192);
 static_assert(sizeof(Grid) == 64);
 static_assert(sizeof(Kdop) == 64);
+static_assert(sizeof(BounceRay) == 48 && sizeof(BounceTerm) == 16);
 static_assert(sizeof(Node) == 48);
 static_assert(sizeof(BvhNode) == 32);
 static_assert(sizeof(WideNode) == 64);

@@ -18,6 +18,7 @@
 // The per-ray work is the weighted megakernel's (Megakernel_TraceNext), and each pixel's rays and
 // samples are summed in the same order, so the image is the same to the bit.
 #include "megakernel_sample.cl"
+#include "scan.cl"
 
 // Pixel `k` of the `count` pixels from `first` in row-major order. Whole rows go by strips of
 // RT_PERSIST_TILE_W columns and RT_PERSIST_TILE_H rows, row by row inside a strip (bands of TILE_H
@@ -106,7 +107,151 @@ inline void Persistent_EndOfTree(const SceneData* sc, global float* image, Persi
     }
 }
 
-#if defined(RT_PERSIST_NESTED)
+#if defined(RT_PERSIST_BOUNCE)
+// The bounce form (--persistent-loop bounce; RT_PERSIST_BOUNCE is the work-group size): a
+// wavefront inside the persistent launch. A work-group takes a batch of `batch` pixels from the
+// counter and traces their rays bounce by bounce: all camera rays, then all their children, and so
+// on, each bounce's rays in one list in global memory (BounceRay, core/types.h), compacted in a
+// stable order by a prefix sum, so that a warp traces rays of one bounce from neighbouring pixels,
+// the order the queue wavefront's extend kernel traces them in. The other loops trace a lane's
+// own pixel's rays, and a warp's lanes part at the first mirror. No lane keeps a stack of pending
+// rays, only the ray it traces.
+//
+// Each ray's term and children go to its pixel's tree (BounceTerm at the ray's slot), and once the
+// batch's trees are done each pixel sums its terms in the weighted megakernel's order: depth
+// first, the reflection's subtree before the refraction's (Bounce_Sum). Same terms, computed by the
+// same code from the same bits, added in the same order: the weighted megakernel's image to the
+// bit. The AA samples of a batch go one after another, summed in the image buffer.
+//
+// Scratch (the host sizes it): per work-group two lists of batch * C^B rays (the widest bounce a
+// batch can have) and batch * N terms (N slots of a tree of B bounces, RayTree_NodeCount).
+
+inline BounceRay Bounce_Pack(const Pending* p, int pixel, int slot) {
+    BounceRay r;
+    r.origin = F3(p->ray.origin);
+    r.dir = F3(p->ray.dir);
+    r.weight = F3(p->weight);
+    r.depthType = p->depth << 8 | p->type;
+    r.pixel = pixel;
+    r.slot = slot;
+    return r;
+}
+
+inline Pending Bounce_Unpack(BounceRay r) {
+    return PathState_Make(makeRay(f3(r.origin), f3(r.dir)), f3(r.weight), r.depthType >> 8,
+                          r.depthType & 0xff);
+}
+
+// A pixel's colour from its tree of terms (slot 0 its camera ray), summed in pre-order with the
+// reflection first: the order in which the weighted megakernel's stack pops the same rays.
+inline float3 Bounce_Sum(const global BounceTerm* tree) {
+    float3 color = (float3)(0.0f, 0.0f, 0.0f);
+    int i = 0;
+    for (;;) {
+        color += f3(tree[i].term);
+        const int children = tree[i].children;
+        if (children != 0) {  // down to the first child
+            i = i * RT_BRANCH + ((children & 1) ? 1 : 2);
+            continue;
+        }
+        // Up to the nearest ancestor entered by its reflection that also has a refraction.
+        for (;;) {
+            if (i == 0) return color;
+            const int parent = (i - 1) / RT_BRANCH;
+            if (i == parent * RT_BRANCH + 1 && (tree[parent].children & 2)) {
+                i = parent * RT_BRANCH + 2;
+                break;
+            }
+            i = parent;
+        }
+    }
+}
+
+kernel void Persistent_RenderBounce(RT_SCENE_PARAMS, global float* image, global int* next,
+                                    int first, int count, global BounceRay* rays,
+                                    global BounceTerm* terms, int batch) {
+    RT_SCENE_INIT(sc);
+    local int scan[RT_PERSIST_BOUNCE];
+    local int start;  // the group's first pixel this batch
+    const int lane = (int)get_local_id(0), lanes = RT_PERSIST_BOUNCE;
+    const int samples = settings.aaSamples * settings.aaSamples;
+    const int slots = RayTree_NodeCount(settings.bounces);
+    const int widest = batch << (settings.bounces * (RT_BRANCH - 1));
+    global BounceRay* lists = rays + (size_t)get_group_id(0) * 2 * (size_t)widest;
+    global BounceTerm* trees = terms + (size_t)get_group_id(0) * (size_t)batch * (size_t)slots;
+    for (;;) {
+        barrier(CLK_LOCAL_MEM_FENCE);  // every lane has read the last batch's start
+        if (lane == 0) start = atomic_add(next, batch);
+        barrier(CLK_LOCAL_MEM_FENCE);
+        if (start >= count) break;  // the whole group leaves together
+        const int pixels = min(batch, count - start);
+        for (int sample = 0; sample < samples; ++sample) {
+            global BounceRay* in = lists;
+            global BounceRay* out = lists + widest;
+            // One bounce a pass: rays [0, n) of `in` (the camera rays at depth 0), `lanes` at a
+            // time, their children appended to `out` in the same order.
+            for (int depth = 0, n = pixels; n > 0; ++depth) {
+                int produced = 0;
+                for (int chunk = 0; chunk < n; chunk += lanes) {
+                    const int i = chunk + lane;
+                    int pixel = 0, slot = 0, children = 0;
+                    Pending refl, refr;
+                    if (i < n) {
+                        Pending p;
+                        if (depth == 0) {
+                            pixel = i;
+                        } else {
+                            const BounceRay r = in[i];
+                            pixel = r.pixel;
+                            slot = r.slot;
+                            p = Bounce_Unpack(r);
+                        }
+                        const int2 xy =
+                            Persistent_PixelOf(start + pixel, first, count, settings.width);
+                        if (depth == 0) p = PathState_Primary(&sc, xy.x, xy.y, sample);
+                        RT_COUNT_WARP_STEP(&sc);  // the lanes that trace a ray this pass
+                        const Node node = RayTree_TraceNode(
+                            &sc, p.ray, p.type, Sampling_PointKey(xy.x, xy.y, sample, p.depth));
+                        float3 term;
+                        if (node.kind == RT_KIND_MISS) {
+                            term = PathState_Miss(&sc, &p);
+                        } else {
+                            bool hasRefl, hasRefr;
+                            term = PathState_Step(&sc, &node, &p, true, true, RT_PATTERN_ANY, &refl,
+                                                  &hasRefl, &refr, &hasRefr);
+                            children = (hasRefl ? 1 : 0) | (hasRefr ? 2 : 0);
+                        }
+                        global BounceTerm* t = &trees[pixel * slots + slot];
+                        t->term = F3(term);
+                        t->children = children;
+                    }
+                    const int mine = popcount(children);
+                    int o = produced + Scan_WorkGroupInclusive(scan, lane, lanes, mine) - mine;
+                    produced += scan[lanes - 1];
+                    if (children & 1) out[o++] = Bounce_Pack(&refl, pixel, slot * RT_BRANCH + 1);
+                    if (children & 2) out[o] = Bounce_Pack(&refr, pixel, slot * RT_BRANCH + 2);
+                    barrier(CLK_LOCAL_MEM_FENCE);  // every lane has read the total
+                }
+                // The next bounce reads children and sums terms that other lanes wrote.
+                barrier(CLK_GLOBAL_MEM_FENCE);
+                n = produced;
+                global BounceRay* swap = in;
+                in = out;
+                out = swap;
+            }
+            for (int pixel = lane; pixel < pixels; pixel += lanes) {
+                const int2 xy = Persistent_PixelOf(start + pixel, first, count, settings.width);
+                const int at = (xy.y * settings.width + xy.x) * 3;
+                float3 c = Bounce_Sum(&trees[pixel * slots]);
+                if (sample > 0) c += (float3)(image[at], image[at + 1], image[at + 2]);
+                if (sample == samples - 1) c = c / (float)samples;
+                Megakernel_Store(image, at, c);
+            }
+            barrier(CLK_GLOBAL_MEM_FENCE);  // the next sample rewrites trees other lanes summed
+        }
+    }
+}
+#elif defined(RT_PERSIST_NESTED)
 // The nested form (--persistent-loop nested): Aila and Laine's own shape, a loop over pixels
 // around the one-pixel megakernel's loop over rays. The work-group takes a pixel for each of its
 // lanes with one atomic add, each lane renders its pixel as Megakernel_Render does, and the group

@@ -57,8 +57,9 @@ const PipelineOption& registersOption() {
     return o;
 }
 
-// The flat loop over rays, or a loop over pixels around the megakernel's loop over rays.
-enum class PersistLoop { Flat, Nested, Lockstep };  // loopOption()'s choices, in order
+// The flat loop over rays, a loop over pixels around the megakernel's loop over rays, the flat
+// loop in warp lockstep, or a work-group's batch of pixels traced bounce by bounce.
+enum class PersistLoop { Flat, Nested, Lockstep, Bounce };  // loopOption()'s choices, in order
 
 const PipelineOption& loopOption() {
     static const PipelineOption o{
@@ -67,14 +68,35 @@ const PipelineOption& loopOption() {
         .help =
             "Persistent megakernel: flat (one loop over rays; a lane takes a pixel when its tree "
             "ends), nested (a loop over pixels around the megakernel's loop over rays; a "
-            "work-group takes a pixel a lane once all its lanes are done) or lockstep (the flat "
+            "work-group takes a pixel a lane once all its lanes are done), lockstep (the flat "
             "loop with a warp's 32 lanes starting every step together, NVIDIA; elsewhere the "
-            "flat loop); nested and lockstep do not regroup [flat]",
+            "flat loop) or bounce (a work-group traces a batch of --persistent-batch pixels "
+            "bounce by bounce, each bounce's rays compacted in global memory, a wavefront inside "
+            "the launch); only flat regroups [flat]",
         .defaultValue = "flat",
-        .choices = {"flat", "nested", "lockstep"},
+        .choices = {"flat", "nested", "lockstep", "bounce"},
         .sweepKey = "persistent-loop",
         .cellTag = "L",
         .label = "{} loop",
+    };
+    return o;
+}
+
+// The pixels a work-group of the bounce loop takes together and traces bounce by bounce.
+const PipelineOption& batchOption() {
+    static const PipelineOption o{
+        .name = "persistent-batch",
+        .type = PipelineOption::Type::Integer,
+        .help =
+            "Persistent megakernel, --persistent-loop bounce: pixels a work-group takes together "
+            "and traces bounce by bounce, 16..65536; more keeps its later bounces' lanes busier "
+            "and needs more scratch memory [1024]",
+        .defaultValue = 1024ll,
+        .min = 16,
+        .max = 65536,
+        .sweepKey = "persistent-batch",
+        .cellTag = "U",
+        .label = "batches of {} pixels",
     };
     return o;
 }
@@ -326,18 +348,22 @@ Image PersistentPipeline::renderScheduled(const Scene& scene, const RenderOption
     checkLanes(dev, local, regroup);
     const auto loop = PersistLoop(loopOption().index(o.pipelineOptions));
     const bool nested = loop == PersistLoop::Nested, lockstep = loop == PersistLoop::Lockstep;
-    if ((nested || lockstep) && regroup)
+    const bool bounce = loop == PersistLoop::Bounce;
+    if (!bounce && !batchOption().isDefault(o.pipelineOptions))
+        throw Error("--persistent-batch applies to --persistent-loop bounce only",
+                    FailureKind::InvalidOption);
+    if ((nested || lockstep || bounce) && regroup)
         throw Error("--persistent-loop " + loopOption().choice(o.pipelineOptions) +
                         " does not go with --persistent-regroup " +
                         regroupOption().choice(o.pipelineOptions) +
                         " (regrouping cuts the flat loop's steps)",
                     FailureKind::InvalidOption);
     const long long refill = refillOption().integer(o.pipelineOptions);
-    if (refill != 1 && (nested || lockstep || regroup))
+    if (refill != 1 && (nested || lockstep || bounce || regroup))
         throw Error(
             "--persistent-refill " + std::to_string(refill) + " applies to the flat loop only (" +
-                (nested
-                     ? std::string("--persistent-loop nested takes pixels a work-group at a time")
+                (nested || bounce ? "--persistent-loop " + loopOption().choice(o.pipelineOptions) +
+                                        " takes pixels a work-group at a time"
                  : lockstep ? std::string("--persistent-loop lockstep takes them at once")
                             : "--persistent-regroup takes a pixel a lane at once") +
                 ")",
@@ -348,6 +374,7 @@ Image PersistentPipeline::renderScheduled(const Scene& scene, const RenderOption
     if (regroupBy == PersistRegroup::Material) programDefines.push_back("RT_PERSIST_REGROUP_CLASS");
     if (nested) programDefines.push_back("RT_PERSIST_NESTED");
     if (lockstep) programDefines.push_back("RT_PERSIST_LOCKSTEP");
+    if (bounce) programDefines.push_back("RT_PERSIST_BOUNCE=" + std::to_string(local));
     const std::string& tile = tileOption().choice(o.pipelineOptions);
     const size_t by = tile.find('x');
     programDefines.push_back("RT_PERSIST_TILE_W=" + tile.substr(0, by));
@@ -367,10 +394,15 @@ Image PersistentPipeline::renderScheduled(const Scene& scene, const RenderOption
     }
     stats_.addBuffer("image", bytes);
 
-    Kernel kernel(program, regroup ? "Persistent_RenderRegrouped" : "Persistent_Render");
-    kernel.set("image", image_.get()).set("next", next_.get());
-    kernel.set("refill", cl_int(refill));
     const size_t most = workItems(dev, o, local);
+    Kernel kernel(program, bounce    ? "Persistent_RenderBounce"
+                           : regroup ? "Persistent_RenderRegrouped"
+                                     : "Persistent_Render");
+    kernel.set("image", image_.get()).set("next", next_.get());
+    if (bounce)
+        setBounceScratch(kernel, scene, o, most / local);
+    else
+        kernel.set("refill", cl_int(refill));
     dev::RenderSettings settings = makeSettings(scene, o);
     deviceScene.setArgs(kernel, settings);
     std::string key = std::to_string(o.width) + "x" + std::to_string(o.height);
@@ -418,6 +450,43 @@ Image PersistentPipeline::renderScheduled(const Scene& scene, const RenderOption
     return out;
 }
 
+void PersistentPipeline::setBounceScratch(Kernel& kernel, const Scene& scene,
+                                          const RenderOptions& o, size_t groups) {
+    // Per work-group, as persistent.cl's Persistent_RenderBounce indexes it: two lists as long as
+    // the widest bounce a batch can reach (every ray of the last one glass), and a tree of terms a
+    // pixel.
+    const long long batch = batchOption().integer(o.pipelineOptions);
+    const int branching = scene.branching();
+    const size_t widest = size_t(batch) << (o.bounces * (branching - 1));
+    const size_t rayBytes = groups * 2 * widest * sizeof(dev::BounceRay);
+    const size_t termBytes = groups * size_t(batch) * size_t(treeNodeCount(branching, o.bounces)) *
+                             sizeof(dev::BounceTerm);
+    const DeviceInfo& dev = cl_.device();
+    for (const size_t bytes : {rayBytes, termBytes})
+        if (bytes > dev.maxAlloc || rayBytes + termBytes > dev.globalMem / 2)
+            throw Error(
+                "--persistent-batch " + std::to_string(batch) + ": " + std::to_string(groups) +
+                    " work-groups tracing batches bounce by "
+                    "bounce at --bounces " +
+                    std::to_string(o.bounces) + " need " + std::to_string(rayBytes >> 20) +
+                    " MiB of rays and " + std::to_string(termBytes >> 20) + " MiB of terms, and " +
+                    dev.name + " allocates at most " + std::to_string(dev.maxAlloc >> 20) +
+                    " MiB a buffer and half its " + std::to_string(dev.globalMem >> 20) +
+                    " MiB in all here; lower --persistent-batch, --persistent-groups or "
+                    "--bounces",
+                FailureKind::InvalidOption);
+    try {
+        bounceRays_.ensure(cl_, rayBytes, "the bounce loop's ray lists");
+        bounceTerms_.ensure(cl_, termBytes, "the bounce loop's trees of terms");
+    } catch (const cl::Error& e) {
+        throwClError(e, "preparing the persistent megakernel's bounce scratch");
+    }
+    stats_.addBuffer("bounce rays", rayBytes);
+    stats_.addBuffer("bounce terms", termBytes);
+    kernel.set("rays", bounceRays_.get()).set("terms", bounceTerms_.get());
+    kernel.set("batch", cl_int(batch));
+}
+
 void registerPersistentMegakernel(PipelineRegistry& registry) {
     PipelineInfo p;
     p.name = "persist";
@@ -428,23 +497,27 @@ void registerPersistentMegakernel(PipelineRegistry& registry) {
         "work-items take pixels from a global counter as their ray trees end "
         "(--persistent-groups N, --persistent-refill N, --persistent-regroup pattern|material, "
         "--persistent-lanes N, --persistent-max-registers N, --persistent-loop "
-        "nested|lockstep, --persistent-tile WxH, or --persistent-schedule auto to let warps traced "
+        "nested|lockstep|bounce, --persistent-batch N, --persistent-tile WxH, or "
+        "--persistent-schedule auto to let warps traced "
         "on the CPU "
         "choose)";
     p.supports = {.adaptiveAa = false, .tiling = false, .rowWindow = true};
-    p.options = {groupsOption(),    refillOption(), regroupOption(), laneOption(),
-                 registersOption(), loopOption(),   tileOption(),    scheduleOption()};
+    p.options = {groupsOption(), refillOption(),    regroupOption(),
+                 laneOption(),   registersOption(), loopOption(),
+                 batchOption(),  tileOption(),      scheduleOption()};
     // Tests and the smoke check run the default schedule, the regrouped one, whose hits move
     // between lanes through local memory, the nested loop, the lockstep loop (whose warp votes
-    // only NVIDIA runs), and the schedule auto chooses (256 regrouped lanes a group where it
+    // only NVIDIA runs), the bounce loop (whose rays move between lanes through global memory),
+    // and the schedule auto chooses (256 regrouped lanes a group where it
     // regroups).
     PipelineVariant regrouped{"regrouped", {}}, nested{"nested", {}}, lockstep{"lockstep", {}},
-        automatic{"auto", {}};
+        bounce{"bounce", {}}, automatic{"auto", {}};
     regroupOption().set(regrouped.values, std::string("material"));
     loopOption().set(nested.values, std::string("nested"));
     loopOption().set(lockstep.values, std::string("lockstep"));
+    loopOption().set(bounce.values, std::string("bounce"));
     scheduleOption().set(automatic.values, std::string("auto"));
-    p.variants = {PipelineVariant{"", {}}, regrouped, nested, lockstep, automatic};
+    p.variants = {PipelineVariant{"", {}}, regrouped, nested, lockstep, bounce, automatic};
     p.make = [](ClContext* cl) { return std::make_unique<PersistentPipeline>(*cl); };
     registry.add(std::move(p));
 }

@@ -69,7 +69,7 @@ TEST(Persistent, PiecesAndRowWindowsKeepTheBits) {
     PersistentPipeline persist(test::device());
     const Image m = mega.render(scene, o);
     // The nested loop's work-group takes a pixel a lane: a piece of one row leaves lanes without.
-    for (const char* loop : {"flat", "nested", "lockstep"}) {
+    for (const char* loop : {"flat", "nested", "lockstep", "bounce"}) {
         setOption(o, "persistent-loop", std::string(loop));
         RenderOptions capped = o;
         capped.maxLaunchMs = 1e-6;  // every launch over the cap: a row, or part of one, at a time
@@ -147,6 +147,58 @@ TEST(Persistent, RegroupedKeepsTheBitsAndTheRays) {
             setOption(r, "persistent-lanes", 32ll);  // more groups, fewer lanes to sort among
             EXPECT_TRUE(sameBits(m, persist.render(scene, r))) << name << " " << key << " 32";
         }
+    }
+}
+
+// The bounce loop traces a work-group's batch of pixels bounce by bounce, each bounce's rays
+// compacted in global memory, so a lane traces other pixels' rays and a pixel's terms are summed
+// after its whole tree is traced. The divergence scene branches at glass and mirrors on most
+// pixels; batches of 16 leave most lanes of 32 without a camera ray, batches of 100 take four
+// passes of 32 lanes, the last one cut, and B = 8 at AA 2 widens the lists to 256 rays a pixel.
+TEST(Persistent, BounceLoopKeepsTheBitsAndTheRays) {
+    MegakernelPipeline mega(test::device());
+    PersistentPipeline persist(test::device());
+    for (const char* name : {"divergence", "spheres", "envmap"}) {
+        Scene scene = load(name);
+        for (int b : {0, 4, 8}) {
+            RenderOptions o = weighted(scene, b, b == 0 ? 1 : 2);
+            o.width = 37;
+            o.height = 23;
+            o.countRays = true;
+            const Image m = mega.render(scene, o);
+            RenderOptions r = o;
+            setOption(r, "persistent-loop", std::string("bounce"));
+            EXPECT_TRUE(sameBits(m, persist.render(scene, r))) << name << " B=" << b;
+            ASSERT_TRUE(persist.stats().raysCounted);
+            EXPECT_EQ(persist.stats().rays, mega.stats().rays) << name << " B=" << b;
+            setOption(r, "persistent-lanes", 32ll);
+            for (long long batch : {16ll, 100ll}) {
+                setOption(r, "persistent-batch", batch);
+                EXPECT_TRUE(sameBits(m, persist.render(scene, r)))
+                    << name << " B=" << b << ", batches of " << batch;
+                EXPECT_EQ(persist.stats().rays, mega.stats().rays)
+                    << name << " B=" << b << ", batches of " << batch;
+            }
+        }
+    }
+}
+
+// The bounce loop's scratch holds the widest bounce a batch can reach: at B = 16 on a scene
+// with glass, 2^16 rays a pixel, which no device holds for a thousand pixels a group.
+TEST(Persistent, BounceLoopRefusesScratchPastTheDevice) {
+    Scene scene = load("divergence");
+    ASSERT_EQ(scene.branching(), 2);
+    RenderOptions o = weighted(scene, 16, 1);
+    setOption(o, "persistent-loop", std::string("bounce"));
+    PersistentPipeline persist(test::device());
+    try {
+        persist.render(scene, o);
+        FAIL() << "scratch past the device was accepted";
+    } catch (const Error& e) {
+        const std::string what = e.what();
+        EXPECT_NE(what.find("--persistent-batch 1024"), std::string::npos) << what;
+        EXPECT_NE(what.find("--bounces 16"), std::string::npos) << what;
+        EXPECT_NE(what.find("MiB of rays"), std::string::npos) << what;
     }
 }
 
