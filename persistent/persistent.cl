@@ -18,7 +18,6 @@
 // The per-ray work is the weighted megakernel's (Megakernel_TraceNext), and each pixel's rays and
 // samples are summed in the same order, so the image is the same to the bit.
 #include "megakernel_sample.cl"
-#include "scan.cl"
 
 // Pixel `k` of the `count` pixels from `first` in row-major order. Whole rows go by strips of
 // RT_PERSIST_TILE_W columns and RT_PERSIST_TILE_H rows, row by row inside a strip (bands of TILE_H
@@ -49,6 +48,23 @@ inline bool Persistent_Refill(bool idle, int refill, uint* wanting) {
                      : "r"((uint)idle), "r"(active));
     *wanting = idleLanes;
     return (int)popcount(idleLanes) >= refill || idleLanes == active;
+}
+
+// The lanes of `warp` for which `p` holds; every lane of `warp` must call it.
+inline uint Persistent_WarpBallot(bool p, uint warp) {
+    uint lanes;
+    __asm__ volatile("{ .reg .pred q; setp.ne.u32 q, %1, 0; vote.sync.ballot.b32 %0, q, %2; }"
+                     : "=r"(lanes)
+                     : "r"((uint)p), "r"(warp));
+    return lanes;
+}
+
+// Lane `from`'s v, to every lane of `warp` (each of them calls it).
+inline int Persistent_WarpShuffle(int v, int from, uint warp) {
+    __asm__ volatile("shfl.sync.idx.b32 %0, %1, %2, 0x1f, %3;"
+                     : "=r"(v)
+                     : "r"(v), "r"(from), "r"(warp));
+    return v;
 }
 
 // Pixels for the lanes of `wanting` (each of them calls this): one atomic add by the lowest,
@@ -111,17 +127,18 @@ inline void Persistent_EndOfTree(const SceneData* sc, global float* image, Persi
 // The bounce form (--persistent-loop bounce; RT_PERSIST_BOUNCE is the work-group size): a
 // wavefront inside the persistent launch. A work-group takes a batch of `batch` pixels from the
 // counter and traces their rays bounce by bounce: all camera rays, then all their children, and so
-// on, each bounce's rays in one list in global memory (BounceRay, core/types.h), compacted in a
-// stable order by a prefix sum, so that a warp traces rays of one bounce from neighbouring pixels,
-// the order the queue wavefront's extend kernel traces them in. The other loops trace a lane's
-// own pixel's rays, and a warp's lanes part at the first mirror. No lane keeps a stack of pending
-// rays, only the ray it traces.
+// on, each bounce's rays in one list in global memory (BounceRay, core/types.h). A warp takes 32
+// consecutive rays of the list and appends their children together, so that a warp traces rays
+// of one bounce from neighbouring pixels, the order the queue wavefront's extend kernel traces
+// them in. The other loops trace a lane's own pixel's rays, and a warp's lanes part at the first
+// mirror. No lane keeps a stack of pending rays, only the ray it traces.
 //
 // Each ray's term and children go to its pixel's tree (BounceTerm at the ray's slot), and once the
 // batch's trees are done each pixel sums its terms in the weighted megakernel's order: depth
 // first, the reflection's subtree before the refraction's (Bounce_Sum). Same terms, computed by the
 // same code from the same bits, added in the same order: the weighted megakernel's image to the
-// bit. The AA samples of a batch go one after another, summed in the image buffer.
+// bit, whatever order the lists come in. The AA samples of a batch go one after another, summed
+// in the image buffer.
 //
 // Scratch (the host sizes it): per work-group two lists of batch * C^B rays (the widest bounce a
 // batch can have) and batch * N terms (N slots of a tree of B bounces, RayTree_NodeCount).
@@ -167,18 +184,76 @@ inline float3 Bounce_Sum(const global BounceTerm* tree) {
     }
 }
 
+// A warp's share of a bounce, on NVIDIA (RT_WARP_PTX): its lanes take the next 32 rays of the
+// bounce together and append their children together, one local atomic each, the children lane
+// by lane in order, so that the next bounce's warps again trace neighbours' rays. Elsewhere a
+// work-item is a warp of its own. No work-group barrier inside a bounce: a warp that is done
+// takes more rays instead of waiting for the group's slowest.
+typedef struct BounceWarp {
+    uint lanes;  // the warp's lanes (mask)
+    int count;   // how many
+    int lane;    // the caller's, within the warp
+} BounceWarp;
+
+inline BounceWarp Bounce_WarpOf(int lane) {
+    BounceWarp w;
+#ifdef RT_WARP_PTX
+    // A one-dimensional work-group fills its warps 32 work-items at a time; only its last warp
+    // may have fewer.
+    w.count = min(32, RT_PERSIST_BOUNCE - (lane & ~31));
+    w.lanes = w.count == 32 ? 0xffffffffu : (1u << w.count) - 1u;
+    w.lane = lane & 31;
+#else
+    w.lanes = 1u;
+    w.count = 1;
+    w.lane = 0;
+#endif
+    return w;
+}
+
+// The first of the warp's next w->count rays of the bounce; every lane of the warp calls it.
+inline int Bounce_Take(local int* taken, const BounceWarp* w) {
+#ifdef RT_WARP_PTX
+    int base = 0;
+    if (w->lane == 0) base = atomic_add(taken, w->count);
+    return Persistent_WarpShuffle(base, 0, w->lanes);
+#else
+    return atomic_inc(taken);
+#endif
+}
+
+// Where the caller's children (bit 0 reflection, bit 1 refraction, in that order) go in the next
+// bounce's list; every lane of the warp calls it.
+inline int Bounce_Place(local int* produced, int children, const BounceWarp* w) {
+#ifdef RT_WARP_PTX
+    const uint refl = Persistent_WarpBallot((children & 1) != 0, w->lanes);
+    const uint refr = Persistent_WarpBallot((children & 2) != 0, w->lanes);
+    uint below;
+    __asm__ volatile("mov.u32 %0, %%lanemask_lt;" : "=r"(below));
+    int base = 0;
+    if (w->lane == 0) base = atomic_add(produced, (int)(popcount(refl) + popcount(refr)));
+    base = Persistent_WarpShuffle(base, 0, w->lanes);
+    return base + (int)(popcount(refl & below) + popcount(refr & below));
+#else
+    return atomic_add(produced, (int)popcount(children));
+#endif
+}
+
 kernel void Persistent_RenderBounce(RT_SCENE_PARAMS, global float* image, global int* next,
                                     int first, int count, global BounceRay* rays,
                                     global BounceTerm* terms, int batch) {
     RT_SCENE_INIT(sc);
-    local int scan[RT_PERSIST_BOUNCE];
-    local int start;  // the group's first pixel this batch
-    const int lane = (int)get_local_id(0), lanes = RT_PERSIST_BOUNCE;
+    local int start;     // the group's first pixel this batch
+    local int taken;     // rays of this bounce taken by the group's warps
+    local int produced;  // children appended to the next bounce's list
+    const int lane = (int)get_local_id(0);
+    const BounceWarp warp = Bounce_WarpOf(lane);
     const int samples = settings.aaSamples * settings.aaSamples;
     const int slots = RayTree_NodeCount(settings.bounces);
     const int widest = batch << (settings.bounces * (RT_BRANCH - 1));
     global BounceRay* lists = rays + (size_t)get_group_id(0) * 2 * (size_t)widest;
     global BounceTerm* trees = terms + (size_t)get_group_id(0) * (size_t)batch * (size_t)slots;
+    if (lane == 0) taken = produced = 0;
     for (;;) {
         barrier(CLK_LOCAL_MEM_FENCE);  // every lane has read the last batch's start
         if (lane == 0) start = atomic_add(next, batch);
@@ -188,12 +263,13 @@ kernel void Persistent_RenderBounce(RT_SCENE_PARAMS, global float* image, global
         for (int sample = 0; sample < samples; ++sample) {
             global BounceRay* in = lists;
             global BounceRay* out = lists + widest;
-            // One bounce a pass: rays [0, n) of `in` (the camera rays at depth 0), `lanes` at a
-            // time, their children appended to `out` in the same order.
+            // One bounce a pass: rays [0, n) of `in` (the camera rays at depth 0), their children
+            // appended to `out`.
             for (int depth = 0, n = pixels; n > 0; ++depth) {
-                int produced = 0;
-                for (int chunk = 0; chunk < n; chunk += lanes) {
-                    const int i = chunk + lane;
+                for (;;) {
+                    const int base = Bounce_Take(&taken, &warp);
+                    if (base >= n) break;  // the same for the whole warp
+                    const int i = base + warp.lane;
                     int pixel = 0, slot = 0, children = 0;
                     Pending refl, refr;
                     if (i < n) {
@@ -209,7 +285,7 @@ kernel void Persistent_RenderBounce(RT_SCENE_PARAMS, global float* image, global
                         const int2 xy =
                             Persistent_PixelOf(start + pixel, first, count, settings.width);
                         if (depth == 0) p = PathState_Primary(&sc, xy.x, xy.y, sample);
-                        RT_COUNT_WARP_STEP(&sc);  // the lanes that trace a ray this pass
+                        RT_COUNT_WARP_STEP(&sc);  // the lanes that trace a ray this take
                         const Node node = RayTree_TraceNode(
                             &sc, p.ray, p.type, Sampling_PointKey(xy.x, xy.y, sample, p.depth));
                         float3 term;
@@ -225,21 +301,22 @@ kernel void Persistent_RenderBounce(RT_SCENE_PARAMS, global float* image, global
                         t->term = F3(term);
                         t->children = children;
                     }
-                    const int mine = popcount(children);
-                    int o = produced + Scan_WorkGroupInclusive(scan, lane, lanes, mine) - mine;
-                    produced += scan[lanes - 1];
+                    int o = Bounce_Place(&produced, children, &warp);
                     if (children & 1) out[o++] = Bounce_Pack(&refl, pixel, slot * RT_BRANCH + 1);
                     if (children & 2) out[o] = Bounce_Pack(&refr, pixel, slot * RT_BRANCH + 2);
-                    barrier(CLK_LOCAL_MEM_FENCE);  // every lane has read the total
                 }
-                // The next bounce reads children and sums terms that other lanes wrote.
-                barrier(CLK_GLOBAL_MEM_FENCE);
+                // The bounce is traced: the next one reads the children, and the sums the terms,
+                // that other lanes wrote.
+                barrier(CLK_LOCAL_MEM_FENCE | CLK_GLOBAL_MEM_FENCE);
                 n = produced;
+                barrier(CLK_LOCAL_MEM_FENCE);  // every lane has read the count
+                if (lane == 0) taken = produced = 0;
+                barrier(CLK_LOCAL_MEM_FENCE);
                 global BounceRay* swap = in;
                 in = out;
                 out = swap;
             }
-            for (int pixel = lane; pixel < pixels; pixel += lanes) {
+            for (int pixel = lane; pixel < pixels; pixel += RT_PERSIST_BOUNCE) {
                 const int2 xy = Persistent_PixelOf(start + pixel, first, count, settings.width);
                 const int at = (xy.y * settings.width + xy.x) * 3;
                 float3 c = Bounce_Sum(&trees[pixel * slots]);
@@ -292,15 +369,6 @@ kernel void Persistent_Render(RT_SCENE_PARAMS, global float* image, global int* 
 // last warp of a work-group of 16 or 48 lanes), and no lane leaves before the warp does, as
 // vote.sync requires. Same pixels, same sums, same bits; `refill` does not apply (the host
 // refuses it).
-
-// The lanes of `warp` for which `p` holds; every lane of `warp` must call it.
-inline uint Persistent_WarpBallot(bool p, uint warp) {
-    uint lanes;
-    __asm__ volatile("{ .reg .pred q; setp.ne.u32 q, %1, 0; vote.sync.ballot.b32 %0, q, %2; }"
-                     : "=r"(lanes)
-                     : "r"((uint)p), "r"(warp));
-    return lanes;
-}
 
 kernel void Persistent_Render(RT_SCENE_PARAMS, global float* image, global int* next, int first,
                               int count, int refill) {

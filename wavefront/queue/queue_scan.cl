@@ -3,7 +3,18 @@
 // within the pool, and the per-pixel sums. RT_QUEUE_GROUP is the work-group size of the scan,
 // a power of two the host picks for the device.
 
-#include "scan.cl"
+// Inclusive scan of one work-group's values in local memory (Hillis-Steele: log2(size) steps).
+inline int Queue_ScanLocal(local int* tmp, int lid, int size, int v) {
+    tmp[lid] = v;
+    barrier(CLK_LOCAL_MEM_FENCE);
+    for (int off = 1; off < size; off <<= 1) {
+        int t = lid >= off ? tmp[lid - off] : 0;
+        barrier(CLK_LOCAL_MEM_FENCE);
+        tmp[lid] += t;
+        barrier(CLK_LOCAL_MEM_FENCE);
+    }
+    return tmp[lid];
+}
 
 // From: children per ray / To: offsets within the work-group's block, and each block's total.
 kernel void Queue_ScanBlocks(global const int* children, int n, global int* offsets,
@@ -16,7 +27,7 @@ kernel void Queue_ScanBlocks(global const int* children, int n, global int* offs
     int block = (i - lid) / RT_QUEUE_GROUP;
     if (block * RT_QUEUE_GROUP >= n) return;  // past the queue: Queue_ScanSums skips it
     int v = i < n ? children[i] : 0;
-    int inclusive = Scan_WorkGroupInclusive(tmp, lid, RT_QUEUE_GROUP, v);
+    int inclusive = Queue_ScanLocal(tmp, lid, RT_QUEUE_GROUP, v);
     if (i < n) offsets[i] = inclusive - v;
     if (lid == RT_QUEUE_GROUP - 1) blockSums[block] = inclusive;
 }
@@ -28,7 +39,7 @@ inline int Queue_ScanInPlace(local int* tmp, int lid, global int* values, int co
     for (int b0 = 0; b0 < count; b0 += RT_QUEUE_GROUP) {
         int b = b0 + lid;
         int v = b < count ? values[b] : 0;
-        int inclusive = Scan_WorkGroupInclusive(tmp, lid, RT_QUEUE_GROUP, v);
+        int inclusive = Queue_ScanLocal(tmp, lid, RT_QUEUE_GROUP, v);
         if (b < count) values[b] = carry + inclusive - v;
         carry += tmp[RT_QUEUE_GROUP - 1];
         barrier(CLK_LOCAL_MEM_FENCE);  // tmp is rewritten by the next chunk
