@@ -130,7 +130,7 @@ const PipelineOption& laneOption() {
             "Persistent megakernel: work-items per work-group, 16..1024, at most what the "
             "device takes (and, regrouped, what its local memory holds): the lanes that "
             "--persistent-regroup sorts hits among, or that the nested loop hands pixels to "
-            "together [128 on a GPU, 64 elsewhere]",
+            "together [128 on a GPU, 512 in the bounce loop; 64 elsewhere]",
         .defaultValue = 0ll,
         .min = 16,
         .max = 1024,
@@ -341,14 +341,18 @@ Image PersistentPipeline::renderScheduled(const Scene& scene, const RenderOption
     const std::vector<std::string> defines = MegakernelPipeline::defines(scene, weighted);
     stats_.privateBytes = MegakernelPipeline::privateBytes(scene, weighted);
     const DeviceInfo& dev = cl_.device();
-    const long long lanes = laneOption().integer(o.pipelineOptions);
-    const size_t local = lanes != 0 ? size_t(lanes) : dev.isGpu() ? 128 : 64;
-    const auto regroupBy = PersistRegroup(regroupOption().index(o.pipelineOptions));
-    const bool regroup = regroupBy != PersistRegroup::Off;
-    checkLanes(dev, local, regroup);
     const auto loop = PersistLoop(loopOption().index(o.pipelineOptions));
     const bool nested = loop == PersistLoop::Nested, lockstep = loop == PersistLoop::Lockstep;
     const bool bounce = loop == PersistLoop::Bounce;
+    // The bounce loop's warps meet only between bounces, and a larger group gives each of them
+    // more of the batch's rays to take between meetings: it takes 512 lanes on a GPU.
+    const long long lanes = laneOption().integer(o.pipelineOptions);
+    const size_t local = lanes != 0    ? size_t(lanes)
+                         : dev.isGpu() ? (bounce ? std::min<size_t>(512, dev.maxWorkGroup) : 128)
+                                       : 64;
+    const auto regroupBy = PersistRegroup(regroupOption().index(o.pipelineOptions));
+    const bool regroup = regroupBy != PersistRegroup::Off;
+    checkLanes(dev, local, regroup);
     if (!bounce && !batchOption().isDefault(o.pipelineOptions))
         throw Error("--persistent-batch applies to --persistent-loop bounce only",
                     FailureKind::InvalidOption);
