@@ -284,6 +284,16 @@ typedef struct BounceRay {
     int32_t slot;
 } BounceRay;
 
+// The sorted bounce loop (--persistent-loop bounce with --persistent-regroup) keeps a bounce's
+// traced rays here between the trace and the shading: the hit, the ray, its sort key and its rank
+// among the hits of that key.
+typedef struct BounceHit {
+    Node node;
+    BounceRay ray;
+    int32_t key, rank;
+    int32_t pad[2];
+} BounceHit;
+
 // What a traced ray added to its pixel, and which children it spawned (bit 0 reflection, bit 1
 // refraction): one per slot of every pixel's tree, so that the pixel's terms can be summed in the
 // weighted megakernel's order once the tree is done.
@@ -320,7 +330,7 @@ static_assert(sizeof(Camera) == 32);
 static_assert(sizeof(RenderSettings) == 192);
 static_assert(sizeof(Grid) == 64);
 static_assert(sizeof(Kdop) == 64);
-static_assert(sizeof(BounceRay) == 48 && sizeof(BounceTerm) == 16);
+static_assert(sizeof(BounceRay) == 48 && sizeof(BounceTerm) == 16 && sizeof(BounceHit) == 112);
 static_assert(sizeof(Node) == 48);
 static_assert(sizeof(BvhNode) == 32);
 static_assert(sizeof(WideNode) == 64);

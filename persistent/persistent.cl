@@ -123,6 +123,28 @@ inline void Persistent_EndOfTree(const SceneData* sc, global float* image, Persi
     }
 }
 
+// What the regrouped and the sorted bounce loops sort hits by (--persistent-regroup): the
+// procedural pattern; with RT_PERSIST_REGROUP_CLASS, a hit without one is keyed by its material
+// class too (plain, mirror, glass), as the queue wavefront's shade queues are.
+#define RG_MIRROR (RT_PATTERN_BUMP + 1)  // no pattern, reflective
+#define RG_GLASS (RG_MIRROR + 1)         // no pattern, transparent
+#define RG_MISS (RG_GLASS + 1)           // a ray that left the scene
+#define RG_IDLE (RG_MISS + 1)            // a lane without a ray this step
+#define RG_KEYS (RG_IDLE + 1)
+
+// The sort key of a traced ray's hit.
+inline int Regroup_KeyOf(const SceneData* sc, const Node* node) {
+    if (node->kind == RT_KIND_MISS) return RG_MISS;
+    const global Material* m = &sc->materials[node->material];
+#ifdef RT_PERSIST_REGROUP_CLASS
+    if (m->pattern == RT_PATTERN_NONE) {
+        if (m->opacity < 1.0f) return RG_GLASS;
+        if (m->reflectance > 0.0f) return RG_MIRROR;
+    }
+#endif
+    return m->pattern;
+}
+
 #if defined(RT_PERSIST_BOUNCE)
 // The bounce form (--persistent-loop bounce; RT_PERSIST_BOUNCE is the work-group size): a
 // wavefront inside the persistent launch. A work-group takes a batch of `batch` pixels from the
@@ -239,9 +261,45 @@ inline int Bounce_Place(local int* produced, int children, const BounceWarp* w) 
 #endif
 }
 
+// Shades a traced ray of pixel `pixel`'s tree slot `slot`: its term and children into the tree,
+// the children appended to `out`. Every lane of the warp calls it, `has` false where the lane has
+// no ray.
+inline void Bounce_Shade(const SceneData* sc, bool has, const Node* node, const Pending* p,
+                         int pixel, int slot, global BounceTerm* tree, global BounceRay* out,
+                         local int* produced, const BounceWarp* w) {
+    int children = 0;
+    Pending refl, refr;
+    if (has) {
+        float3 term;
+        if (node->kind == RT_KIND_MISS) {
+            term = PathState_Miss(sc, p);
+        } else {
+            bool hasRefl, hasRefr;
+            term = PathState_Step(sc, node, p, true, true, RT_PATTERN_ANY, &refl, &hasRefl, &refr,
+                                  &hasRefr);
+            children = (hasRefl ? 1 : 0) | (hasRefr ? 2 : 0);
+        }
+        tree[slot].term = F3(term);
+        tree[slot].children = children;
+    }
+    int o = Bounce_Place(produced, children, w);
+    if (children & 1) out[o++] = Bounce_Pack(&refl, pixel, slot * RT_BRANCH + 1);
+    if (children & 2) out[o] = Bounce_Pack(&refr, pixel, slot * RT_BRANCH + 2);
+}
+
+#ifdef RT_PERSIST_BOUNCE_SORT
+// Sorted (--persistent-regroup with the bounce loop): a bounce's traced rays wait in `hits` while
+// the group counts them by key, and are shaded in key order (`order`), so that a warp runs one
+// pattern's code at a time. Only mirrors and glass spawn children, and the ranks within a key
+// follow the trace, so the next bounce's rays stay close to the order of their pixels.
+#define BOUNCE_SORT_PARAMS , global BounceHit *hits, global int *order
+#else
+#define BOUNCE_SORT_PARAMS
+#endif
+
 kernel void Persistent_RenderBounce(RT_SCENE_PARAMS, global float* image, global int* next,
                                     int first, int count, global BounceRay* rays,
-                                    global BounceTerm* terms, int batch) {
+                                    global BounceTerm* terms, int batch BOUNCE_SORT_PARAMS) {
     RT_SCENE_INIT(sc);
     local int start;     // the group's first pixel this batch
     local int taken;     // rays of this bounce taken by the group's warps
@@ -251,8 +309,17 @@ kernel void Persistent_RenderBounce(RT_SCENE_PARAMS, global float* image, global
     const int samples = settings.aaSamples * settings.aaSamples;
     const int slots = RayTree_NodeCount(settings.bounces);
     const int widest = batch << (settings.bounces * (RT_BRANCH - 1));
-    global BounceRay* lists = rays + (size_t)get_group_id(0) * 2 * (size_t)widest;
-    global BounceTerm* trees = terms + (size_t)get_group_id(0) * (size_t)batch * (size_t)slots;
+    const size_t group = get_group_id(0);
+    global BounceRay* lists = rays + group * 2 * (size_t)widest;
+    global BounceTerm* trees = terms + group * (size_t)batch * (size_t)slots;
+#ifdef RT_PERSIST_BOUNCE_SORT
+    local int keyCount[RG_KEYS], keyBase[RG_KEYS];
+    local int shaded;  // hits of this bounce taken for shading
+    hits += group * (size_t)widest;
+    order += group * (size_t)widest;
+    if (lane < RG_KEYS) keyCount[lane] = 0;
+    if (lane == 0) shaded = 0;
+#endif
     if (lane == 0) taken = produced = 0;
     for (;;) {
         barrier(CLK_LOCAL_MEM_FENCE);  // every lane has read the last batch's start
@@ -270,10 +337,10 @@ kernel void Persistent_RenderBounce(RT_SCENE_PARAMS, global float* image, global
                     const int base = Bounce_Take(&taken, &warp);
                     if (base >= n) break;  // the same for the whole warp
                     const int i = base + warp.lane;
-                    int pixel = 0, slot = 0, children = 0;
-                    Pending refl, refr;
+                    Pending p;
+                    int pixel = 0, slot = 0;
+                    Node node;
                     if (i < n) {
-                        Pending p;
                         if (depth == 0) {
                             pixel = i;
                         } else {
@@ -286,31 +353,60 @@ kernel void Persistent_RenderBounce(RT_SCENE_PARAMS, global float* image, global
                             Persistent_PixelOf(start + pixel, first, count, settings.width);
                         if (depth == 0) p = PathState_Primary(&sc, xy.x, xy.y, sample);
                         RT_COUNT_WARP_STEP(&sc);  // the lanes that trace a ray this take
-                        const Node node = RayTree_TraceNode(
-                            &sc, p.ray, p.type, Sampling_PointKey(xy.x, xy.y, sample, p.depth));
-                        float3 term;
-                        if (node.kind == RT_KIND_MISS) {
-                            term = PathState_Miss(&sc, &p);
-                        } else {
-                            bool hasRefl, hasRefr;
-                            term = PathState_Step(&sc, &node, &p, true, true, RT_PATTERN_ANY, &refl,
-                                                  &hasRefl, &refr, &hasRefr);
-                            children = (hasRefl ? 1 : 0) | (hasRefr ? 2 : 0);
-                        }
-                        global BounceTerm* t = &trees[pixel * slots + slot];
-                        t->term = F3(term);
-                        t->children = children;
+                        node = RayTree_TraceNode(&sc, p.ray, p.type,
+                                                 Sampling_PointKey(xy.x, xy.y, sample, p.depth));
                     }
-                    int o = Bounce_Place(&produced, children, &warp);
-                    if (children & 1) out[o++] = Bounce_Pack(&refl, pixel, slot * RT_BRANCH + 1);
-                    if (children & 2) out[o] = Bounce_Pack(&refr, pixel, slot * RT_BRANCH + 2);
+#ifdef RT_PERSIST_BOUNCE_SORT
+                    if (i < n) {
+                        const int key = Regroup_KeyOf(&sc, &node);
+                        global BounceHit* h = &hits[i];
+                        h->node = node;
+                        h->ray = Bounce_Pack(&p, pixel, slot);
+                        h->key = key;
+                        h->rank = atomic_inc(&keyCount[key]);
+                    }
+#else
+                    Bounce_Shade(&sc, i < n, &node, &p, pixel, slot, &trees[pixel * slots], out,
+                                 &produced, &warp);
+#endif
                 }
-                // The bounce is traced: the next one reads the children, and the sums the terms,
+#ifdef RT_PERSIST_BOUNCE_SORT
+                // Every hit is counted: each key's first place in the order, then the order.
+                barrier(CLK_LOCAL_MEM_FENCE | CLK_GLOBAL_MEM_FENCE);
+                if (lane == 0)
+                    for (int k = 0, at = 0; k < RG_KEYS; ++k) {
+                        keyBase[k] = at;
+                        at += keyCount[k];
+                    }
+                barrier(CLK_LOCAL_MEM_FENCE);
+                for (int i = lane; i < n; i += RT_PERSIST_BOUNCE)
+                    order[keyBase[hits[i].key] + hits[i].rank] = i;
+                barrier(CLK_GLOBAL_MEM_FENCE);
+                for (;;) {
+                    const int base = Bounce_Take(&shaded, &warp);
+                    if (base >= n) break;
+                    const int k = base + warp.lane;
+                    BounceHit h;
+                    h.ray.pixel = h.ray.slot = 0;
+                    Pending p;
+                    if (k < n) {
+                        h = hits[order[k]];
+                        p = Bounce_Unpack(h.ray);
+                    }
+                    Bounce_Shade(&sc, k < n, &h.node, &p, h.ray.pixel, h.ray.slot,
+                                 &trees[h.ray.pixel * slots], out, &produced, &warp);
+                }
+#endif
+                // The bounce is done: the next one reads the children, and the sums the terms,
                 // that other lanes wrote.
                 barrier(CLK_LOCAL_MEM_FENCE | CLK_GLOBAL_MEM_FENCE);
                 n = produced;
                 barrier(CLK_LOCAL_MEM_FENCE);  // every lane has read the count
                 if (lane == 0) taken = produced = 0;
+#ifdef RT_PERSIST_BOUNCE_SORT
+                if (lane == 0) shaded = 0;
+                if (lane < RG_KEYS) keyCount[lane] = 0;
+#endif
                 barrier(CLK_LOCAL_MEM_FENCE);
                 global BounceRay* swap = in;
                 in = out;
@@ -438,28 +534,7 @@ kernel void Persistent_Render(RT_SCENE_PARAMS, global float* image, global int* 
 // pushes it exactly as Megakernel_TraceNext does: a pixel's terms arrive in the same order and
 // each is computed by the same code from the same bits, so the image stays the weighted
 // megakernel's. Each lane takes a pixel as soon as it has none (`refill` does not apply).
-//
-// The key is the procedural pattern; with RT_PERSIST_REGROUP_CLASS, a hit without one is keyed
-// by its material class too (plain, mirror, glass), as the queue wavefront's shade queues are.
 #define RG_LANES RT_PERSIST_REGROUP
-#define RG_MIRROR (RT_PATTERN_BUMP + 1)  // no pattern, reflective
-#define RG_GLASS (RG_MIRROR + 1)         // no pattern, transparent
-#define RG_MISS (RG_GLASS + 1)           // a ray that left the scene
-#define RG_IDLE (RG_MISS + 1)            // a lane without a ray this step
-#define RG_KEYS (RG_IDLE + 1)
-
-// The sort key of a traced ray's hit.
-inline int Regroup_KeyOf(const SceneData* sc, const Node* node) {
-    if (node->kind == RT_KIND_MISS) return RG_MISS;
-    const global Material* m = &sc->materials[node->material];
-#ifdef RT_PERSIST_REGROUP_CLASS
-    if (m->pattern == RT_PATTERN_NONE) {
-        if (m->opacity < 1.0f) return RG_GLASS;
-        if (m->reflectance > 0.0f) return RG_MIRROR;
-    }
-#endif
-    return m->pattern;
-}
 
 // A lane's slot in local memory holds a hit to shade, then what shading it gave: lane i copies
 // slot i's hit into registers before it writes slot i's result, and no other lane touches slot i

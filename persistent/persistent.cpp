@@ -72,7 +72,7 @@ const PipelineOption& loopOption() {
             "loop with a warp's 32 lanes starting every step together, NVIDIA; elsewhere the "
             "flat loop) or bounce (a work-group traces a batch of --persistent-batch pixels "
             "bounce by bounce, each bounce's rays compacted in global memory, a wavefront inside "
-            "the launch); only flat regroups [flat]",
+            "the launch); nested and lockstep do not regroup [flat]",
         .defaultValue = "flat",
         .choices = {"flat", "nested", "lockstep", "bounce"},
         .sweepKey = "persistent-loop",
@@ -152,8 +152,9 @@ const PipelineOption& regroupOption() {
         .help =
             "Persistent megakernel: off; pattern: each step, a work-group sorts its hits by "
             "procedural pattern in local memory and each lane shades the next hit of that "
-            "order, so that a warp runs one pattern's code at a time; material: by pattern, "
-            "and hits without one by class (plain, mirror, glass); same image [off]",
+            "order, so that a warp runs one pattern's code at a time (the bounce loop: each "
+            "bounce's hits, in global memory); material: by pattern, and hits without one by "
+            "class (plain, mirror, glass); same image [off]",
         .defaultValue = "off",
         .choices = {"off", "pattern", "material"},
         .sweepKey = "persistent-regroup",
@@ -352,15 +353,15 @@ Image PersistentPipeline::renderScheduled(const Scene& scene, const RenderOption
                                        : 64;
     const auto regroupBy = PersistRegroup(regroupOption().index(o.pipelineOptions));
     const bool regroup = regroupBy != PersistRegroup::Off;
-    checkLanes(dev, local, regroup);
+    checkLanes(dev, local, regroup && !bounce);
     if (!bounce && !batchOption().isDefault(o.pipelineOptions))
         throw Error("--persistent-batch applies to --persistent-loop bounce only",
                     FailureKind::InvalidOption);
-    if ((nested || lockstep || bounce) && regroup)
+    if ((nested || lockstep) && regroup)
         throw Error("--persistent-loop " + loopOption().choice(o.pipelineOptions) +
                         " does not go with --persistent-regroup " +
                         regroupOption().choice(o.pipelineOptions) +
-                        " (regrouping cuts the flat loop's steps)",
+                        " (regrouping sorts the flat loop's steps or the bounce loop's bounces)",
                     FailureKind::InvalidOption);
     const long long refill = refillOption().integer(o.pipelineOptions);
     if (refill != 1 && (nested || lockstep || bounce || regroup))
@@ -374,7 +375,8 @@ Image PersistentPipeline::renderScheduled(const Scene& scene, const RenderOption
             FailureKind::InvalidOption);
     // Regrouped: the work-group's local arrays are sized by its work-items.
     std::vector<std::string> programDefines = defines;
-    if (regroup) programDefines.push_back("RT_PERSIST_REGROUP=" + std::to_string(local));
+    if (regroup && !bounce) programDefines.push_back("RT_PERSIST_REGROUP=" + std::to_string(local));
+    if (regroup && bounce) programDefines.push_back("RT_PERSIST_BOUNCE_SORT");
     if (regroupBy == PersistRegroup::Material) programDefines.push_back("RT_PERSIST_REGROUP_CLASS");
     if (nested) programDefines.push_back("RT_PERSIST_NESTED");
     if (lockstep) programDefines.push_back("RT_PERSIST_LOCKSTEP");
@@ -404,7 +406,7 @@ Image PersistentPipeline::renderScheduled(const Scene& scene, const RenderOption
                                      : "Persistent_Render");
     kernel.set("image", image_.get()).set("next", next_.get());
     if (bounce)
-        setBounceScratch(kernel, scene, o, most / local);
+        setBounceScratch(kernel, scene, o, most / local, regroup);
     else
         kernel.set("refill", cl_int(refill));
     dev::RenderSettings settings = makeSettings(scene, o);
@@ -455,33 +457,41 @@ Image PersistentPipeline::renderScheduled(const Scene& scene, const RenderOption
 }
 
 void PersistentPipeline::setBounceScratch(Kernel& kernel, const Scene& scene,
-                                          const RenderOptions& o, size_t groups) {
+                                          const RenderOptions& o, size_t groups, bool sorted) {
     // Per work-group, as persistent.cl's Persistent_RenderBounce indexes it: two lists as long as
-    // the widest bounce a batch can reach (every ray of the last one glass), and a tree of terms a
-    // pixel.
+    // the widest bounce a batch can reach (every ray of the last one glass), a tree of terms a
+    // pixel, and, sorted, a hit and a place in the order for each ray of one such list.
     const long long batch = batchOption().integer(o.pipelineOptions);
     const int branching = scene.branching();
     const size_t widest = size_t(batch) << (o.bounces * (branching - 1));
     const size_t rayBytes = groups * 2 * widest * sizeof(dev::BounceRay);
     const size_t termBytes = groups * size_t(batch) * size_t(treeNodeCount(branching, o.bounces)) *
                              sizeof(dev::BounceTerm);
+    const size_t hitBytes = sorted ? groups * widest * sizeof(dev::BounceHit) : 0;
+    const size_t orderBytes = sorted ? groups * widest * sizeof(cl_int) : 0;
+    const size_t total = rayBytes + termBytes + hitBytes + orderBytes;
     const DeviceInfo& dev = cl_.device();
-    for (const size_t bytes : {rayBytes, termBytes})
-        if (bytes > dev.maxAlloc || rayBytes + termBytes > dev.globalMem / 2)
-            throw Error(
-                "--persistent-batch " + std::to_string(batch) + ": " + std::to_string(groups) +
-                    " work-groups tracing batches bounce by "
-                    "bounce at --bounces " +
-                    std::to_string(o.bounces) + " need " + std::to_string(rayBytes >> 20) +
-                    " MiB of rays and " + std::to_string(termBytes >> 20) + " MiB of terms, and " +
-                    dev.name + " allocates at most " + std::to_string(dev.maxAlloc >> 20) +
-                    " MiB a buffer and half its " + std::to_string(dev.globalMem >> 20) +
-                    " MiB in all here; lower --persistent-batch, --persistent-groups or "
-                    "--bounces",
-                FailureKind::InvalidOption);
+    const auto mib = [](size_t bytes) { return std::to_string(bytes >> 20) + " MiB"; };
+    for (const size_t bytes : {rayBytes, termBytes, hitBytes})
+        if (bytes > dev.maxAlloc || total > dev.globalMem / 2)
+            throw Error("--persistent-batch " + std::to_string(batch) + ": " +
+                            std::to_string(groups) + " work-groups tracing batches bounce by " +
+                            "bounce at --bounces " + std::to_string(o.bounces) + " need " +
+                            mib(rayBytes) + " of rays, " + mib(termBytes) + " of terms" +
+                            (sorted ? " and " + mib(hitBytes + orderBytes) + " of hits to sort"
+                                    : std::string()) +
+                            ", and " + dev.name + " allocates at most " + mib(dev.maxAlloc) +
+                            " a buffer and half its " + mib(dev.globalMem) +
+                            " in all here; lower --persistent-batch, --persistent-groups or "
+                            "--bounces",
+                        FailureKind::InvalidOption);
     try {
         bounceRays_.ensure(cl_, rayBytes, "the bounce loop's ray lists");
         bounceTerms_.ensure(cl_, termBytes, "the bounce loop's trees of terms");
+        if (sorted) {
+            bounceHits_.ensure(cl_, hitBytes, "the sorted bounce loop's hits");
+            bounceOrder_.ensure(cl_, orderBytes, "the sorted bounce loop's shading order");
+        }
     } catch (const cl::Error& e) {
         throwClError(e, "preparing the persistent megakernel's bounce scratch");
     }
@@ -489,6 +499,11 @@ void PersistentPipeline::setBounceScratch(Kernel& kernel, const Scene& scene,
     stats_.addBuffer("bounce terms", termBytes);
     kernel.set("rays", bounceRays_.get()).set("terms", bounceTerms_.get());
     kernel.set("batch", cl_int(batch));
+    if (sorted) {
+        stats_.addBuffer("bounce hits", hitBytes);
+        stats_.addBuffer("bounce order", orderBytes);
+        kernel.set("hits", bounceHits_.get()).set("order", bounceOrder_.get());
+    }
 }
 
 void registerPersistentMegakernel(PipelineRegistry& registry) {
@@ -512,16 +527,19 @@ void registerPersistentMegakernel(PipelineRegistry& registry) {
     // Tests and the smoke check run the default schedule, the regrouped one, whose hits move
     // between lanes through local memory, the nested loop, the lockstep loop (whose warp votes
     // only NVIDIA runs), the bounce loop (whose rays move between lanes through global memory),
-    // and the schedule auto chooses (256 regrouped lanes a group where it
-    // regroups).
+    // unsorted and with each bounce's hits sorted by material, and the schedule auto chooses (256
+    // regrouped lanes a group where it regroups).
     PipelineVariant regrouped{"regrouped", {}}, nested{"nested", {}}, lockstep{"lockstep", {}},
-        bounce{"bounce", {}}, automatic{"auto", {}};
+        bounce{"bounce", {}}, bounceSorted{"bounce-sorted", {}}, automatic{"auto", {}};
     regroupOption().set(regrouped.values, std::string("material"));
     loopOption().set(nested.values, std::string("nested"));
     loopOption().set(lockstep.values, std::string("lockstep"));
     loopOption().set(bounce.values, std::string("bounce"));
+    loopOption().set(bounceSorted.values, std::string("bounce"));
+    regroupOption().set(bounceSorted.values, std::string("material"));
     scheduleOption().set(automatic.values, std::string("auto"));
-    p.variants = {PipelineVariant{"", {}}, regrouped, nested, lockstep, bounce, automatic};
+    p.variants = {
+        PipelineVariant{"", {}}, regrouped, nested, lockstep, bounce, bounceSorted, automatic};
     p.make = [](ClContext* cl) { return std::make_unique<PersistentPipeline>(*cl); };
     registry.add(std::move(p));
 }

@@ -60,12 +60,13 @@ class PersistentPipeline : public DevicePipeline {
     // frames each in 4x16 and 16x8 strips, timed once per scene and settings.
     void chooseOrder(const Scene& scene, RenderOptions& nested);
 
-    // --persistent-loop bounce: sizes its scratch for `groups` work-groups (or refuses, naming the
-    // flags, when the device cannot hold it) and sets the kernel's arguments for it.
+    // --persistent-loop bounce: sizes its scratch for `groups` work-groups, `sorted` with the
+    // hits it sorts by key (or refuses, naming the flags, when the device cannot hold it), and
+    // sets the kernel's arguments for it.
     void setBounceScratch(Kernel& kernel, const Scene& scene, const RenderOptions& options,
-                          size_t groups);
+                          size_t groups, bool sorted);
 
-    DeviceBuffer image_, next_, bounceRays_, bounceTerms_;
+    DeviceBuffer image_, next_, bounceRays_, bounceTerms_, bounceHits_, bounceOrder_;
     LaunchPlanner planner_;
     LaneEstimateCache estimates_;  // --persistent-schedule auto's, one trace per scene
     // The strip order chooseOrder found, for the scene and settings of orderKey_.

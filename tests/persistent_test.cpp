@@ -155,6 +155,7 @@ TEST(Persistent, RegroupedKeepsTheBitsAndTheRays) {
 // after its whole tree is traced. The divergence scene branches at glass and mirrors on most
 // pixels; batches of 16 leave most lanes of 32 without a camera ray, batches of 100 take four
 // passes of 32 lanes, the last one cut, and B = 8 at AA 2 widens the lists to 256 rays a pixel.
+// Sorted by pattern or material, each bounce's hits are shaded in key order, not the trace's.
 TEST(Persistent, BounceLoopKeepsTheBitsAndTheRays) {
     MegakernelPipeline mega(test::device());
     PersistentPipeline persist(test::device());
@@ -171,6 +172,14 @@ TEST(Persistent, BounceLoopKeepsTheBitsAndTheRays) {
             EXPECT_TRUE(sameBits(m, persist.render(scene, r))) << name << " B=" << b;
             ASSERT_TRUE(persist.stats().raysCounted);
             EXPECT_EQ(persist.stats().rays, mega.stats().rays) << name << " B=" << b;
+            for (const char* key : {"pattern", "material"}) {  // each bounce's hits sorted
+                RenderOptions sorted = r;
+                setOption(sorted, "persistent-regroup", std::string(key));
+                EXPECT_TRUE(sameBits(m, persist.render(scene, sorted)))
+                    << name << " B=" << b << ", sorted by " << key;
+                EXPECT_EQ(persist.stats().rays, mega.stats().rays)
+                    << name << " B=" << b << ", sorted by " << key;
+            }
             setOption(r, "persistent-lanes", 32ll);
             for (long long batch : {16ll, 100ll}) {
                 setOption(r, "persistent-batch", batch);
@@ -409,7 +418,19 @@ TEST(Persistent, RefusesAdaptiveAntiAliasingAndOptionsOutOfRange) {
                   0u)
             << e.what();
     }
-    for (const char* loop : {"nested", "lockstep"}) {
+    {
+        RenderOptions batch = weighted(scene, 2, 1);
+        setOption(batch, "persistent-batch", 256ll);
+        try {
+            persist.render(scene, batch);
+            ADD_FAILURE() << "no error for --persistent-batch in the flat loop";
+        } catch (const Error& e) {
+            EXPECT_EQ(e.kind(), FailureKind::InvalidOption);
+            EXPECT_EQ(std::string(e.what()),
+                      "--persistent-batch applies to --persistent-loop bounce only");
+        }
+    }
+    for (const char* loop : {"nested", "lockstep", "bounce"}) {
         RenderOptions refill = weighted(scene, 2, 1);
         setOption(refill, "persistent-loop", std::string(loop));
         setOption(refill, "persistent-refill", 8ll);

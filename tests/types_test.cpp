@@ -15,7 +15,7 @@ TEST(Types, DeviceSeesTheSameSizesAndOffsets) {
     ClContext& cl = test::device();
     cl::Program program = cl.program("probe.cl", {});
     Kernel kernel(program, "Probe_Sizes");
-    constexpr int kCount = 19;
+    constexpr int kCount = 20;
     cl::Buffer out(cl.context(), CL_MEM_WRITE_ONLY, kCount * sizeof(cl_uint));
     kernel.set("out", out);
     cl.queue().enqueueNDRangeKernel(kernel.get(), cl::NullRange, cl::NDRange(1));
@@ -40,7 +40,8 @@ TEST(Types, DeviceSeesTheSameSizesAndOffsets) {
                                      sizeof(Kdop),
                                      offsetof(RenderSettings, grid),
                                      sizeof(BounceRay),
-                                     sizeof(BounceTerm)};
+                                     sizeof(BounceTerm),
+                                     sizeof(BounceHit)};
     for (int i = 0; i < kCount; ++i) EXPECT_EQ(got[i], expected[i]) << "probe entry " << i;
 }
 

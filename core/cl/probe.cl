@@ -22,6 +22,7 @@ kernel void Probe_Sizes(global uint* out) {
     out[16] = __builtin_offsetof(RenderSettings, grid);
     out[17] = sizeof(BounceRay);
     out[18] = sizeof(BounceTerm);
+    out[19] = sizeof(BounceHit);
 }
 
 // One ray per work-item against one sphere: in = origin, dir, centre, radius (10 floats).
