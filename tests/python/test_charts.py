@@ -795,6 +795,28 @@ class PersistTest(unittest.TestCase):
         self.assertIn("| 5.00 |", walls, "the flat loop's time stays")
         self.assertTrue(walls.endswith("| auto schedule | 3.33x | 2.67x |"), walls)
 
+    def test_each_bounce_setting_is_a_column_and_the_fastest_is_best(self):
+        # The bounce loop's batch, lanes and groups name its series; none is taken for the flat
+        # loop, and the fastest of them is the best schedule where it beats the others.
+        c = self.cell
+        rows = self.rows() + [
+            c("persist", "walls", 3.0, persistent_loop="bounce", persistent_batch=1024,
+              persistent_lanes=512, persistent_groups=1),
+            c("persist", "walls", 3.2, persistent_loop="bounce", persistent_batch=512,
+              persistent_lanes=256, persistent_groups=2)]
+        d, p = self.run_script(rows)
+        self.assertEqual(p.returncode, 0, p.stderr)
+        md = open(os.path.join(d, "persist.md")).read()
+        header = md.splitlines()[4]
+        self.assertIn("persist, bounce loop, 1024 px batches, 512 lanes, 1 group a unit", header)
+        self.assertIn("persist, bounce loop, 512 px batches, 256 lanes, 2 groups a unit", header)
+        walls = next(line for line in md.splitlines() if line.startswith("| `walls`"))
+        self.assertIn("| 5.00 |", walls, "the flat loop's time stays")
+        self.assertTrue(walls.endswith(
+            "| bounce loop, 1024 px batches, 512 lanes, 1 group a unit | 3.33x | 2.67x |"), walls)
+        if HAVE_MPL:
+            self.assertGreater(os.path.getsize(os.path.join(d, "persist.png")), 10000)
+
     def test_no_weighted_megakernel_is_one_line(self):
         rows = [r for r in self.rows() if r["pipeline"] != "mega"]
         _, p = self.run_script(rows)
