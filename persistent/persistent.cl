@@ -287,19 +287,26 @@ inline void Bounce_Shade(const SceneData* sc, bool has, const Node* node, const 
     if (children & 2) out[o] = Bounce_Pack(&refr, pixel, slot * RT_BRANCH + 2);
 }
 
-#ifdef RT_PERSIST_BOUNCE_SORT
-// Sorted (--persistent-regroup with the bounce loop): a bounce's traced rays wait in `hits` while
-// the group counts them by key, and are shaded in key order (`order`), so that a warp runs one
-// pattern's code at a time. Only mirrors and glass spawn children, and the ranks within a key
-// follow the trace, so the next bounce's rays stay close to the order of their pixels.
-#define BOUNCE_SORT_PARAMS , global BounceHit *hits, global int *order
+// Staged: a bounce's traced rays wait in `hits` between passes over them, with `order` a list of
+// their indices.
+//   Sorted (--persistent-regroup with the bounce loop): the group counts the hits by key and
+//   shades them in key order, so that a warp runs one pattern's code at a time. Only mirrors and
+//   glass spawn children, and the ranks within a key follow the trace, so the next bounce's rays
+//   stay close to the order of their pixels.
+//   Shadow pass (--persistent-shadows pass): the trace finds the closest hits only, and a pass of
+//   its own casts the shadow rays of the hits (not the misses) in trace order, as the queue's
+//   shadow kernel does, so that a warp's lanes cast shadow rays together rather than each after
+//   its own trace.
+#if defined(RT_PERSIST_BOUNCE_SORT) || defined(RT_PERSIST_BOUNCE_SHADOW_PASS)
+#define BOUNCE_STAGED
+#define BOUNCE_STAGED_PARAMS , global BounceHit *hits, global int *order
 #else
-#define BOUNCE_SORT_PARAMS
+#define BOUNCE_STAGED_PARAMS
 #endif
 
 kernel void Persistent_RenderBounce(RT_SCENE_PARAMS, global float* image, global int* next,
                                     int first, int count, global BounceRay* rays,
-                                    global BounceTerm* terms, int batch BOUNCE_SORT_PARAMS) {
+                                    global BounceTerm* terms, int batch BOUNCE_STAGED_PARAMS) {
     RT_SCENE_INIT(sc);
     local int start;     // the group's first pixel this batch
     local int taken;     // rays of this bounce taken by the group's warps
@@ -312,13 +319,20 @@ kernel void Persistent_RenderBounce(RT_SCENE_PARAMS, global float* image, global
     const size_t group = get_group_id(0);
     global BounceRay* lists = rays + group * 2 * (size_t)widest;
     global BounceTerm* trees = terms + group * (size_t)batch * (size_t)slots;
-#ifdef RT_PERSIST_BOUNCE_SORT
-    local int keyCount[RG_KEYS], keyBase[RG_KEYS];
+#ifdef BOUNCE_STAGED
     local int shaded;  // hits of this bounce taken for shading
     hits += group * (size_t)widest;
     order += group * (size_t)widest;
-    if (lane < RG_KEYS) keyCount[lane] = 0;
     if (lane == 0) shaded = 0;
+#endif
+#ifdef RT_PERSIST_BOUNCE_SORT
+    local int keyCount[RG_KEYS], keyBase[RG_KEYS];
+    if (lane < RG_KEYS) keyCount[lane] = 0;
+#endif
+#ifdef RT_PERSIST_BOUNCE_SHADOW_PASS
+    local int casting;  // hits listed for the shadow pass
+    local int cast;     // of those, taken by the group's warps
+    if (lane == 0) casting = cast = 0;
 #endif
     if (lane == 0) taken = produced = 0;
     for (;;) {
@@ -353,23 +367,56 @@ kernel void Persistent_RenderBounce(RT_SCENE_PARAMS, global float* image, global
                             Persistent_PixelOf(start + pixel, first, count, settings.width);
                         if (depth == 0) p = PathState_Primary(&sc, xy.x, xy.y, sample);
                         RT_COUNT_WARP_STEP(&sc);  // the lanes that trace a ray this take
+#ifdef RT_PERSIST_BOUNCE_SHADOW_PASS
+                        node = RayTree_TraceSurface(&sc, p.ray, p.type);
+#else
                         node = RayTree_TraceNode(&sc, p.ray, p.type,
                                                  Sampling_PointKey(xy.x, xy.y, sample, p.depth));
+#endif
                     }
-#ifdef RT_PERSIST_BOUNCE_SORT
+#ifdef BOUNCE_STAGED
                     if (i < n) {
-                        const int key = Regroup_KeyOf(&sc, &node);
                         global BounceHit* h = &hits[i];
                         h->node = node;
                         h->ray = Bounce_Pack(&p, pixel, slot);
+#ifdef RT_PERSIST_BOUNCE_SORT
+                        const int key = Regroup_KeyOf(&sc, &node);
                         h->key = key;
                         h->rank = atomic_inc(&keyCount[key]);
+#endif
                     }
+#ifdef RT_PERSIST_BOUNCE_SHADOW_PASS
+                    const bool casts =
+                        i < n && node.kind != RT_KIND_MISS && settings.lightCount > 0;
+                    const int at = Bounce_Place(&casting, casts ? 1 : 0, &warp);
+                    if (casts) order[at] = i;
+#endif
 #else
                     Bounce_Shade(&sc, i < n, &node, &p, pixel, slot, &trees[pixel * slots], out,
                                  &produced, &warp);
 #endif
                 }
+#ifdef RT_PERSIST_BOUNCE_SHADOW_PASS
+                // Every hit is traced: cast the listed hits' shadow rays, with the key the
+                // trace would have given them (their pixel, AA sample and depth).
+                barrier(CLK_LOCAL_MEM_FENCE | CLK_GLOBAL_MEM_FENCE);
+                for (;;) {
+                    const int base = Bounce_Take(&cast, &warp);
+                    if (base >= casting) break;
+                    const int j = base + warp.lane;
+                    if (j < casting) {
+                        global BounceHit* h = &hits[order[j]];
+                        Node node = h->node;
+                        const int2 xy =
+                            Persistent_PixelOf(start + h->ray.pixel, first, count, settings.width);
+                        RayTree_CastShadows(
+                            &sc, &node,
+                            Sampling_PointKey(xy.x, xy.y, sample, h->ray.depthType >> 8));
+                        for (int l = 0; l < settings.lightCount; ++l)
+                            h->node.occluded[l] = node.occluded[l];
+                    }
+                }
+#endif
 #ifdef RT_PERSIST_BOUNCE_SORT
                 // Every hit is counted: each key's first place in the order, then the order.
                 barrier(CLK_LOCAL_MEM_FENCE | CLK_GLOBAL_MEM_FENCE);
@@ -381,7 +428,10 @@ kernel void Persistent_RenderBounce(RT_SCENE_PARAMS, global float* image, global
                 barrier(CLK_LOCAL_MEM_FENCE);
                 for (int i = lane; i < n; i += RT_PERSIST_BOUNCE)
                     order[keyBase[hits[i].key] + hits[i].rank] = i;
-                barrier(CLK_GLOBAL_MEM_FENCE);
+#endif
+#ifdef BOUNCE_STAGED
+                // Shade the hits, in key order when sorted, in trace order otherwise.
+                barrier(CLK_LOCAL_MEM_FENCE | CLK_GLOBAL_MEM_FENCE);
                 for (;;) {
                     const int base = Bounce_Take(&shaded, &warp);
                     if (base >= n) break;
@@ -390,7 +440,11 @@ kernel void Persistent_RenderBounce(RT_SCENE_PARAMS, global float* image, global
                     h.ray.pixel = h.ray.slot = 0;
                     Pending p;
                     if (k < n) {
+#ifdef RT_PERSIST_BOUNCE_SORT
                         h = hits[order[k]];
+#else
+                        h = hits[k];
+#endif
                         p = Bounce_Unpack(h.ray);
                     }
                     Bounce_Shade(&sc, k < n, &h.node, &p, h.ray.pixel, h.ray.slot,
@@ -403,9 +457,14 @@ kernel void Persistent_RenderBounce(RT_SCENE_PARAMS, global float* image, global
                 n = produced;
                 barrier(CLK_LOCAL_MEM_FENCE);  // every lane has read the count
                 if (lane == 0) taken = produced = 0;
-#ifdef RT_PERSIST_BOUNCE_SORT
+#ifdef BOUNCE_STAGED
                 if (lane == 0) shaded = 0;
+#endif
+#ifdef RT_PERSIST_BOUNCE_SORT
                 if (lane < RG_KEYS) keyCount[lane] = 0;
+#endif
+#ifdef RT_PERSIST_BOUNCE_SHADOW_PASS
+                if (lane == 0) casting = cast = 0;
 #endif
                 barrier(CLK_LOCAL_MEM_FENCE);
                 global BounceRay* swap = in;

@@ -101,6 +101,28 @@ const PipelineOption& batchOption() {
     return o;
 }
 
+// Where the bounce loop casts its shadow rays: each lane right after its own trace, or in a pass
+// of their own over each bounce's hits.
+enum class PersistShadows { Inline, Pass };  // shadowsOption()'s choices, in order
+
+const PipelineOption& shadowsOption() {
+    static const PipelineOption o{
+        .name = "persistent-shadows",
+        .type = PipelineOption::Type::Choice,
+        .help =
+            "Persistent megakernel, --persistent-loop bounce: inline (a lane casts its hit's "
+            "shadow rays right after tracing it) or pass (each bounce's closest hits first, then "
+            "the shadow rays of the hits in a pass of their own, as the queue's shadow kernel "
+            "casts them); same image [inline]",
+        .defaultValue = "inline",
+        .choices = {"inline", "pass"},
+        .sweepKey = "persistent-shadows",
+        .cellTag = "V",
+        .label = "shadow rays {}",
+    };
+    return o;
+}
+
 // The order pixels are handed out in (persistent.cl, Persistent_PixelOf): strips W columns wide
 // and H rows tall, row by row inside a strip, so that the 32 pixels a warp takes together are a
 // W x (32 / W) block and the ones it takes next lie below them.
@@ -354,9 +376,12 @@ Image PersistentPipeline::renderScheduled(const Scene& scene, const RenderOption
     const auto regroupBy = PersistRegroup(regroupOption().index(o.pipelineOptions));
     const bool regroup = regroupBy != PersistRegroup::Off;
     checkLanes(dev, local, regroup && !bounce);
-    if (!bounce && !batchOption().isDefault(o.pipelineOptions))
-        throw Error("--persistent-batch applies to --persistent-loop bounce only",
-                    FailureKind::InvalidOption);
+    for (const PipelineOption* option : {&batchOption(), &shadowsOption()})
+        if (!bounce && !option->isDefault(o.pipelineOptions))
+            throw Error(option->flag() + " applies to --persistent-loop bounce only",
+                        FailureKind::InvalidOption);
+    const bool shadowPass =
+        PersistShadows(shadowsOption().index(o.pipelineOptions)) == PersistShadows::Pass;
     if ((nested || lockstep) && regroup)
         throw Error("--persistent-loop " + loopOption().choice(o.pipelineOptions) +
                         " does not go with --persistent-regroup " +
@@ -377,6 +402,7 @@ Image PersistentPipeline::renderScheduled(const Scene& scene, const RenderOption
     std::vector<std::string> programDefines = defines;
     if (regroup && !bounce) programDefines.push_back("RT_PERSIST_REGROUP=" + std::to_string(local));
     if (regroup && bounce) programDefines.push_back("RT_PERSIST_BOUNCE_SORT");
+    if (shadowPass) programDefines.push_back("RT_PERSIST_BOUNCE_SHADOW_PASS");
     if (regroupBy == PersistRegroup::Material) programDefines.push_back("RT_PERSIST_REGROUP_CLASS");
     if (nested) programDefines.push_back("RT_PERSIST_NESTED");
     if (lockstep) programDefines.push_back("RT_PERSIST_LOCKSTEP");
@@ -406,7 +432,7 @@ Image PersistentPipeline::renderScheduled(const Scene& scene, const RenderOption
                                      : "Persistent_Render");
     kernel.set("image", image_.get()).set("next", next_.get());
     if (bounce)
-        setBounceScratch(kernel, scene, o, most / local, regroup);
+        setBounceScratch(kernel, scene, o, most / local, regroup || shadowPass);
     else
         kernel.set("refill", cl_int(refill));
     dev::RenderSettings settings = makeSettings(scene, o);
@@ -457,18 +483,19 @@ Image PersistentPipeline::renderScheduled(const Scene& scene, const RenderOption
 }
 
 void PersistentPipeline::setBounceScratch(Kernel& kernel, const Scene& scene,
-                                          const RenderOptions& o, size_t groups, bool sorted) {
+                                          const RenderOptions& o, size_t groups, bool staged) {
     // Per work-group, as persistent.cl's Persistent_RenderBounce indexes it: two lists as long as
     // the widest bounce a batch can reach (every ray of the last one glass), a tree of terms a
-    // pixel, and, sorted, a hit and a place in the order for each ray of one such list.
+    // pixel, and, staged (sorted or with a shadow pass), a hit and an index for each ray of one
+    // such list.
     const long long batch = batchOption().integer(o.pipelineOptions);
     const int branching = scene.branching();
     const size_t widest = size_t(batch) << (o.bounces * (branching - 1));
     const size_t rayBytes = groups * 2 * widest * sizeof(dev::BounceRay);
     const size_t termBytes = groups * size_t(batch) * size_t(treeNodeCount(branching, o.bounces)) *
                              sizeof(dev::BounceTerm);
-    const size_t hitBytes = sorted ? groups * widest * sizeof(dev::BounceHit) : 0;
-    const size_t orderBytes = sorted ? groups * widest * sizeof(cl_int) : 0;
+    const size_t hitBytes = staged ? groups * widest * sizeof(dev::BounceHit) : 0;
+    const size_t orderBytes = staged ? groups * widest * sizeof(cl_int) : 0;
     const size_t total = rayBytes + termBytes + hitBytes + orderBytes;
     const DeviceInfo& dev = cl_.device();
     const auto mib = [](size_t bytes) { return std::to_string(bytes >> 20) + " MiB"; };
@@ -478,7 +505,7 @@ void PersistentPipeline::setBounceScratch(Kernel& kernel, const Scene& scene,
                             std::to_string(groups) + " work-groups tracing batches bounce by " +
                             "bounce at --bounces " + std::to_string(o.bounces) + " need " +
                             mib(rayBytes) + " of rays, " + mib(termBytes) + " of terms" +
-                            (sorted ? " and " + mib(hitBytes + orderBytes) + " of hits to sort"
+                            (staged ? " and " + mib(hitBytes + orderBytes) + " of staged hits"
                                     : std::string()) +
                             ", and " + dev.name + " allocates at most " + mib(dev.maxAlloc) +
                             " a buffer and half its " + mib(dev.globalMem) +
@@ -488,9 +515,9 @@ void PersistentPipeline::setBounceScratch(Kernel& kernel, const Scene& scene,
     try {
         bounceRays_.ensure(cl_, rayBytes, "the bounce loop's ray lists");
         bounceTerms_.ensure(cl_, termBytes, "the bounce loop's trees of terms");
-        if (sorted) {
-            bounceHits_.ensure(cl_, hitBytes, "the sorted bounce loop's hits");
-            bounceOrder_.ensure(cl_, orderBytes, "the sorted bounce loop's shading order");
+        if (staged) {
+            bounceHits_.ensure(cl_, hitBytes, "the bounce loop's staged hits");
+            bounceOrder_.ensure(cl_, orderBytes, "the bounce loop's hit indices");
         }
     } catch (const cl::Error& e) {
         throwClError(e, "preparing the persistent megakernel's bounce scratch");
@@ -499,7 +526,7 @@ void PersistentPipeline::setBounceScratch(Kernel& kernel, const Scene& scene,
     stats_.addBuffer("bounce terms", termBytes);
     kernel.set("rays", bounceRays_.get()).set("terms", bounceTerms_.get());
     kernel.set("batch", cl_int(batch));
-    if (sorted) {
+    if (staged) {
         stats_.addBuffer("bounce hits", hitBytes);
         stats_.addBuffer("bounce order", orderBytes);
         kernel.set("hits", bounceHits_.get()).set("order", bounceOrder_.get());
@@ -516,30 +543,30 @@ void registerPersistentMegakernel(PipelineRegistry& registry) {
         "work-items take pixels from a global counter as their ray trees end "
         "(--persistent-groups N, --persistent-refill N, --persistent-regroup pattern|material, "
         "--persistent-lanes N, --persistent-max-registers N, --persistent-loop "
-        "nested|lockstep|bounce, --persistent-batch N, --persistent-tile WxH, or "
-        "--persistent-schedule auto to let warps traced "
-        "on the CPU "
+        "nested|lockstep|bounce, --persistent-batch N, --persistent-shadows inline|pass, "
+        "--persistent-tile WxH, or --persistent-schedule auto to let warps traced on the CPU "
         "choose)";
     p.supports = {.adaptiveAa = false, .tiling = false, .rowWindow = true};
-    p.options = {groupsOption(), refillOption(),    regroupOption(),
-                 laneOption(),   registersOption(), loopOption(),
-                 batchOption(),  tileOption(),      scheduleOption()};
+    p.options = {groupsOption(), refillOption(), regroupOption(), laneOption(), registersOption(),
+                 loopOption(),   batchOption(),  shadowsOption(), tileOption(), scheduleOption()};
     // Tests and the smoke check run the default schedule, the regrouped one, whose hits move
     // between lanes through local memory, the nested loop, the lockstep loop (whose warp votes
     // only NVIDIA runs), the bounce loop (whose rays move between lanes through global memory),
-    // unsorted and with each bounce's hits sorted by material, and the schedule auto chooses (256
+    // as it is and staged (each bounce's hits sorted by material, their shadow rays cast in a
+    // pass of their own), and the schedule auto chooses (256
     // regrouped lanes a group where it regroups).
     PipelineVariant regrouped{"regrouped", {}}, nested{"nested", {}}, lockstep{"lockstep", {}},
-        bounce{"bounce", {}}, bounceSorted{"bounce-sorted", {}}, automatic{"auto", {}};
+        bounce{"bounce", {}}, bounceStaged{"bounce-staged", {}}, automatic{"auto", {}};
     regroupOption().set(regrouped.values, std::string("material"));
     loopOption().set(nested.values, std::string("nested"));
     loopOption().set(lockstep.values, std::string("lockstep"));
     loopOption().set(bounce.values, std::string("bounce"));
-    loopOption().set(bounceSorted.values, std::string("bounce"));
-    regroupOption().set(bounceSorted.values, std::string("material"));
+    loopOption().set(bounceStaged.values, std::string("bounce"));
+    regroupOption().set(bounceStaged.values, std::string("material"));
+    shadowsOption().set(bounceStaged.values, std::string("pass"));
     scheduleOption().set(automatic.values, std::string("auto"));
     p.variants = {
-        PipelineVariant{"", {}}, regrouped, nested, lockstep, bounce, bounceSorted, automatic};
+        PipelineVariant{"", {}}, regrouped, nested, lockstep, bounce, bounceStaged, automatic};
     p.make = [](ClContext* cl) { return std::make_unique<PersistentPipeline>(*cl); };
     registry.add(std::move(p));
 }

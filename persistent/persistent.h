@@ -60,11 +60,12 @@ class PersistentPipeline : public DevicePipeline {
     // frames each in 4x16 and 16x8 strips, timed once per scene and settings.
     void chooseOrder(const Scene& scene, RenderOptions& nested);
 
-    // --persistent-loop bounce: sizes its scratch for `groups` work-groups, `sorted` with the
-    // hits it sorts by key (or refuses, naming the flags, when the device cannot hold it), and
-    // sets the kernel's arguments for it.
+    // --persistent-loop bounce: sizes its scratch for `groups` work-groups, `staged` with the
+    // hits it keeps between passes when it sorts them or casts their shadow rays in a pass of
+    // their own (or refuses, naming the flags, when the device cannot hold it), and sets the
+    // kernel's arguments for it.
     void setBounceScratch(Kernel& kernel, const Scene& scene, const RenderOptions& options,
-                          size_t groups, bool sorted);
+                          size_t groups, bool staged);
 
     DeviceBuffer image_, next_, bounceRays_, bounceTerms_, bounceHits_, bounceOrder_;
     LaunchPlanner planner_;

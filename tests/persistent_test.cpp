@@ -155,7 +155,8 @@ TEST(Persistent, RegroupedKeepsTheBitsAndTheRays) {
 // after its whole tree is traced. The divergence scene branches at glass and mirrors on most
 // pixels; batches of 16 leave most lanes of 32 without a camera ray, batches of 100 take four
 // passes of 32 lanes, the last one cut, and B = 8 at AA 2 widens the lists to 256 rays a pixel.
-// Sorted by pattern or material, each bounce's hits are shaded in key order, not the trace's.
+// Sorted by pattern or material, each bounce's hits are shaded in key order, not the trace's;
+// with a shadow pass, their shadow rays are cast by other lanes than the ones that traced them.
 TEST(Persistent, BounceLoopKeepsTheBitsAndTheRays) {
     MegakernelPipeline mega(test::device());
     PersistentPipeline persist(test::device());
@@ -172,14 +173,17 @@ TEST(Persistent, BounceLoopKeepsTheBitsAndTheRays) {
             EXPECT_TRUE(sameBits(m, persist.render(scene, r))) << name << " B=" << b;
             ASSERT_TRUE(persist.stats().raysCounted);
             EXPECT_EQ(persist.stats().rays, mega.stats().rays) << name << " B=" << b;
-            for (const char* key : {"pattern", "material"}) {  // each bounce's hits sorted
-                RenderOptions sorted = r;
-                setOption(sorted, "persistent-regroup", std::string(key));
-                EXPECT_TRUE(sameBits(m, persist.render(scene, sorted)))
-                    << name << " B=" << b << ", sorted by " << key;
-                EXPECT_EQ(persist.stats().rays, mega.stats().rays)
-                    << name << " B=" << b << ", sorted by " << key;
-            }
+            // Staged: each bounce's hits sorted, their shadow rays cast in a pass of their own.
+            for (const char* key : {"off", "pattern", "material"})
+                for (const char* shadows : {"inline", "pass"}) {
+                    RenderOptions staged = r;
+                    setOption(staged, "persistent-regroup", std::string(key));
+                    setOption(staged, "persistent-shadows", std::string(shadows));
+                    EXPECT_TRUE(sameBits(m, persist.render(scene, staged)))
+                        << name << " B=" << b << ", sorted by " << key << ", shadows " << shadows;
+                    EXPECT_EQ(persist.stats().rays, mega.stats().rays)
+                        << name << " B=" << b << ", sorted by " << key << ", shadows " << shadows;
+                }
             setOption(r, "persistent-lanes", 32ll);
             for (long long batch : {16ll, 100ll}) {
                 setOption(r, "persistent-batch", batch);
@@ -418,16 +422,19 @@ TEST(Persistent, RefusesAdaptiveAntiAliasingAndOptionsOutOfRange) {
                   0u)
             << e.what();
     }
-    {
-        RenderOptions batch = weighted(scene, 2, 1);
-        setOption(batch, "persistent-batch", 256ll);
+    for (const char* flag : {"persistent-batch", "persistent-shadows"}) {
+        RenderOptions o = weighted(scene, 2, 1);
+        if (std::string(flag) == "persistent-batch")
+            setOption(o, flag, 256ll);
+        else
+            setOption(o, flag, std::string("pass"));
         try {
-            persist.render(scene, batch);
-            ADD_FAILURE() << "no error for --persistent-batch in the flat loop";
+            persist.render(scene, o);
+            ADD_FAILURE() << "no error for --" << flag << " in the flat loop";
         } catch (const Error& e) {
             EXPECT_EQ(e.kind(), FailureKind::InvalidOption);
             EXPECT_EQ(std::string(e.what()),
-                      "--persistent-batch applies to --persistent-loop bounce only");
+                      "--" + std::string(flag) + " applies to --persistent-loop bounce only");
         }
     }
     for (const char* loop : {"nested", "lockstep", "bounce"}) {
