@@ -17,6 +17,11 @@
 //
 // The per-ray work is the weighted megakernel's (Megakernel_TraceNext), and each pixel's rays and
 // samples are summed in the same order, so the image is the same to the bit.
+//
+// The other forms, each chosen at build time (--persistent-loop, --persistent-regroup): the bounce
+// loop (RT_PERSIST_BOUNCE, a work-group's batch of pixels traced bounce by bounce), the nested
+// loop (RT_PERSIST_NESTED), the lockstep loop (RT_PERSIST_LOCKSTEP) and the regrouped flat loop
+// (RT_PERSIST_REGROUP), in that order below.
 #include "megakernel_sample.cl"
 
 // Pixel `k` of the `count` pixels from `first` in row-major order. Whole rows go by strips of
