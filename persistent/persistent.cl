@@ -397,8 +397,8 @@ kernel void Persistent_RenderBounce(RT_SCENE_PARAMS, global float* image, global
                     if (casts) order[at] = i;
 #endif
 #else
-                    Bounce_Shade(&sc, i < n, &node, &p, pixel, slot, &trees[pixel * slots], out,
-                                 &produced, &warp);
+                    Bounce_Shade(&sc, i < n, &node, &p, pixel, slot, &trees[(size_t)pixel * slots],
+                                 out, &produced, &warp);
 #endif
                 }
 #ifdef RT_PERSIST_BOUNCE_SHADOW_PASS
@@ -453,7 +453,7 @@ kernel void Persistent_RenderBounce(RT_SCENE_PARAMS, global float* image, global
                         p = Bounce_Unpack(h.ray);
                     }
                     Bounce_Shade(&sc, k < n, &h.node, &p, h.ray.pixel, h.ray.slot,
-                                 &trees[h.ray.pixel * slots], out, &produced, &warp);
+                                 &trees[(size_t)h.ray.pixel * slots], out, &produced, &warp);
                 }
 #endif
                 // The bounce is done: the next one reads the children, and the sums the terms,
@@ -479,7 +479,7 @@ kernel void Persistent_RenderBounce(RT_SCENE_PARAMS, global float* image, global
             for (int pixel = lane; pixel < pixels; pixel += RT_PERSIST_BOUNCE) {
                 const int2 xy = Persistent_PixelOf(start + pixel, first, count, settings.width);
                 const int at = (xy.y * settings.width + xy.x) * 3;
-                float3 c = Bounce_Sum(&trees[pixel * slots]);
+                float3 c = Bounce_Sum(&trees[(size_t)pixel * slots]);
                 if (sample > 0) c += (float3)(image[at], image[at + 1], image[at + 2]);
                 if (sample == samples - 1) c = c / (float)samples;
                 Megakernel_Store(image, at, c);
