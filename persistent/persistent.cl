@@ -309,179 +309,214 @@ inline void Bounce_Shade(const SceneData* sc, bool has, const Node* node, const 
 #define BOUNCE_STAGED_PARAMS
 #endif
 
+// A work-group's counters of one bounce, in local memory; Bounce_Reset zeroes them between
+// bounces.
+typedef struct BounceCounters {
+    int taken;                                // rays taken for the trace by the group's warps
+    int produced;                             // children appended to the next bounce's list
+    int casting;                              // hits listed for the shadow pass
+    int cast;                                 // of those, taken for the shadow pass
+    int shaded;                               // staged hits taken for shading
+    int keyCount[RG_KEYS], keyBase[RG_KEYS];  // the sorted loop's hits by key
+} BounceCounters;
+
+inline void Bounce_Reset(local BounceCounters* c, int lane) {
+    if (lane == 0) c->taken = c->produced = c->casting = c->cast = c->shaded = 0;
+    if (lane < RG_KEYS) c->keyCount[lane] = 0;
+}
+
+// What a bounce's passes share: the caller's warp, the group's counters and scratch, and which
+// pixels and AA sample the batch is at.
+typedef struct Bounce {
+    BounceWarp warp;
+    local BounceCounters* c;
+    global BounceTerm* trees;  // batch x slots
+    global BounceHit* hits;    // staged: one a ray of the bounce
+    global int* order;         // staged: hit indices, for the shadow pass and the sorted shading
+    int start, pixels, first, count, sample, slots;
+} Bounce;
+
+// The trace: every ray of `in` (the batch's camera rays at depth 0) to its closest hit, with its
+// shadow rays unless a pass of their own casts them. Unstaged, each hit is shaded at once and its
+// children appended to `out`; staged, it waits in b->hits.
+inline void Bounce_TracePass(const SceneData* sc, const Bounce* b, int depth, int n,
+                             global const BounceRay* in, global BounceRay* out) {
+    for (;;) {
+        const int base = Bounce_Take(&b->c->taken, &b->warp);
+        if (base >= n) return;  // the same for the whole warp
+        const int i = base + b->warp.lane;
+        Pending p;
+        int pixel = 0, slot = 0;
+        Node node;
+        if (i < n) {
+            if (depth == 0) {
+                pixel = i;
+            } else {
+                const BounceRay r = in[i];
+                pixel = r.pixel;
+                slot = r.slot;
+                p = Bounce_Unpack(r);
+            }
+            const int2 xy =
+                Persistent_PixelOf(b->start + pixel, b->first, b->count, sc->settings.width);
+            if (depth == 0) p = PathState_Primary(sc, xy.x, xy.y, b->sample);
+            RT_COUNT_WARP_STEP(sc);  // the lanes that trace a ray this take
+#ifdef RT_PERSIST_BOUNCE_SHADOW_PASS
+            node = RayTree_TraceSurface(sc, p.ray, p.type);
+#else
+            node = RayTree_TraceNode(sc, p.ray, p.type,
+                                     Sampling_PointKey(xy.x, xy.y, b->sample, p.depth));
+#endif
+        }
+#ifdef BOUNCE_STAGED
+        if (i < n) {
+            global BounceHit* h = &b->hits[i];
+            h->node = node;
+            h->ray = Bounce_Pack(&p, pixel, slot);
+#ifdef RT_PERSIST_BOUNCE_SORT
+            const int key = Regroup_KeyOf(sc, &node);
+            h->key = key;
+            h->rank = atomic_inc(&b->c->keyCount[key]);
+#endif
+        }
+#ifdef RT_PERSIST_BOUNCE_SHADOW_PASS
+        const bool casts = i < n && node.kind != RT_KIND_MISS && sc->settings.lightCount > 0;
+        const int at = Bounce_Place(&b->c->casting, casts ? 1 : 0, &b->warp);
+        if (casts) b->order[at] = i;
+#endif
+#else
+        Bounce_Shade(sc, i < n, &node, &p, pixel, slot, &b->trees[(size_t)pixel * b->slots], out,
+                     &b->c->produced, &b->warp);
+#endif
+    }
+}
+
+// The shadow pass: the shadow rays of the hits the trace listed, with the key the trace would have
+// given them (their pixel, AA sample and depth).
+inline void Bounce_ShadowPass(const SceneData* sc, const Bounce* b) {
+    const int casting = b->c->casting;
+    for (;;) {
+        const int base = Bounce_Take(&b->c->cast, &b->warp);
+        if (base >= casting) return;
+        const int j = base + b->warp.lane;
+        if (j < casting) {
+            global BounceHit* h = &b->hits[b->order[j]];
+            Node node = h->node;
+            const int2 xy =
+                Persistent_PixelOf(b->start + h->ray.pixel, b->first, b->count, sc->settings.width);
+            RayTree_CastShadows(sc, &node,
+                                Sampling_PointKey(xy.x, xy.y, b->sample, h->ray.depthType >> 8));
+            for (int l = 0; l < sc->settings.lightCount; ++l)
+                h->node.occluded[l] = node.occluded[l];
+        }
+    }
+}
+
+// The sorted loop's order: each key's first place, then every hit's place, into b->order.
+// Every lane of the group calls it.
+inline void Bounce_SortPass(const Bounce* b, int n, int lane) {
+    if (lane == 0)
+        for (int k = 0, at = 0; k < RG_KEYS; ++k) {
+            b->c->keyBase[k] = at;
+            at += b->c->keyCount[k];
+        }
+    barrier(CLK_LOCAL_MEM_FENCE);
+    for (int i = lane; i < n; i += RT_PERSIST_BOUNCE)
+        b->order[b->c->keyBase[b->hits[i].key] + b->hits[i].rank] = i;
+}
+
+// Shading the staged hits, in key order when sorted, in trace order otherwise; their children
+// appended to `out`.
+inline void Bounce_ShadePass(const SceneData* sc, const Bounce* b, int n, global BounceRay* out) {
+    for (;;) {
+        const int base = Bounce_Take(&b->c->shaded, &b->warp);
+        if (base >= n) return;
+        const int k = base + b->warp.lane;
+        BounceHit h;
+        h.ray.pixel = h.ray.slot = 0;
+        Pending p;
+        if (k < n) {
+#ifdef RT_PERSIST_BOUNCE_SORT
+            h = b->hits[b->order[k]];
+#else
+            h = b->hits[k];
+#endif
+            p = Bounce_Unpack(h.ray);
+        }
+        Bounce_Shade(sc, k < n, &h.node, &p, h.ray.pixel, h.ray.slot,
+                     &b->trees[(size_t)h.ray.pixel * b->slots], out, &b->c->produced, &b->warp);
+    }
+}
+
 kernel void Persistent_RenderBounce(RT_SCENE_PARAMS, global float* image, global int* next,
                                     int first, int count, global BounceRay* rays,
                                     global BounceTerm* terms, int batch BOUNCE_STAGED_PARAMS) {
     RT_SCENE_INIT(sc);
-    local int start;     // the group's first pixel this batch
-    local int taken;     // rays of this bounce taken by the group's warps
-    local int produced;  // children appended to the next bounce's list
+    local int start;  // the group's first pixel this batch
+    local BounceCounters counters;
     const int lane = (int)get_local_id(0);
-    const BounceWarp warp = Bounce_WarpOf(lane);
     const int samples = settings.aaSamples * settings.aaSamples;
-    const int slots = RayTree_NodeCount(settings.bounces);
     const int widest = batch << (settings.bounces * (RT_BRANCH - 1));
     const size_t group = get_group_id(0);
     global BounceRay* lists = rays + group * 2 * (size_t)widest;
-    global BounceTerm* trees = terms + group * (size_t)batch * (size_t)slots;
+    Bounce b;
+    b.warp = Bounce_WarpOf(lane);
+    b.c = &counters;
+    b.slots = RayTree_NodeCount(settings.bounces);
+    b.trees = terms + group * (size_t)batch * (size_t)b.slots;
 #ifdef BOUNCE_STAGED
-    local int shaded;  // hits of this bounce taken for shading
-    hits += group * (size_t)widest;
-    order += group * (size_t)widest;
-    if (lane == 0) shaded = 0;
+    b.hits = hits + group * (size_t)widest;
+    b.order = order + group * (size_t)widest;
+#else
+    b.hits = 0;
+    b.order = 0;
 #endif
-#ifdef RT_PERSIST_BOUNCE_SORT
-    local int keyCount[RG_KEYS], keyBase[RG_KEYS];
-    if (lane < RG_KEYS) keyCount[lane] = 0;
-#endif
-#ifdef RT_PERSIST_BOUNCE_SHADOW_PASS
-    local int casting;  // hits listed for the shadow pass
-    local int cast;     // of those, taken by the group's warps
-    if (lane == 0) casting = cast = 0;
-#endif
-    if (lane == 0) taken = produced = 0;
+    b.first = first;
+    b.count = count;
+    Bounce_Reset(&counters, lane);
     for (;;) {
         barrier(CLK_LOCAL_MEM_FENCE);  // every lane has read the last batch's start
         if (lane == 0) start = atomic_add(next, batch);
         barrier(CLK_LOCAL_MEM_FENCE);
         if (start >= count) break;  // the whole group leaves together
-        const int pixels = min(batch, count - start);
-        for (int sample = 0; sample < samples; ++sample) {
+        b.start = start;
+        b.pixels = min(batch, count - start);
+        for (b.sample = 0; b.sample < samples; ++b.sample) {
             global BounceRay* in = lists;
             global BounceRay* out = lists + widest;
-            // One bounce a pass: rays [0, n) of `in` (the camera rays at depth 0), their children
-            // appended to `out`.
-            for (int depth = 0, n = pixels; n > 0; ++depth) {
-                for (;;) {
-                    const int base = Bounce_Take(&taken, &warp);
-                    if (base >= n) break;  // the same for the whole warp
-                    const int i = base + warp.lane;
-                    Pending p;
-                    int pixel = 0, slot = 0;
-                    Node node;
-                    if (i < n) {
-                        if (depth == 0) {
-                            pixel = i;
-                        } else {
-                            const BounceRay r = in[i];
-                            pixel = r.pixel;
-                            slot = r.slot;
-                            p = Bounce_Unpack(r);
-                        }
-                        const int2 xy =
-                            Persistent_PixelOf(start + pixel, first, count, settings.width);
-                        if (depth == 0) p = PathState_Primary(&sc, xy.x, xy.y, sample);
-                        RT_COUNT_WARP_STEP(&sc);  // the lanes that trace a ray this take
+            // One bounce at a time: rays [0, n) of `in` (the camera rays at depth 0), their
+            // children appended to `out`. The group meets between passes, each of which reads
+            // what other lanes wrote in the last.
+            for (int depth = 0, n = b.pixels; n > 0; ++depth) {
+                Bounce_TracePass(&sc, &b, depth, n, in, out);
 #ifdef RT_PERSIST_BOUNCE_SHADOW_PASS
-                        node = RayTree_TraceSurface(&sc, p.ray, p.type);
-#else
-                        node = RayTree_TraceNode(&sc, p.ray, p.type,
-                                                 Sampling_PointKey(xy.x, xy.y, sample, p.depth));
-#endif
-                    }
-#ifdef BOUNCE_STAGED
-                    if (i < n) {
-                        global BounceHit* h = &hits[i];
-                        h->node = node;
-                        h->ray = Bounce_Pack(&p, pixel, slot);
-#ifdef RT_PERSIST_BOUNCE_SORT
-                        const int key = Regroup_KeyOf(&sc, &node);
-                        h->key = key;
-                        h->rank = atomic_inc(&keyCount[key]);
-#endif
-                    }
-#ifdef RT_PERSIST_BOUNCE_SHADOW_PASS
-                    const bool casts =
-                        i < n && node.kind != RT_KIND_MISS && settings.lightCount > 0;
-                    const int at = Bounce_Place(&casting, casts ? 1 : 0, &warp);
-                    if (casts) order[at] = i;
-#endif
-#else
-                    Bounce_Shade(&sc, i < n, &node, &p, pixel, slot, &trees[(size_t)pixel * slots],
-                                 out, &produced, &warp);
-#endif
-                }
-#ifdef RT_PERSIST_BOUNCE_SHADOW_PASS
-                // Every hit is traced: cast the listed hits' shadow rays, with the key the
-                // trace would have given them (their pixel, AA sample and depth).
                 barrier(CLK_LOCAL_MEM_FENCE | CLK_GLOBAL_MEM_FENCE);
-                for (;;) {
-                    const int base = Bounce_Take(&cast, &warp);
-                    if (base >= casting) break;
-                    const int j = base + warp.lane;
-                    if (j < casting) {
-                        global BounceHit* h = &hits[order[j]];
-                        Node node = h->node;
-                        const int2 xy =
-                            Persistent_PixelOf(start + h->ray.pixel, first, count, settings.width);
-                        RayTree_CastShadows(
-                            &sc, &node,
-                            Sampling_PointKey(xy.x, xy.y, sample, h->ray.depthType >> 8));
-                        for (int l = 0; l < settings.lightCount; ++l)
-                            h->node.occluded[l] = node.occluded[l];
-                    }
-                }
+                Bounce_ShadowPass(&sc, &b);
 #endif
 #ifdef RT_PERSIST_BOUNCE_SORT
-                // Every hit is counted: each key's first place in the order, then the order.
                 barrier(CLK_LOCAL_MEM_FENCE | CLK_GLOBAL_MEM_FENCE);
-                if (lane == 0)
-                    for (int k = 0, at = 0; k < RG_KEYS; ++k) {
-                        keyBase[k] = at;
-                        at += keyCount[k];
-                    }
-                barrier(CLK_LOCAL_MEM_FENCE);
-                for (int i = lane; i < n; i += RT_PERSIST_BOUNCE)
-                    order[keyBase[hits[i].key] + hits[i].rank] = i;
+                Bounce_SortPass(&b, n, lane);
 #endif
 #ifdef BOUNCE_STAGED
-                // Shade the hits, in key order when sorted, in trace order otherwise.
                 barrier(CLK_LOCAL_MEM_FENCE | CLK_GLOBAL_MEM_FENCE);
-                for (;;) {
-                    const int base = Bounce_Take(&shaded, &warp);
-                    if (base >= n) break;
-                    const int k = base + warp.lane;
-                    BounceHit h;
-                    h.ray.pixel = h.ray.slot = 0;
-                    Pending p;
-                    if (k < n) {
-#ifdef RT_PERSIST_BOUNCE_SORT
-                        h = hits[order[k]];
-#else
-                        h = hits[k];
+                Bounce_ShadePass(&sc, &b, n, out);
 #endif
-                        p = Bounce_Unpack(h.ray);
-                    }
-                    Bounce_Shade(&sc, k < n, &h.node, &p, h.ray.pixel, h.ray.slot,
-                                 &trees[(size_t)h.ray.pixel * slots], out, &produced, &warp);
-                }
-#endif
-                // The bounce is done: the next one reads the children, and the sums the terms,
-                // that other lanes wrote.
                 barrier(CLK_LOCAL_MEM_FENCE | CLK_GLOBAL_MEM_FENCE);
-                n = produced;
+                n = counters.produced;
                 barrier(CLK_LOCAL_MEM_FENCE);  // every lane has read the count
-                if (lane == 0) taken = produced = 0;
-#ifdef BOUNCE_STAGED
-                if (lane == 0) shaded = 0;
-#endif
-#ifdef RT_PERSIST_BOUNCE_SORT
-                if (lane < RG_KEYS) keyCount[lane] = 0;
-#endif
-#ifdef RT_PERSIST_BOUNCE_SHADOW_PASS
-                if (lane == 0) casting = cast = 0;
-#endif
+                Bounce_Reset(&counters, lane);
                 barrier(CLK_LOCAL_MEM_FENCE);
                 global BounceRay* swap = in;
                 in = out;
                 out = swap;
             }
-            for (int pixel = lane; pixel < pixels; pixel += RT_PERSIST_BOUNCE) {
+            // The batch's trees are traced: each pixel's sum, added to its earlier samples'.
+            for (int pixel = lane; pixel < b.pixels; pixel += RT_PERSIST_BOUNCE) {
                 const int2 xy = Persistent_PixelOf(start + pixel, first, count, settings.width);
                 const int at = (xy.y * settings.width + xy.x) * 3;
-                float3 c = Bounce_Sum(&trees[(size_t)pixel * slots]);
-                if (sample > 0) c += (float3)(image[at], image[at + 1], image[at + 2]);
-                if (sample == samples - 1) c = c / (float)samples;
+                float3 c = Bounce_Sum(&b.trees[(size_t)pixel * b.slots]);
+                if (b.sample > 0) c += (float3)(image[at], image[at + 1], image[at + 2]);
+                if (b.sample == samples - 1) c = c / (float)samples;
                 Megakernel_Store(image, at, c);
             }
             barrier(CLK_GLOBAL_MEM_FENCE);  // the next sample rewrites trees other lanes summed
