@@ -284,9 +284,9 @@ typedef struct BounceRay {
     int32_t slot;
 } BounceRay;
 
-// The sorted bounce loop (--persistent-loop bounce with --persistent-regroup) keeps a bounce's
-// traced rays here between the trace and the shading: the hit, the ray, its sort key and its rank
-// among the hits of that key.
+// The staged bounce loop (--persistent-loop bounce with --persistent-regroup or
+// --persistent-shadows pass) keeps a bounce's traced rays here between the trace and the passes
+// after it: the hit, the ray, and, sorted, its key and its rank among the hits of that key.
 typedef struct BounceHit {
     Node node;
     BounceRay ray;
