@@ -167,8 +167,9 @@ inline int Regroup_KeyOf(const SceneData* sc, const Node* node) {
 // bit, whatever order the lists come in. The AA samples of a batch go one after another, summed
 // in the image buffer.
 //
-// Scratch (the host sizes it): per work-group two lists of batch * C^B rays (the widest bounce a
-// batch can have) and batch * N terms (N slots of a tree of B bounces, RayTree_NodeCount).
+// Scratch (the host sizes it, setBounceScratch): per work-group two lists of `widest` rays (batch
+// * C^B, the widest bounce a batch can have) and batch * N terms (N slots of a tree of B bounces,
+// RayTree_NodeCount).
 
 inline BounceRay Bounce_Pack(const Pending* p, int pixel, int slot) {
     BounceRay r;
@@ -333,7 +334,7 @@ typedef struct Bounce {
     global BounceTerm* trees;  // batch x slots
     global BounceHit* hits;    // staged: one a ray of the bounce
     global int* order;         // staged: hit indices, for the shadow pass and the sorted shading
-    int start, pixels, first, count, sample, slots;
+    int start, first, count, sample, slots;
 } Bounce;
 
 // The trace: every ray of `in` (the batch's camera rays at depth 0) to its closest hit, with its
@@ -450,13 +451,13 @@ inline void Bounce_ShadePass(const SceneData* sc, const Bounce* b, int n, global
 
 kernel void Persistent_RenderBounce(RT_SCENE_PARAMS, global float* image, global int* next,
                                     int first, int count, global BounceRay* rays,
-                                    global BounceTerm* terms, int batch BOUNCE_STAGED_PARAMS) {
+                                    global BounceTerm* terms, int batch,
+                                    int widest BOUNCE_STAGED_PARAMS) {
     RT_SCENE_INIT(sc);
     local int start;  // the group's first pixel this batch
     local BounceCounters counters;
     const int lane = (int)get_local_id(0);
     const int samples = settings.aaSamples * settings.aaSamples;
-    const int widest = batch << (settings.bounces * (RT_BRANCH - 1));
     const size_t group = get_group_id(0);
     global BounceRay* lists = rays + group * 2 * (size_t)widest;
     Bounce b;
@@ -480,14 +481,14 @@ kernel void Persistent_RenderBounce(RT_SCENE_PARAMS, global float* image, global
         barrier(CLK_LOCAL_MEM_FENCE);
         if (start >= count) break;  // the whole group leaves together
         b.start = start;
-        b.pixels = min(batch, count - start);
+        const int pixels = min(batch, count - start);
         for (b.sample = 0; b.sample < samples; ++b.sample) {
             global BounceRay* in = lists;
             global BounceRay* out = lists + widest;
             // One bounce at a time: rays [0, n) of `in` (the camera rays at depth 0), their
             // children appended to `out`. The group meets between passes, each of which reads
             // what other lanes wrote in the last.
-            for (int depth = 0, n = b.pixels; n > 0; ++depth) {
+            for (int depth = 0, n = pixels; n > 0; ++depth) {
                 Bounce_TracePass(&sc, &b, depth, n, in, out);
 #ifdef RT_PERSIST_BOUNCE_SHADOW_PASS
                 barrier(CLK_LOCAL_MEM_FENCE | CLK_GLOBAL_MEM_FENCE);
@@ -511,7 +512,7 @@ kernel void Persistent_RenderBounce(RT_SCENE_PARAMS, global float* image, global
                 out = swap;
             }
             // The batch's trees are traced: each pixel's sum, added to its earlier samples'.
-            for (int pixel = lane; pixel < b.pixels; pixel += RT_PERSIST_BOUNCE) {
+            for (int pixel = lane; pixel < pixels; pixel += RT_PERSIST_BOUNCE) {
                 const int2 xy = Persistent_PixelOf(start + pixel, first, count, settings.width);
                 const int at = (xy.y * settings.width + xy.x) * 3;
                 float3 c = Bounce_Sum(&b.trees[(size_t)pixel * b.slots]);

@@ -362,11 +362,12 @@ Image PersistentPipeline::renderScheduled(const Scene& scene, const RenderOption
     RenderOptions weighted = o;
     setMegaLayout(weighted, MegaLayout::Weighted);
     const std::vector<std::string> defines = MegakernelPipeline::defines(scene, weighted);
-    stats_.privateBytes = MegakernelPipeline::privateBytes(scene, weighted);
     const DeviceInfo& dev = cl_.device();
     const auto loop = PersistLoop(loopOption().index(o.pipelineOptions));
     const bool nested = loop == PersistLoop::Nested, lockstep = loop == PersistLoop::Lockstep;
     const bool bounce = loop == PersistLoop::Bounce;
+    // The bounce loop's lanes keep no stack of pending rays: its rays wait in global memory.
+    stats_.privateBytes = bounce ? 0 : MegakernelPipeline::privateBytes(scene, weighted);
     // The bounce loop's warps meet only between bounces, and a larger group gives each of them
     // more of the batch's rays to take between meetings: it takes 512 lanes on a GPU.
     const long long lanes = laneOption().integer(o.pipelineOptions);
@@ -475,8 +476,10 @@ Image PersistentPipeline::renderScheduled(const Scene& scene, const RenderOption
         finishRayCount(o);
     } catch (const cl::Error& e) {
         throwClError(e, "persistent-megakernel frame on " + dev.name,
-                     "each work-item keeps " + std::to_string(stats_.privateBytes) +
-                         " bytes of pending rays; lower --bounces or --persistent-groups");
+                     bounce ? std::string("the bounce loop keeps its rays in scratch buffers; "
+                                          "lower --persistent-batch or --persistent-groups")
+                            : "each work-item keeps " + std::to_string(stats_.privateBytes) +
+                                  " bytes of pending rays; lower --bounces or --persistent-groups");
     }
     stats_.extras["work_items"] = most;
     return out;
@@ -499,19 +502,20 @@ void PersistentPipeline::setBounceScratch(Kernel& kernel, const Scene& scene,
     const size_t total = rayBytes + termBytes + hitBytes + orderBytes;
     const DeviceInfo& dev = cl_.device();
     const auto mib = [](size_t bytes) { return std::to_string(bytes >> 20) + " MiB"; };
-    for (const size_t bytes : {rayBytes, termBytes, hitBytes})
-        if (bytes > dev.maxAlloc || total > dev.globalMem / 2)
-            throw Error("--persistent-batch " + std::to_string(batch) + ": " +
-                            std::to_string(groups) + " work-groups tracing batches bounce by " +
-                            "bounce at --bounces " + std::to_string(o.bounces) + " need " +
-                            mib(rayBytes) + " of rays, " + mib(termBytes) + " of terms" +
-                            (staged ? " and " + mib(hitBytes + orderBytes) + " of staged hits"
-                                    : std::string()) +
-                            ", and " + dev.name + " allocates at most " + mib(dev.maxAlloc) +
-                            " a buffer and half its " + mib(dev.globalMem) +
-                            " in all here; lower --persistent-batch, --persistent-groups or "
-                            "--bounces",
-                        FailureKind::InvalidOption);
+    // The kernel indexes a list with an int.
+    if (std::max({rayBytes, termBytes, hitBytes}) > dev.maxAlloc || total > dev.globalMem / 2 ||
+        widest > size_t(std::numeric_limits<cl_int>::max()))
+        throw Error("--persistent-batch " + std::to_string(batch) + ": " + std::to_string(groups) +
+                        " work-groups tracing batches bounce by " + "bounce at --bounces " +
+                        std::to_string(o.bounces) + " need " + mib(rayBytes) + " of rays, " +
+                        mib(termBytes) + " of terms" +
+                        (staged ? " and " + mib(hitBytes + orderBytes) + " of staged hits"
+                                : std::string()) +
+                        ", and " + dev.name + " allocates at most " + mib(dev.maxAlloc) +
+                        " a buffer and half its " + mib(dev.globalMem) +
+                        " in all here; lower --persistent-batch, --persistent-groups or "
+                        "--bounces",
+                    FailureKind::InvalidOption);
     try {
         bounceRays_.ensure(cl_, rayBytes, "the bounce loop's ray lists");
         bounceTerms_.ensure(cl_, termBytes, "the bounce loop's trees of terms");
@@ -525,7 +529,7 @@ void PersistentPipeline::setBounceScratch(Kernel& kernel, const Scene& scene,
     stats_.addBuffer("bounce rays", rayBytes);
     stats_.addBuffer("bounce terms", termBytes);
     kernel.set("rays", bounceRays_.get()).set("terms", bounceTerms_.get());
-    kernel.set("batch", cl_int(batch));
+    kernel.set("batch", cl_int(batch)).set("widest", cl_int(widest));
     if (staged) {
         stats_.addBuffer("bounce hits", hitBytes);
         stats_.addBuffer("bounce order", orderBytes);
@@ -553,8 +557,8 @@ void registerPersistentMegakernel(PipelineRegistry& registry) {
     // between lanes through local memory, the nested loop, the lockstep loop (whose warp votes
     // only NVIDIA runs), the bounce loop (whose rays move between lanes through global memory),
     // as it is and staged (each bounce's hits sorted by material, their shadow rays cast in a
-    // pass of their own), and the schedule auto chooses (256
-    // regrouped lanes a group where it regroups).
+    // pass of their own), and the schedule auto chooses (256 regrouped lanes a group where
+    // it regroups).
     PipelineVariant regrouped{"regrouped", {}}, nested{"nested", {}}, lockstep{"lockstep", {}},
         bounce{"bounce", {}}, bounceStaged{"bounce-staged", {}}, automatic{"auto", {}};
     regroupOption().set(regrouped.values, std::string("material"));
