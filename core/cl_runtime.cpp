@@ -140,6 +140,18 @@ static void widenThreadStacks() {
 // set already. The driver reads it when the platform is first listed.
 static void disableDriverProgramCache() { setenv("CUDA_CACHE_DISABLE", "1", /*overwrite=*/0); }
 
+// NVIDIA's cl_nv_device_attribute_query: the registers a work-group's work-items share
+// (CL_DEVICE_REGISTERS_PER_BLOCK_NV, 65,536 on the H200), or 0 where the device does not say.
+static cl_uint registersPerGroup(const cl::Device& d) {
+    if (d.getInfo<CL_DEVICE_EXTENSIONS>().find("cl_nv_device_attribute_query") == std::string::npos)
+        return 0;
+    try {
+        return d.getInfo<CL_DEVICE_REGISTERS_PER_BLOCK_NV>();
+    } catch (const cl::Error&) {
+        return 0;
+    }
+}
+
 std::vector<DeviceInfo> listDevices() {
     std::vector<DeviceInfo> out;
     std::vector<cl::Platform> platforms;
@@ -179,6 +191,7 @@ std::vector<DeviceInfo> listDevices() {
             info.maxAlloc = d.getInfo<CL_DEVICE_MAX_MEM_ALLOC_SIZE>();
             info.localMem = d.getInfo<CL_DEVICE_LOCAL_MEM_SIZE>();
             info.maxWorkGroup = d.getInfo<CL_DEVICE_MAX_WORK_GROUP_SIZE>();
+            info.registersPerGroup = registersPerGroup(d);
             info.correctlyRoundedDivSqrt = (d.getInfo<CL_DEVICE_SINGLE_FP_CONFIG>() &
                                             CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT) != 0;
             // PoCL caches every build by source and options ($POCL_CACHE_DIR), and compiles a

@@ -31,6 +31,9 @@ struct DeviceInfo {
     cl_uint computeUnits = 0;
     cl_ulong globalMem = 0, maxAlloc = 0, localMem = 0;
     size_t maxWorkGroup = 0;
+    // Registers the work-items of one work-group share, where the device says (NVIDIA's
+    // cl_nv_device_attribute_query); 0 elsewhere.
+    cl_uint registersPerGroup = 0;
     bool correctlyRoundedDivSqrt = false;  // supports -cl-fp32-correctly-rounded-divide-sqrt
     // The driver keeps its own cache of compiled programs, keyed by source and options (PoCL),
     // so rtlab keeps none: see ClContext::program.

@@ -43,6 +43,10 @@ bool Kernel::has(std::string_view arg) const {
     return std::find(args_.begin(), args_.end(), arg) != args_.end();
 }
 
+size_t Kernel::maxGroup(const cl::Device& device) const {
+    return kernel_.getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(device);
+}
+
 cl_uint Kernel::index(std::string_view arg) const {
     auto it = std::find(args_.begin(), args_.end(), arg);
     if (it != args_.end()) return cl_uint(it - args_.begin());

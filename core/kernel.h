@@ -28,6 +28,10 @@ class Kernel {
     // The same for `size` bytes at `value` (a struct the host holds as bytes).
     Kernel& set(std::string_view arg, size_t size, const void* value);
     bool has(std::string_view arg) const;
+    // The most work-items a work-group of this kernel may have on `device` as it was built
+    // (CL_KERNEL_WORK_GROUP_SIZE): below the device's own limit where the kernel's registers or
+    // private memory do not fit a larger group, or where the compiler assumed a smaller one.
+    size_t maxGroup(const cl::Device& device) const;
 
     const std::string& name() const { return name_; }
     const std::vector<std::string>& arguments() const { return args_; }

@@ -449,10 +449,11 @@ inline void Bounce_ShadePass(const SceneData* sc, const Bounce* b, int n, global
     }
 }
 
-kernel void Persistent_RenderBounce(RT_SCENE_PARAMS, global float* image, global int* next,
-                                    int first, int count, global BounceRay* rays,
-                                    global BounceTerm* terms, int batch,
-                                    int widest BOUNCE_STAGED_PARAMS) {
+// The group size is the compiler's to know: a compiler that assumes smaller groups otherwise
+// (LLVM's AMDGPU back end: 256) builds a kernel that cannot launch in groups of 512.
+kernel __attribute__((reqd_work_group_size(RT_PERSIST_BOUNCE, 1, 1))) void Persistent_RenderBounce(
+    RT_SCENE_PARAMS, global float* image, global int* next, int first, int count,
+    global BounceRay* rays, global BounceTerm* terms, int batch, int widest BOUNCE_STAGED_PARAMS) {
     RT_SCENE_INIT(sc);
     local int start;  // the group's first pixel this batch
     local BounceCounters counters;
@@ -695,8 +696,8 @@ inline ulong Phase_Clock(void) {
 #define PHASE_MARK(sc, slot, t, warp, first)
 #endif
 
-kernel void Persistent_RenderRegrouped(RT_SCENE_PARAMS, global float* image, global int* next,
-                                       int first, int count, int refill) {
+kernel __attribute__((reqd_work_group_size(RG_LANES, 1, 1))) void Persistent_RenderRegrouped(
+    RT_SCENE_PARAMS, global float* image, global int* next, int first, int count, int refill) {
     RT_SCENE_INIT(sc);
     local RegroupSlot slots[RG_LANES];
     // Key counts, three sets in turn, so that a step needs no barrier before it counts: it

@@ -53,7 +53,10 @@ const PipelineOption& refillOption() {
 const PipelineOption& registersOption() {
     static const PipelineOption o =
         registerCapOption("persistent-max-registers", "Persistent megakernel",
-                          " (raise --persistent-groups to fill them)", "J");
+                          " (raise --persistent-groups to fill them); where none is asked, a "
+                          "build whose --persistent-lanes would not share the registers of a "
+                          "multiprocessor is capped so that they do (128 at 512 lanes)",
+                          "J");
     return o;
 }
 
@@ -254,6 +257,23 @@ long long regroupLanes(const DeviceInfo& dev) {
 
 }  // namespace
 
+long long persistentRegisterCap(const DeviceInfo& dev, size_t lanes, long long asked) {
+    if (dev.registersPerGroup == 0 || lanes == 0) return asked;
+    // NVIDIA gives a warp its registers in units of 256, 8 a lane, up to 255 a lane.
+    constexpr long long kMost = 255, kUnit = 8;
+    const auto warpLanes = static_cast<long long>((lanes + 31) / 32 * 32);
+    const long long fits = std::min(kMost, dev.registersPerGroup / warpLanes / kUnit * kUnit);
+    if (asked > fits)
+        throw Error("--persistent-max-registers " + std::to_string(asked) + ": " +
+                        std::to_string(lanes) +
+                        " work-items a work-group (--persistent-lanes) "
+                        "share " +
+                        dev.name + "'s " + std::to_string(dev.registersPerGroup) +
+                        " registers, at most " + std::to_string(fits) + " each; lower either flag",
+                    FailureKind::InvalidOption);
+    return asked != 0 || fits == kMost ? asked : fits;
+}
+
 PersistSchedule choosePersistentSchedule(const LaneEstimate& e) {
     char lanes[80], objects[80];
     std::snprintf(lanes, sizeof lanes, "%.1f busy lanes of %d predicted", e.busyLanes, e.lanes);
@@ -412,8 +432,9 @@ Image PersistentPipeline::renderScheduled(const Scene& scene, const RenderOption
     const size_t by = tile.find('x');
     programDefines.push_back("RT_PERSIST_TILE_W=" + tile.substr(0, by));
     programDefines.push_back("RT_PERSIST_TILE_H=" + tile.substr(by + 1));
-    const std::vector<std::string> buildOptions =
-        registerCapBuildOptions(registersOption().integer(o.pipelineOptions), dev.vendor);
+    const long long registerCap =
+        persistentRegisterCap(dev, local, registersOption().integer(o.pipelineOptions));
+    const std::vector<std::string> buildOptions = registerCapBuildOptions(registerCap, dev.vendor);
     // On NVIDIA the warp's lanes vote and take pixels together (inline PTX, RT_WARP_PTX).
     const cl::Program program =
         rayLoopProgram("persistent.cl", programDefines, buildOptions, o, {"RT_WARP_PTX"});
@@ -431,6 +452,14 @@ Image PersistentPipeline::renderScheduled(const Scene& scene, const RenderOption
     Kernel kernel(program, bounce    ? "Persistent_RenderBounce"
                            : regroup ? "Persistent_RenderRegrouped"
                                      : "Persistent_Render");
+    // A build can still be too large for the group (its private memory, or a compiler that
+    // assumed smaller groups): refused here by name, not by the launch.
+    if (const size_t fits = kernel.maxGroup(dev.device); fits < local)
+        throw Error("--persistent-lanes " + std::to_string(local) + ": " + kernel.name() +
+                        " as built for " + dev.name + " runs at most " + std::to_string(fits) +
+                        " work-items a work-group; lower --persistent-lanes",
+                    FailureKind::InvalidOption);
+    if (registerCap != 0) stats_.extras["persist_register_cap"] = registerCap;
     kernel.set("image", image_.get()).set("next", next_.get());
     if (bounce)
         setBounceScratch(kernel, scene, o, most / local, regroup || shadowPass);

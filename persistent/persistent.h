@@ -35,6 +35,15 @@ PersistSchedule choosePersistentSchedule(const LaneEstimate& estimate);
 // megakernel with).
 void setPersistentScheduleAuto(RenderOptions& options);
 
+// The register cap (-cl-nv-maxrregcount) of a build whose work-groups have `lanes` work-items on
+// `device`. A group's work-items share the registers of one multiprocessor, so a kernel built with
+// more a work-item than fit cannot launch in such groups. Returns `asked`
+// (--persistent-max-registers, 0: the compiler's choice) where it fits; where nothing was asked
+// and the compiler's choice might not fit, the most that does (as CUDA's __launch_bounds__ caps a
+// kernel); refuses an asked cap that does not fit, naming both flags. Devices that do not say how
+// many registers a group shares (DeviceInfo::registersPerGroup 0) get `asked`.
+long long persistentRegisterCap(const DeviceInfo& device, size_t lanes, long long asked);
+
 class PersistentPipeline : public DevicePipeline {
   public:
     explicit PersistentPipeline(ClContext& cl) : DevicePipeline(cl) {}

@@ -248,11 +248,42 @@ TEST(Persistent, RefusesMoreLanesThanTheDeviceRuns) {
             persist.render(scene, o);
             EXPECT_TRUE(fits) << "no error for 1024 lanes, regroup " << regroup;
         } catch (const Error& e) {
-            EXPECT_FALSE(fits) << e.what();
+            const std::string what = e.what();
+            // Within the device's limits the kernel as built may still take fewer lanes.
+            EXPECT_TRUE(!fits || what.find(" as built for ") != std::string::npos) << what;
             EXPECT_EQ(e.kind(), FailureKind::InvalidOption);
-            EXPECT_EQ(std::string(e.what()).rfind("--persistent-lanes 1024: ", 0), 0u) << e.what();
+            EXPECT_EQ(what.rfind("--persistent-lanes 1024: ", 0), 0u) << what;
         }
     }
+}
+
+// A work-group's lanes share the registers of one multiprocessor: 65,536 on NVIDIA's recent
+// GPUs, given to a warp in units of 8 a lane, at most 255 a lane.
+TEST(Persistent, CapsRegistersSoThatAGroupFits) {
+    DeviceInfo gpu;
+    gpu.name = "a GPU";
+    gpu.registersPerGroup = 65536;
+    EXPECT_EQ(persistentRegisterCap(gpu, 128, 0), 0);  // 512 a lane: any build fits
+    EXPECT_EQ(persistentRegisterCap(gpu, 256, 0), 0);
+    EXPECT_EQ(persistentRegisterCap(gpu, 512, 0), 128);
+    EXPECT_EQ(persistentRegisterCap(gpu, 1024, 0), 64);
+    EXPECT_EQ(persistentRegisterCap(gpu, 384, 0), 168);  // 170 a lane, in units of 8
+    EXPECT_EQ(persistentRegisterCap(gpu, 500, 0), 128);  // a group's last warp is whole
+    EXPECT_EQ(persistentRegisterCap(gpu, 512, 96), 96);  // an asked cap that fits is kept
+    EXPECT_EQ(persistentRegisterCap(gpu, 1024, 64), 64);
+    try {
+        persistentRegisterCap(gpu, 1024, 80);
+        FAIL() << "80 registers for 1024 lanes were accepted";
+    } catch (const Error& e) {
+        EXPECT_EQ(e.kind(), FailureKind::InvalidOption);
+        EXPECT_EQ(std::string(e.what()),
+                  "--persistent-max-registers 80: 1024 work-items a work-group "
+                  "(--persistent-lanes) share a GPU's 65536 registers, at most 64 each; lower "
+                  "either flag");
+    }
+    DeviceInfo silent;  // says nothing of its registers: the asked cap, or none
+    EXPECT_EQ(persistentRegisterCap(silent, 1024, 0), 0);
+    EXPECT_EQ(persistentRegisterCap(silent, 1024, 80), 80);
 }
 
 TEST(Persistent, CountsTheRaysTheMegakernelCounts) {

@@ -160,7 +160,7 @@ class QueueFrame {
         auto it = kernels_.find(name);
         if (it != kernels_.end()) return it->second;
         Kernel k(program_, name);
-        size_t most = k.get().getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(cl_.device().device);
+        size_t most = k.maxGroup(cl_.device().device);
         size_t local = size_t(group_);
         // Their local arrays need the full group.
         bool scan = name.rfind("Queue_Scan", 0) == 0 || name == "Queue_SortBuckets";
