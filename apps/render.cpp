@@ -125,6 +125,10 @@ int runDevices() {
                     d.version.c_str(), d.openclC.c_str(), d.driver.c_str());
         std::printf("      %u compute units, %s global memory, %s max allocation\n", d.computeUnits,
                     mib(double(d.globalMem)).c_str(), mib(double(d.maxAlloc)).c_str());
+        std::printf("      at most %zu work-items a work-group, %llu KiB local memory",
+                    d.maxWorkGroup, static_cast<unsigned long long>(d.localMem / 1024));
+        if (d.registersPerGroup != 0) std::printf(", %u registers", d.registersPerGroup);
+        std::printf("\n");
     }
     std::printf("(* = default; choose with --device INDEX|NAME or RTLAB_DEVICE)\n");
     return 0;

@@ -443,6 +443,11 @@ TEST(Cli, DevicesListsEveryDevice) {
     for (const rt::DeviceInfo& d : rt::listDevices())
         EXPECT_NE(r.out.find(d.name), std::string::npos) << d.name << " missing from\n" << r.out;
     EXPECT_NE(r.out.find("max allocation"), std::string::npos) << r.out;
+    for (const rt::DeviceInfo& d : rt::listDevices())
+        EXPECT_NE(
+            r.out.find("at most " + std::to_string(d.maxWorkGroup) + " work-items a work-group"),
+            std::string::npos)
+            << r.out;
 }
 
 TEST(Cli, HelpExplainsEveryRenderFlag) {
