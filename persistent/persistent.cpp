@@ -263,14 +263,14 @@ long long persistentRegisterCap(const DeviceInfo& dev, size_t lanes, long long a
     constexpr long long kMost = 255, kUnit = 8;
     const auto warpLanes = static_cast<long long>((lanes + 31) / 32 * 32);
     const long long fits = std::min(kMost, dev.registersPerGroup / warpLanes / kUnit * kUnit);
-    if (asked > fits)
-        throw Error("--persistent-max-registers " + std::to_string(asked) + ": " +
-                        std::to_string(lanes) +
-                        " work-items a work-group (--persistent-lanes) "
-                        "share " +
-                        dev.name + "'s " + std::to_string(dev.registersPerGroup) +
-                        " registers, at most " + std::to_string(fits) + " each; lower either flag",
+    if (asked > fits) {
+        const std::string group = std::to_string(lanes) + " work-items a work-group";
+        throw Error("--persistent-max-registers " + std::to_string(asked) + ": " + group +
+                        " (--persistent-lanes) share " + dev.name + "'s " +
+                        std::to_string(dev.registersPerGroup) + " registers, at most " +
+                        std::to_string(fits) + " each; lower either flag",
                     FailureKind::InvalidOption);
+    }
     return asked != 0 || fits == kMost ? asked : fits;
 }
 
