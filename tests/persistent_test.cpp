@@ -154,7 +154,8 @@ TEST(Persistent, RegroupedKeepsTheBitsAndTheRays) {
 // compacted in global memory, so a lane traces other pixels' rays and a pixel's terms are summed
 // after its whole tree is traced. The divergence scene branches at glass and mirrors on most
 // pixels; batches of 16 leave most lanes of 32 without a camera ray, batches of 100 take four
-// passes of 32 lanes, the last one cut, and B = 8 at AA 2 widens the lists to 256 rays a pixel.
+// passes of 32 lanes (three of 48), the last one cut, and B = 8 at AA 2 widens the lists to 256
+// rays a pixel.
 // Sorted by pattern or material, each bounce's hits are shaded in key order, not the trace's;
 // with a shadow pass, their shadow rays are cast by other lanes than the ones that traced them.
 TEST(Persistent, BounceLoopKeepsTheBitsAndTheRays) {
@@ -190,13 +191,14 @@ TEST(Persistent, BounceLoopKeepsTheBitsAndTheRays) {
                     EXPECT_EQ(persist.stats().rays, mega.stats().rays)
                         << name << " B=" << b << ", sorted by " << key << ", shadows " << shadows;
                 }
-            setOption(r, "persistent-lanes", 32ll);
-            for (long long batch : {16ll, 100ll}) {
+            // Groups of one warp, and of a warp and a half (groups need not be a power of two).
+            for (auto [lanes, batch] : {std::pair{32ll, 16ll}, {32ll, 100ll}, {48ll, 100ll}}) {
+                setOption(r, "persistent-lanes", lanes);
                 setOption(r, "persistent-batch", batch);
                 EXPECT_TRUE(sameBits(m, persist.render(scene, r)))
-                    << name << " B=" << b << ", batches of " << batch;
+                    << name << " B=" << b << ", " << lanes << " lanes, batches of " << batch;
                 EXPECT_EQ(persist.stats().rays, mega.stats().rays)
-                    << name << " B=" << b << ", batches of " << batch;
+                    << name << " B=" << b << ", " << lanes << " lanes, batches of " << batch;
             }
         }
     }
