@@ -91,9 +91,10 @@ const PipelineOption& batchOption() {
         .name = "persistent-batch",
         .type = PipelineOption::Type::Integer,
         .help =
-            "Persistent megakernel, --persistent-loop bounce: pixels a work-group takes together "
-            "and traces bounce by bounce, 16..65536; more keeps its later bounces' lanes busier "
-            "and needs more scratch memory [1024]",
+            "Persistent megakernel, --persistent-loop bounce (or --persistent-schedule auto, "
+            "where it tries the bounce loop): pixels a work-group takes together and traces "
+            "bounce by bounce, 16..65536; more keeps its later bounces' lanes busier and needs "
+            "more scratch memory [1024]",
         .defaultValue = 1024ll,
         .min = 16,
         .max = 65536,
@@ -113,7 +114,8 @@ const PipelineOption& shadowsOption() {
         .name = "persistent-shadows",
         .type = PipelineOption::Type::Choice,
         .help =
-            "Persistent megakernel, --persistent-loop bounce: inline (a lane casts its hit's "
+            "Persistent megakernel, --persistent-loop bounce (or --persistent-schedule auto, "
+            "where it tries the bounce loop): inline (a lane casts its hit's "
             "shadow rays right after tracing it) or pass (each bounce's closest hits first, then "
             "the shadow rays of the hits in a pass of their own, as the queue's shadow kernel "
             "casts them); same image [inline]",
@@ -206,8 +208,10 @@ const PipelineOption& scheduleOption() {
                        "set) or auto (warps traced on the CPU, as `rtlab predict` does, choose: " +
                        std::string(rule) +
                        ", two work-groups of 256 lanes a compute unit at most 128 registers, "
-                       "regrouped by pattern; otherwise the nested loop, in 4x16 or 16x8 "
-                       "strips, whichever two trial frames each find faster) [flags]";
+                       "regrouped by pattern, or the bounce loop at its defaults (with "
+                       "--persistent-batch and --persistent-shadows where given); otherwise the "
+                       "nested loop, in 4x16 or 16x8 strips; where there are two, whichever two "
+                       "trial frames each find faster) [flags]";
             }(),
         .defaultValue = "flags",
         .choices = {"flags", "auto"},
@@ -314,7 +318,11 @@ RenderOptions PersistentPipeline::chooseSchedule(const Scene& scene, const Rende
                         FailureKind::InvalidOption);
     const LaneEstimate& estimate = estimates_.get(scene, o);
     const PersistSchedule schedule = choosePersistentSchedule(estimate);
+    // --persistent-batch and --persistent-shadows are the bounce loop's (chooseLoop's other
+    // candidate): the regrouped and nested loops run without them.
     RenderOptions out = o;
+    for (const PipelineOption* option : {&batchOption(), &shadowsOption()})
+        out.pipelineOptions.reset(option->name);
     if (schedule.regroup) {
         regroupOption().set(out.pipelineOptions, std::string("pattern"));
         laneOption().set(out.pipelineOptions, regroupLanes(cl_.device()));
@@ -331,36 +339,68 @@ RenderOptions PersistentPipeline::chooseSchedule(const Scene& scene, const Rende
     return out;
 }
 
+bool PersistentPipeline::decide(TrialChoice& choice, const Scene& scene, const RenderOptions& base,
+                                const std::vector<TrialCandidate>& candidates) {
+    const FrameKey key(scene, base);
+    if (choice.key && *choice.key == key) return false;
+    const FrameStats frame = stats_;  // the schedule's extras and note, kept
+    double best = std::numeric_limits<double>::infinity();
+    std::optional<Error> refused;
+    choice.chosen.clear();
+    choice.trialsMs = nlohmann::json::object();
+    for (const TrialCandidate& candidate : candidates) {
+        double ms = std::numeric_limits<double>::infinity();
+        try {
+            for (int i = 0; i < 2; ++i) {  // the first may pay for building the program
+                stats_ = {};
+                renderScheduled(scene, candidate.options);
+                ms = std::min(ms, stats_.deviceMs);
+            }
+            choice.trialsMs[candidate.name] = ms;
+        } catch (const Error& e) {
+            choice.trialsMs[candidate.name] = nullptr;
+            refused = e;
+            continue;
+        }
+        if (ms < best) best = ms, choice.chosen = candidate.name;
+    }
+    stats_ = frame;
+    if (choice.chosen.empty()) throw *refused;
+    choice.key = key;
+    return true;
+}
+
 void PersistentPipeline::chooseOrder(const Scene& scene, RenderOptions& nested) {
     // Which order keeps a work-group's patch in cache depends on the scene's layout on screen,
     // which the traced warps do not see: on the H200, 16x8 strips (the megakernel's own
     // work-groups) ran spheres 4-7% faster than 4x16, and cornell, mesh and envmap 4-8% slower.
-    const FrameKey key(scene, nested);
-    const bool decide = !orderKey_ || !(*orderKey_ == key);
-    if (decide) {
-        const FrameStats schedule = stats_;  // the schedule's extras and note, kept
-        double best = std::numeric_limits<double>::infinity();
-        orderTrials_ = nlohmann::json::object();
-        for (const char* order : {"4x16", "16x8"}) {
-            RenderOptions trial = nested;
-            tileOption().set(trial.pipelineOptions, std::string(order));
-            double ms = std::numeric_limits<double>::infinity();
-            for (int i = 0; i < 2; ++i) {  // the first may pay for building the program
-                stats_ = {};
-                renderScheduled(scene, trial);
-                ms = std::min(ms, stats_.deviceMs);
-            }
-            orderTrials_[order] = ms;
-            if (ms < best) best = ms, order_ = order;
-        }
-        orderKey_ = key;
-        stats_ = schedule;
+    std::vector<TrialCandidate> orders;
+    for (const char* order : {"4x16", "16x8"}) {
+        orders.push_back({order, nested});
+        tileOption().set(orders.back().options.pipelineOptions, std::string(order));
     }
-    tileOption().set(nested.pipelineOptions, order_);
-    stats_.extras["persist_tile"] = order_;
-    stats_.extras["persist_tile_trials_ms"] = orderTrials_;
-    stats_.extras["persist_tile_decided"] = decide;  // this frame timed the orders
-    stats_.note += "; " + order_ + " strips, the faster of two trial frames each";
+    const bool decided = decide(order_, scene, nested, orders);
+    tileOption().set(nested.pipelineOptions, order_.chosen);
+    stats_.extras["persist_tile"] = order_.chosen;
+    stats_.extras["persist_tile_trials_ms"] = order_.trialsMs;
+    stats_.extras["persist_tile_decided"] = decided;  // this frame timed the orders
+    stats_.note += "; " + order_.chosen + " strips, the faster of two trial frames each";
+}
+
+void PersistentPipeline::chooseLoop(const Scene& scene, const RenderOptions& o,
+                                    RenderOptions& regrouped) {
+    // Both keep a warp's lanes busy where trees disagree; which costs less a step depends on the
+    // shading: on the H200 the bounce loop was 2-5% faster than the regrouped loop on four walls
+    // of six and 4-7% slower on the two whose noise patterns the regrouped loop sorts.
+    RenderOptions bounce = o;
+    loopOption().set(bounce.pipelineOptions, std::string("bounce"));
+    const bool decided =
+        decide(loop_, scene, regrouped, {{"regrouped", regrouped}, {"bounce", bounce}});
+    if (loop_.chosen == "bounce") regrouped = bounce;
+    stats_.extras["persist_loop"] = loop_.chosen;
+    stats_.extras["persist_loop_trials_ms"] = loop_.trialsMs;
+    stats_.extras["persist_loop_decided"] = decided;  // this frame timed the loops
+    stats_.note += "; the " + loop_.chosen + " loop, the faster of two trial frames each";
 }
 
 Image PersistentPipeline::renderFrame(const Scene& scene, const RenderOptions& o) {
@@ -369,6 +409,8 @@ Image PersistentPipeline::renderFrame(const Scene& scene, const RenderOptions& o
     RenderOptions chosen = chooseSchedule(scene, o);
     if (PersistLoop(loopOption().index(chosen.pipelineOptions)) == PersistLoop::Nested)
         chooseOrder(scene, chosen);
+    else
+        chooseLoop(scene, o, chosen);
     return renderScheduled(scene, chosen);
 }
 

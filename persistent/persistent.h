@@ -65,9 +65,29 @@ class PersistentPipeline : public DevicePipeline {
     Image renderScheduled(const Scene& scene, const RenderOptions& options);
     // The options with --persistent-schedule auto's choice set.
     RenderOptions chooseSchedule(const Scene& scene, const RenderOptions& options);
-    // The nested loop's strip order under --persistent-schedule auto: the faster of two trial
-    // frames each in 4x16 and 16x8 strips, timed once per scene and settings.
+    // A choice the traced warps cannot make, made by trial frames once per scene and settings:
+    // the candidate chosen, each one's best time (null where the device refused it), and the
+    // scene and settings it was made for.
+    struct TrialChoice {
+        std::optional<FrameKey> key;
+        std::string chosen;
+        nlohmann::json trialsMs;
+    };
+    struct TrialCandidate {
+        std::string name;
+        RenderOptions options;
+    };
+    // Renders two frames of each candidate (the first may pay for building its program) and
+    // keeps the fastest in `choice`, unless `choice` was made for `base`'s scene and settings
+    // already; returns whether it timed them. A candidate the device refuses (an rt::Error) is
+    // left out; where all are, the last refusal is thrown.
+    bool decide(TrialChoice& choice, const Scene& scene, const RenderOptions& base,
+                const std::vector<TrialCandidate>& candidates);
+    // Under --persistent-schedule auto, what the traced warps do not tell: the nested loop's
+    // strip order (4x16 or 16x8), and, where the warps disagree, the regrouped flat loop or the
+    // bounce loop at its defaults; each the faster of two trial frames.
     void chooseOrder(const Scene& scene, RenderOptions& nested);
+    void chooseLoop(const Scene& scene, const RenderOptions& options, RenderOptions& regrouped);
 
     // --persistent-loop bounce: sizes its scratch for `groups` work-groups, `staged` with the
     // hits it keeps between passes when it sorts them or casts their shadow rays in a pass of
@@ -79,10 +99,7 @@ class PersistentPipeline : public DevicePipeline {
     DeviceBuffer image_, next_, bounceRays_, bounceTerms_, bounceHits_, bounceOrder_;
     LaunchPlanner planner_;
     LaneEstimateCache estimates_;  // --persistent-schedule auto's, one trace per scene
-    // The strip order chooseOrder found, for the scene and settings of orderKey_.
-    std::optional<FrameKey> orderKey_;
-    std::string order_;
-    nlohmann::json orderTrials_;
+    TrialChoice order_, loop_;     // chooseOrder's and chooseLoop's
 };
 
 }  // namespace rt

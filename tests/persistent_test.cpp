@@ -399,6 +399,48 @@ TEST(Persistent, AutoScheduleTimesTheNestedLoopsStripOrders) {
     EXPECT_TRUE(persist.stats().extras.value("persist_tile_decided", false));
 }
 
+// Where the warps disagree, auto times the regrouped flat loop against the bounce loop once per
+// scene and settings and keeps the faster; the frame is the weighted megakernel's either way. A
+// bounce loop the device cannot hold (batches of 65536 pixels at B = 14: 103 GB of ray lists a
+// work-group) is left out, and the regrouped loop renders.
+TEST(Persistent, AutoScheduleTimesTheRegroupedAndBounceLoops) {
+    Scene scene = load("spheres");
+    MegakernelPipeline mega(test::device());
+    PersistentPipeline persist(test::device());
+    RenderOptions o = weighted(scene, 4, 1);
+    o.width = 40;
+    o.height = 30;
+    setPersistentScheduleAuto(o);
+    const Image first = persist.render(scene, o);
+    const nlohmann::json x = persist.stats().extras;
+    ASSERT_EQ(x.value("persist_schedule", ""), "regrouped");
+    const nlohmann::json trials = x.at("persist_loop_trials_ms");
+    ASSERT_EQ(trials.size(), 2u) << trials.dump();
+    const std::string loop = x.value("persist_loop", "");
+    ASSERT_TRUE(loop == "regrouped" || loop == "bounce") << x.dump();
+    for (const auto& [name, ms] : trials.items())
+        EXPECT_LE(trials.at(loop).get<double>(), ms.get<double>()) << name;
+    EXPECT_NE(persist.stats().note.find("the " + loop + " loop"), std::string::npos)
+        << persist.stats().note;
+    EXPECT_TRUE(x.value("persist_loop_decided", false));
+    EXPECT_TRUE(sameBits(mega.render(scene, o), first));
+    // The next frame keeps the loop without timing again.
+    persist.render(scene, o);
+    EXPECT_FALSE(persist.stats().extras.value("persist_loop_decided", true));
+    EXPECT_EQ(persist.stats().extras.value("persist_loop", ""), loop);
+
+    o.bounces = 14;
+    setOption(o, "persistent-batch", 65536ll);
+    const double rayBytes = 2.0 * 65536 * 16384 * sizeof(dev::BounceRay);  // one work-group's
+    if (rayBytes <= double(test::device().device().maxAlloc))
+        GTEST_SKIP() << "a buffer of " << rayBytes << " bytes fits this device";
+    const Image refused = persist.render(scene, o);
+    const nlohmann::json y = persist.stats().extras;
+    EXPECT_EQ(y.value("persist_loop", ""), "regrouped") << y.dump();
+    EXPECT_TRUE(y.at("persist_loop_trials_ms").at("bounce").is_null()) << y.dump();
+    EXPECT_TRUE(sameBits(mega.render(scene, o), refused));
+}
+
 TEST(Persistent, AutoScheduleRefusesTheFlagsItSets) {
     Scene scene = load("spheres");
     PersistentPipeline persist(test::device());
