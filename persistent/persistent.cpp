@@ -396,7 +396,11 @@ void PersistentPipeline::chooseLoop(const Scene& scene, const RenderOptions& o,
     loopOption().set(bounce.pipelineOptions, std::string("bounce"));
     const bool decided =
         decide(loop_, scene, regrouped, {{"regrouped", regrouped}, {"bounce", bounce}});
-    if (loop_.chosen == "bounce") regrouped = bounce;
+    if (loop_.chosen == "bounce")
+        regrouped = bounce;
+    else  // the trial's scratch, which can be gigabytes at high bounce limits, is not kept
+        for (DeviceBuffer* scratch : {&bounceRays_, &bounceTerms_, &bounceHits_, &bounceOrder_})
+            scratch->reset();
     stats_.extras["persist_loop"] = loop_.chosen;
     stats_.extras["persist_loop_trials_ms"] = loop_.trialsMs;
     stats_.extras["persist_loop_decided"] = decided;  // this frame timed the loops
