@@ -27,7 +27,7 @@ struct PredictArgs {
     std::optional<int> bounces, aa;
     int warps = 2048;
     double threshold = kQueueBelowLanes;
-    bool json = false;
+    bool json = false, shading = false;
 } args;
 
 }  // namespace
@@ -55,6 +55,12 @@ void addPredict(CLI::App& app) {
         ->check(CLI::Range(0.0, 32.0))
         ->capture_default_str();
     predictCmd->add_flag("--json", a.json, "One JSON object a scene on stdout instead of a table");
+    predictCmd->add_flag(
+        "--shading", a.shading,
+        "Also count the shading keys (a procedural pattern, or plain, mirror, glass, a miss) the\n"
+        "lanes of a warp step meet, in three orders of the same rays: the megakernel's (each lane\n"
+        "its own tree), the bounce loop's lists (32 consecutive rays of one bounce), and those\n"
+        "lists sorted by key (--persistent-regroup with the bounce loop); 1 is one key's code");
 }
 
 bool predictParsed() { return predictCmd && predictCmd->parsed(); }
@@ -75,6 +81,8 @@ int runPredict() {
         // What --pipeline persist --persistent-schedule auto would render with (its own rule).
         const PersistSchedule persist = choosePersistentSchedule(e);
         const char* schedule = persist.name();
+        const std::optional<ShadingEstimate> shading =
+            a.shading ? std::optional(estimateShadingKeys(scene, o, a.warps)) : std::nullopt;
         if (a.json) {
             nlohmann::json j = {
                 {"scene", file},
@@ -96,6 +104,11 @@ int runPredict() {
                 {"persist_schedule", schedule},
                 {"persist_reason", persist.reason},
                 {"commit", RTLAB_COMMIT}};
+            if (shading)
+                j["shading_keys"] = {{"megakernel", shading->megakernel},
+                                     {"bounce", shading->bounce},
+                                     {"bounce_sorted", shading->sorted},
+                                     {"batches", shading->batches}};
             std::printf("%s\n", j.dump().c_str());
         } else {
             if (std::exchange(header, false))  // after the first scene loads, not before an error
@@ -105,6 +118,11 @@ int runPredict() {
                         (std::to_string(o.width) + "x" + std::to_string(o.height)).c_str(),
                         e.busyLanes, e.raysPerPixel, e.largestTree, e.objectsPerWarp, schedule,
                         p.reason.c_str());
+            if (shading)
+                std::printf(
+                    "%-40s shading keys a warp step: megakernel %.2f, bounce loop %.2f, "
+                    "sorted %.2f\n",
+                    "", shading->megakernel, shading->bounce, shading->sorted);
         }
         std::fflush(stdout);
     }

@@ -12,6 +12,59 @@
 
 namespace rt {
 
+namespace {
+
+// Distinct values among `keys`.
+int distinct(std::vector<int> keys) {
+    std::sort(keys.begin(), keys.end());
+    return int(std::unique(keys.begin(), keys.end()) - keys.begin());
+}
+
+// `count` distinct values of [0, n) at random with a fixed seed; all of them when n <= count.
+std::vector<long long> pick(long long n, int count, std::uint64_t seed) {
+    std::vector<long long> picked;
+    if (n <= count) {
+        picked.resize(std::size_t(n));
+        std::iota(picked.begin(), picked.end(), 0LL);
+        return picked;
+    }
+    std::mt19937_64 rng(seed);
+    std::vector<char> taken(std::size_t(n), 0);
+    while (picked.size() < std::size_t(count)) {
+        const long long t = (long long)(rng() % std::uint64_t(n));
+        if (!taken[std::size_t(t)]) taken[std::size_t(t)] = 1, picked.push_back(t);
+    }
+    return picked;
+}
+
+// The pixels of the warps `tiles` (16x2 tiles, row by row) into `pixels`, and for each of their
+// lanes its index there, or -1 for a lane past the frame's edge: a work-item without a pixel.
+void warpPixels(const std::vector<long long>& tiles, WarpShape shape, const RenderOptions& options,
+                std::vector<glm::ivec2>& pixels, std::vector<int>& lane) {
+    const int across = (options.width + shape.width - 1) / shape.width;
+    for (long long t : tiles) {
+        const int x0 = int(t % across) * shape.width, y0 = int(t / across) * shape.height;
+        for (int dy = 0; dy < shape.height; ++dy)
+            for (int dx = 0; dx < shape.width; ++dx) {
+                const int x = x0 + dx, y = y0 + dy;
+                const bool inside = x < options.width && y < options.height;
+                lane.push_back(inside ? int(pixels.size()) : -1);
+                if (inside) pixels.push_back({x, y});
+            }
+    }
+}
+
+}  // namespace
+
+glm::ivec2 stripPixel(long long k, int width, int height, int tw, int th) {
+    const long long band = k / ((long long)width * th);
+    const int bandRows = std::min(th, height - int(band) * th);
+    const long long i = k - band * width * th;
+    const int strip = int(i / (tw * bandRows)), j = int(i - (long long)strip * tw * bandRows);
+    const int stripWidth = std::min(tw, width - strip * tw);
+    return {strip * tw + j % stripWidth, int(band) * th + j / stripWidth};
+}
+
 double busyLanes(const std::vector<int>& sizes, int lanes) {
     long long rays = 0, steps = 0;
     for (std::size_t w = 0; w < sizes.size(); w += std::size_t(lanes)) {
@@ -28,36 +81,11 @@ LaneEstimate estimateBusyLanes(const Scene& scene, const RenderOptions& options,
     if (warps < 1) throw Error("the warp estimate needs at least one warp");
     const int across = (options.width + shape.width - 1) / shape.width;
     const int down = (options.height + shape.height - 1) / shape.height;
-    const long long tiles = (long long)across * down;
     // Distinct warps at random; every warp of a small frame.
-    std::vector<long long> picked;
-    if (tiles <= warps) {
-        picked.resize(std::size_t(tiles));
-        std::iota(picked.begin(), picked.end(), 0LL);
-    } else {
-        std::mt19937_64 rng(seed);
-        std::vector<char> taken(std::size_t(tiles), 0);
-        while (picked.size() < std::size_t(warps)) {
-            const long long t = (long long)(rng() % std::uint64_t(tiles));
-            if (!taken[std::size_t(t)]) taken[std::size_t(t)] = 1, picked.push_back(t);
-        }
-    }
-    // Lanes past the frame's edge are work-items without a pixel: no tree.
+    const std::vector<long long> picked = pick((long long)across * down, warps, seed);
     std::vector<glm::ivec2> pixels;
     std::vector<int> lane;  // index into pixels, or -1
-    for (long long t : picked) {
-        const int x0 = int(t % across) * shape.width, y0 = int(t / across) * shape.height;
-        for (int dy = 0; dy < shape.height; ++dy)
-            for (int dx = 0; dx < shape.width; ++dx) {
-                const int x = x0 + dx, y = y0 + dy;
-                if (x < options.width && y < options.height) {
-                    lane.push_back(int(pixels.size()));
-                    pixels.push_back({x, y});
-                } else {
-                    lane.push_back(-1);
-                }
-            }
-    }
+    warpPixels(picked, shape, options, pixels, lane);
     const std::vector<RayTreeSize> trees = referenceRayTrees(scene, options, pixels, threads);
     std::vector<int> sizes(lane.size()), traced;
     for (std::size_t i = 0; i < lane.size(); ++i)
@@ -80,6 +108,82 @@ LaneEstimate estimateBusyLanes(const Scene& scene, const RenderOptions& options,
     e.raysPerPixel = traced.empty() ? 0.0 : double(rays) / double(traced.size());
     e.largestTree = traced.empty() ? 0 : *std::max_element(traced.begin(), traced.end());
     e.objectsPerWarp = e.warps ? double(objects) / e.warps : 0.0;
+    return e;
+}
+
+int shadingKey(const Scene& scene, int material) {
+    if (material < 0) return kShadeMiss;
+    const dev::Material& m = scene.materials[std::size_t(material)];
+    if (m.pattern != RT_PATTERN_NONE) return m.pattern;
+    if (m.opacity < 1.0f) return kShadeGlass;
+    return m.reflectance > 0.0f ? kShadeMirror : kShadePlain;
+}
+
+ShadingEstimate estimateShadingKeys(const Scene& scene, const RenderOptions& options, int warps,
+                                    int batches, int batch, std::uint64_t seed, int threads) {
+    if (warps < 1 || batches < 1 || batch < 1)
+        throw Error("the shading estimate needs at least one warp and one batch");
+    ShadingEstimate e;
+    const WarpShape shape;
+    // The megakernel: step k of a warp runs the k-th ray of each lane's tree that has one.
+    const int across = (options.width + shape.width - 1) / shape.width;
+    const int down = (options.height + shape.height - 1) / shape.height;
+    std::vector<glm::ivec2> pixels;
+    std::vector<int> lane;
+    warpPixels(pick((long long)across * down, warps, seed), shape, options, pixels, lane);
+    auto trees = referenceRayTreeNodes(scene, options, pixels, threads);
+    const std::vector<RayTreeNode> none;
+    auto treeOf = [&](std::size_t i) -> const std::vector<RayTreeNode>& {
+        return lane[i] < 0 ? none : trees[std::size_t(lane[i])];
+    };
+    long long keys = 0, steps = 0;
+    for (std::size_t w = 0; w < lane.size(); w += std::size_t(shape.lanes())) {
+        std::size_t longest = 0;
+        for (std::size_t i = w; i < w + std::size_t(shape.lanes()); ++i)
+            longest = std::max(longest, treeOf(i).size());
+        for (std::size_t k = 0; k < longest; ++k, ++steps) {
+            std::vector<int> step;
+            for (std::size_t i = w; i < w + std::size_t(shape.lanes()); ++i)
+                if (k < treeOf(i).size()) step.push_back(shadingKey(scene, treeOf(i)[k].material));
+            keys += distinct(step);
+        }
+        ++e.warps;
+    }
+    e.megakernel = steps ? double(keys) / double(steps) : 0.0;
+
+    // The bounce loop: batches of consecutive pixels in strip order, traced bounce by bounce.
+    const long long frame = (long long)options.width * options.height;
+    const long long starts = (frame + batch - 1) / batch;
+    long long traceKeys = 0, sortedKeys = 0, warpSteps = 0;
+    for (long long b : pick(starts, batches, seed + 1)) {
+        pixels.clear();
+        for (long long k = b * batch; k < std::min(frame, (b + 1) * batch); ++k)
+            pixels.push_back(stripPixel(k, options.width, options.height));
+        trees = referenceRayTreeNodes(scene, options, pixels, threads);
+        std::vector<std::pair<int, int>> list;  // (pixel, node) of one bounce, in list order
+        for (int p = 0; p < int(pixels.size()); ++p) list.push_back({p, 0});
+        while (!list.empty()) {
+            std::vector<int> order;
+            std::vector<std::pair<int, int>> next;
+            for (const auto& [p, n] : list) {
+                const RayTreeNode& node = trees[std::size_t(p)][std::size_t(n)];
+                order.push_back(shadingKey(scene, node.material));
+                if (node.reflected >= 0) next.push_back({p, node.reflected});
+                if (node.refracted >= 0) next.push_back({p, node.refracted});
+            }
+            std::vector<int> sorted = order;
+            std::stable_sort(sorted.begin(), sorted.end());
+            for (std::size_t w = 0; w < order.size(); w += 32, ++warpSteps) {
+                const auto end = std::ptrdiff_t(std::min(order.size(), w + 32));
+                traceKeys += distinct({order.begin() + std::ptrdiff_t(w), order.begin() + end});
+                sortedKeys += distinct({sorted.begin() + std::ptrdiff_t(w), sorted.begin() + end});
+            }
+            list = std::move(next);
+        }
+        ++e.batches;
+    }
+    e.bounce = warpSteps ? double(traceKeys) / double(warpSteps) : 0.0;
+    e.sorted = warpSteps ? double(sortedKeys) / double(warpSteps) : 0.0;
     return e;
 }
 

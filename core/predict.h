@@ -11,6 +11,7 @@
 #pragma once
 
 #include <cstdint>
+#include <glm/glm.hpp>
 #include <string>
 #include <vector>
 
@@ -44,6 +45,31 @@ struct LaneEstimate {
 // scene and settings give the same estimate) and counts their busy lanes.
 LaneEstimate estimateBusyLanes(const Scene& scene, const RenderOptions& options, int warps = 2048,
                                WarpShape shape = {}, std::uint64_t seed = 1, int threads = 0);
+
+// The code a lane runs to shade a hit: its procedural pattern (RT_PATTERN_CHECKER..BUMP), or for a
+// material without one plain, mirror or glass, or a miss. The keys the persistent megakernel's
+// regrouping sorts hits by, keyed by material class (persistent.cl, Regroup_KeyOf).
+enum ShadingKey : int { kShadePlain = 0, kShadeMirror = 6, kShadeGlass = 7, kShadeMiss = 8 };
+int shadingKey(const Scene& scene, int material);
+
+// Pixel k of a whole frame in the order the persistent megakernel hands pixels out
+// (persistent.cl, Persistent_PixelOf): bands of th rows, strips of tw columns in a band (the last
+// band and strip cut to fit), row by row inside a strip.
+glm::ivec2 stripPixel(long long k, int width, int height, int tw = 4, int th = 16);
+
+// How many shading keys the lanes of one warp step meet, the mean over steps, in three orders
+// of the same rays: the megakernel's (a warp of 16x2 pixels, each lane tracing its own tree depth
+// first), the bounce loop's (32 consecutive rays of one bounce's list, a batch of pixels in 4x16
+// strips, each ray's children appended after its list's earlier rays' children), and those lists
+// sorted by key before shading (--persistent-regroup with the bounce loop). 1 when a warp's lanes
+// run one key's code; more when it runs several in turn.
+struct ShadingEstimate {
+    double megakernel = 0, bounce = 0, sorted = 0;
+    int warps = 0, batches = 0;  // traced
+};
+ShadingEstimate estimateShadingKeys(const Scene& scene, const RenderOptions& options,
+                                    int warps = 2048, int batches = 32, int batch = 1024,
+                                    std::uint64_t seed = 1, int threads = 0);
 
 // The estimate of the last scene and settings asked for, traced again only when what it depends
 // on changes (the scene object, the frame's size, bounces, anti-aliasing and the intersection

@@ -510,6 +510,10 @@ class Tracer {
         return treeSize(Ray{toD(scene_.camera.position), primaryDir(x + ox, y + oy)}, 0, hit);
     }
 
+    void treeNodes(int x, int y, double ox, double oy, std::vector<RayTreeNode>& out) const {
+        treeNodes(Ray{toD(scene_.camera.position), primaryDir(x + ox, y + oy)}, 0, out);
+    }
+
   private:
     int treeSize(const Ray& ray, int depth, long long* primary = nullptr) const {
         const Hit hit = closestHit(ray);
@@ -520,6 +524,26 @@ class Tracer {
         const Children c = children(s, scene_.materials[s.material], ray.dir, depth);
         return 1 + (c.reflected ? treeSize(*c.reflected, depth + 1) : 0) +
                (c.refracted ? treeSize(*c.refracted, depth + 1) : 0);
+    }
+
+    // Appends the tree of `ray` to `out` depth first, reflection first; returns its root's index.
+    int treeNodes(const Ray& ray, int depth, std::vector<RayTreeNode>& out) const {
+        const int at = int(out.size());
+        out.push_back({depth, -1, -1, -1});
+        const Hit hit = closestHit(ray);
+        if (hit.kind == RT_KIND_MISS) return at;
+        const Surface s = surface(ray, hit);
+        out[std::size_t(at)].material = s.material;
+        const Children c = children(s, scene_.materials[s.material], ray.dir, depth);
+        if (c.reflected) {
+            const int child = treeNodes(*c.reflected, depth + 1, out);
+            out[std::size_t(at)].reflected = child;
+        }
+        if (c.refracted) {
+            const int child = treeNodes(*c.refracted, depth + 1, out);
+            out[std::size_t(at)].refracted = child;
+        }
+        return at;
     }
 
     const Scene& scene_;
@@ -628,31 +652,48 @@ Image renderReferenceBruteForce(const Scene& scene, const RenderOptions& options
     return render(scene, options, threads, {}, true);
 }
 
-std::vector<RayTreeSize> referenceRayTrees(const Scene& scene, const RenderOptions& options,
-                                           const std::vector<glm::ivec2>& pixels, int threads) {
+// Runs fn(i) for every i in [0, n), in chunks handed out by an atomic counter to `threads`
+// threads (0: one a core).
+template <class Fn>
+void forEachIndex(std::size_t n, int threads, const Fn& fn) {
     if (threads <= 0) threads = int(std::max(1u, std::thread::hardware_concurrency()));
-    const Tracer tracer(scene, options, false);
-    const int n = std::max(1, options.aa);
-    std::vector<RayTreeSize> trees(pixels.size());
     std::atomic<std::size_t> next{0};
     constexpr std::size_t kChunk = 64;
     auto worker = [&] {
-        for (std::size_t begin = next.fetch_add(kChunk); begin < pixels.size();
-             begin = next.fetch_add(kChunk)) {
-            for (std::size_t i = begin; i < std::min(pixels.size(), begin + kChunk); ++i) {
-                RayTreeSize& t = trees[i];
-                for (int sy = 0; sy < n; ++sy)
-                    for (int sx = 0; sx < n; ++sx)
-                        t.rays +=
-                            tracer.treeSize(pixels[i].x, pixels[i].y, (sx + 0.5) / n,
-                                            (sy + 0.5) / n, sx + sy == 0 ? &t.object : nullptr);
-            }
-        }
+        for (std::size_t begin = next.fetch_add(kChunk); begin < n; begin = next.fetch_add(kChunk))
+            for (std::size_t i = begin; i < std::min(n, begin + kChunk); ++i) fn(i);
     };
     std::vector<std::thread> pool;
     for (int i = 1; i < threads; ++i) pool.emplace_back(worker);
     worker();
     for (std::thread& t : pool) t.join();
+}
+
+std::vector<RayTreeSize> referenceRayTrees(const Scene& scene, const RenderOptions& options,
+                                           const std::vector<glm::ivec2>& pixels, int threads) {
+    const Tracer tracer(scene, options, false);
+    const int n = std::max(1, options.aa);
+    std::vector<RayTreeSize> trees(pixels.size());
+    forEachIndex(pixels.size(), threads, [&](std::size_t i) {
+        RayTreeSize& t = trees[i];
+        for (int sy = 0; sy < n; ++sy)
+            for (int sx = 0; sx < n; ++sx)
+                t.rays += tracer.treeSize(pixels[i].x, pixels[i].y, (sx + 0.5) / n, (sy + 0.5) / n,
+                                          sx + sy == 0 ? &t.object : nullptr);
+    });
+    return trees;
+}
+
+std::vector<std::vector<RayTreeNode>> referenceRayTreeNodes(const Scene& scene,
+                                                            const RenderOptions& options,
+                                                            const std::vector<glm::ivec2>& pixels,
+                                                            int threads) {
+    const Tracer tracer(scene, options, false);
+    const double offset = 0.5 / std::max(1, options.aa);  // the first sample of the AA grid
+    std::vector<std::vector<RayTreeNode>> trees(pixels.size());
+    forEachIndex(pixels.size(), threads, [&](std::size_t i) {
+        tracer.treeNodes(pixels[i].x, pixels[i].y, offset, offset, trees[i]);
+    });
     return trees;
 }
 

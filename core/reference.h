@@ -40,6 +40,20 @@ struct RayTreeSize {
 std::vector<RayTreeSize> referenceRayTrees(const Scene& scene, const RenderOptions& options,
                                            const std::vector<glm::ivec2>& pixels, int threads = 0);
 
+// Each pixel's closest-hit rays (its first AA sample's) as a tree: a ray's depth, the material
+// it hit (-1 on a miss) and the indices of its children in the same vector (-1 where it spawned
+// none), in the order a megakernel's stack traces them: depth first, a ray's reflection and its
+// subtree before its refraction. Without shading, like referenceRayTrees.
+struct RayTreeNode {
+    int depth = 0;
+    int material = -1;
+    int reflected = -1, refracted = -1;
+};
+std::vector<std::vector<RayTreeNode>> referenceRayTreeNodes(const Scene& scene,
+                                                            const RenderOptions& options,
+                                                            const std::vector<glm::ivec2>& pixels,
+                                                            int threads = 0);
+
 // Building blocks, exposed for the unit tests. Directions are unit length.
 namespace ref {
 

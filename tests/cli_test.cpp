@@ -317,6 +317,18 @@ TEST(Cli, PredictSaysADesignPerScene) {
     ASSERT_EQ(lenient.size(), 2u);
     EXPECT_EQ(lenient[1].at("predicted"), "tree-per-work-item");
     EXPECT_EQ(lenient[1].at("busy_lanes"), spheres.at("busy_lanes"));  // a fixed seed
+    EXPECT_FALSE(spheres.contains("shading_keys"));  // asked for with --shading only
+
+    // --shading: where every ray misses, one key a warp step in every order.
+    Result r = run("predict scenes/empty.json --size 64x36 --warps 32 --json --shading");
+    ASSERT_EQ(r.status, 0) << r.err;
+    const nlohmann::json keys = nlohmann::json::parse(r.out).at("shading_keys");
+    for (const char* order : {"megakernel", "bounce", "bounce_sorted"})
+        EXPECT_EQ(keys.at(order).get<double>(), 1.0) << order;
+    r = run("predict scenes/empty.json --size 64x36 --warps 32 --shading");
+    EXPECT_NE(r.out.find("shading keys a warp step: megakernel 1.00, bounce loop 1.00"),
+              std::string::npos)
+        << r.out;
 }
 
 // A bad scene after good ones: the good ones' rows stay on stdout, the error is one line.

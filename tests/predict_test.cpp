@@ -4,7 +4,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <numeric>
+#include <utility>
 #include <vector>
 
 #include "core/reference.h"
@@ -113,6 +115,101 @@ TEST(LaneEstimate, TheCacheFollowsTheSettings) {
     const Scene other = test::load("empty");
     EXPECT_EQ(cache.get(other, o).busyLanes, 32.0) << "a new scene is traced, not the last one";
     EXPECT_GE(cache.lastMs(), 0.0);
+}
+
+// A pixel's tree node by node: as many rays as referenceRayTreeSizes counts (one AA sample), each
+// child one bounce deeper than its ray, and a reflection right after its ray (depth first).
+TEST(RayTreeNodes, HoldEveryRayOfThePixelsTreesDepthFirst) {
+    const Scene scene = test::load("spheres");
+    RenderOptions o = scene.defaults;
+    o.width = 40, o.height = 30, o.bounces = 4, o.aa = 1;
+    std::vector<glm::ivec2> pixels;
+    for (int y = 0; y < o.height; ++y)
+        for (int x = 0; x < o.width; ++x) pixels.push_back({x, y});
+    const std::vector<int> sizes = referenceRayTreeSizes(scene, o, pixels, 2);
+    const auto trees = referenceRayTreeNodes(scene, o, pixels, 2);
+    ASSERT_EQ(trees.size(), pixels.size());
+    int branching = 0;
+    for (std::size_t i = 0; i < trees.size(); ++i) {
+        ASSERT_EQ(int(trees[i].size()), sizes[i]) << "pixel " << i;
+        EXPECT_EQ(trees[i][0].depth, 0);
+        for (std::size_t n = 0; n < trees[i].size(); ++n) {
+            const RayTreeNode& node = trees[i][n];
+            if (node.reflected >= 0) EXPECT_EQ(node.reflected, int(n) + 1);
+            for (int child : {node.reflected, node.refracted})
+                if (child >= 0) EXPECT_EQ(trees[i][std::size_t(child)].depth, node.depth + 1);
+            if (node.material < 0) EXPECT_TRUE(node.reflected < 0 && node.refracted < 0);
+            branching += node.reflected >= 0 && node.refracted >= 0;
+        }
+    }
+    EXPECT_GT(branching, 0) << "no ray with both children to check";
+}
+
+// The persistent megakernel's strips: every pixel once, a 4x16 strip row by row first, and a
+// frame whose last band and strip are cut.
+TEST(StripPixel, VisitsEveryPixelOnceStripByStrip) {
+    EXPECT_EQ(stripPixel(0, 64, 32), glm::ivec2(0, 0));
+    EXPECT_EQ(stripPixel(3, 64, 32), glm::ivec2(3, 0));
+    EXPECT_EQ(stripPixel(4, 64, 32), glm::ivec2(0, 1));
+    EXPECT_EQ(stripPixel(63, 64, 32), glm::ivec2(3, 15));
+    EXPECT_EQ(stripPixel(64, 64, 32), glm::ivec2(4, 0));
+    for (const auto& [w, h] : {std::pair{64, 32}, {37, 23}}) {
+        std::vector<int> seen(std::size_t(w * h), 0);
+        for (long long k = 0; k < (long long)w * h; ++k) {
+            const glm::ivec2 p = stripPixel(k, w, h);
+            ASSERT_TRUE(p.x >= 0 && p.x < w && p.y >= 0 && p.y < h) << k;
+            ++seen[std::size_t(p.y * w + p.x)];
+        }
+        EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), w * h) << w << "x" << h;
+    }
+    EXPECT_EQ(stripPixel(36 * 16, 37, 23), glm::ivec2(36, 0));  // the cut strip, 1 wide
+    EXPECT_EQ(stripPixel(37 * 16, 37, 23), glm::ivec2(0, 16));  // the cut band, 7 rows
+}
+
+TEST(ShadingKeys, APatternElseTheClassElseAMiss) {
+    Scene scene;
+    scene.materials.resize(5);
+    scene.materials[1].reflectance = 0.5f;
+    scene.materials[2].opacity = 0.5f;
+    scene.materials[3].pattern = RT_PATTERN_MARBLE;
+    scene.materials[4].pattern = RT_PATTERN_CHECKER;
+    scene.materials[4].opacity = 0.5f;  // a pattern decides before the class
+    for (auto& m : scene.materials)
+        if (m.opacity == 0.0f) m.opacity = 1.0f;
+    EXPECT_EQ(shadingKey(scene, 0), kShadePlain);
+    EXPECT_EQ(shadingKey(scene, 1), kShadeMirror);
+    EXPECT_EQ(shadingKey(scene, 2), kShadeGlass);
+    EXPECT_EQ(shadingKey(scene, 3), RT_PATTERN_MARBLE);
+    EXPECT_EQ(shadingKey(scene, 4), RT_PATTERN_CHECKER);
+    EXPECT_EQ(shadingKey(scene, -1), kShadeMiss);
+}
+
+// Where every ray misses, every warp step in every order runs one key's code; elsewhere between
+// one and all nine keys, the same for the same scene and settings.
+TEST(ShadingKeys, OneKeyWhereEveryRayMisses) {
+    const Scene empty = test::load("empty");
+    RenderOptions o = empty.defaults;
+    o.width = 64, o.height = 48;
+    const ShadingEstimate e = estimateShadingKeys(empty, o, 64, 4, 256);
+    EXPECT_DOUBLE_EQ(e.megakernel, 1.0);
+    EXPECT_DOUBLE_EQ(e.bounce, 1.0);
+    EXPECT_DOUBLE_EQ(e.sorted, 1.0);
+    EXPECT_EQ(e.warps, 64);
+    EXPECT_EQ(e.batches, 4);
+
+    const Scene spheres = test::load("spheres");
+    o = spheres.defaults;
+    o.width = 64, o.height = 48;
+    const ShadingEstimate s = estimateShadingKeys(spheres, o, 64, 4, 256);
+    for (double keys : {s.megakernel, s.bounce, s.sorted}) {
+        EXPECT_GE(keys, 1.0);
+        EXPECT_LE(keys, 9.0);
+    }
+    EXPECT_GT(s.bounce, 1.0) << "a wall of spheres with mirrors: lists that mix keys";
+    const ShadingEstimate again = estimateShadingKeys(spheres, o, 64, 4, 256);
+    EXPECT_EQ(again.megakernel, s.megakernel);
+    EXPECT_EQ(again.bounce, s.bounce);
+    EXPECT_EQ(again.sorted, s.sorted);
 }
 
 TEST(Predict, TheRuleSplitsAtTheThreshold) {
