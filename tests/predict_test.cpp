@@ -18,6 +18,14 @@
 namespace rt {
 namespace {
 
+// Every pixel of the frame, row by row.
+std::vector<glm::ivec2> framePixels(const RenderOptions& o) {
+    std::vector<glm::ivec2> pixels;
+    for (int y = 0; y < o.height; ++y)
+        for (int x = 0; x < o.width; ++x) pixels.push_back({x, y});
+    return pixels;
+}
+
 TEST(BusyLanes, AWarpRunsAsLongAsItsLargestTree) {
     std::vector<int> even(32, 1);
     EXPECT_DOUBLE_EQ(busyLanes(even, 32), 32.0);
@@ -44,9 +52,7 @@ TEST(RayTreeSizes, AddUpToTheRaysADeviceCounts) {
         const Scene scene = test::load(name);
         RenderOptions o = scene.defaults;
         o.width = 48, o.height = 32, o.bounces = 4, o.aa = 2;
-        std::vector<glm::ivec2> pixels;
-        for (int y = 0; y < o.height; ++y)
-            for (int x = 0; x < o.width; ++x) pixels.push_back({x, y});
+        const std::vector<glm::ivec2> pixels = framePixels(o);
         const std::vector<int> sizes = referenceRayTreeSizes(scene, o, pixels, 2);
         const long long cpu = std::accumulate(sizes.begin(), sizes.end(), 0LL);
 
@@ -123,9 +129,7 @@ TEST(RayTreeNodes, HoldEveryRayOfThePixelsTreesDepthFirst) {
     const Scene scene = test::load("spheres");
     RenderOptions o = scene.defaults;
     o.width = 40, o.height = 30, o.bounces = 4, o.aa = 1;
-    std::vector<glm::ivec2> pixels;
-    for (int y = 0; y < o.height; ++y)
-        for (int x = 0; x < o.width; ++x) pixels.push_back({x, y});
+    const std::vector<glm::ivec2> pixels = framePixels(o);
     const std::vector<int> sizes = referenceRayTreeSizes(scene, o, pixels, 2);
     const auto trees = referenceRayTreeNodes(scene, o, pixels, 2);
     ASSERT_EQ(trees.size(), pixels.size());
