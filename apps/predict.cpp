@@ -60,7 +60,8 @@ void addPredict(CLI::App& app) {
         "Also count the shading keys (a procedural pattern, or plain, mirror, glass, a miss) the\n"
         "lanes of a warp step meet, in three orders of the same rays: the megakernel's (each lane\n"
         "its own tree), the bounce loop's lists (32 consecutive rays of one bounce), and those\n"
-        "lists sorted by key (--persistent-regroup with the bounce loop); 1 is one key's code");
+        "lists sorted by key (--persistent-regroup with the bounce loop); 1 is one key's code;\n"
+        "and the lanes of 32 that cast shadow rays in a step, inline and in a shadow pass");
 }
 
 bool predictParsed() { return predictCmd && predictCmd->parsed(); }
@@ -108,7 +109,10 @@ int runPredict() {
                 j["shading_keys"] = {{"megakernel", shading->megakernel},
                                      {"bounce", shading->bounce},
                                      {"bounce_sorted", shading->sorted},
-                                     {"batches", shading->batches}};
+                                     {"batches", shading->batches},
+                                     {"shadow_lanes_megakernel", shading->shadowMegakernel},
+                                     {"shadow_lanes_bounce_inline", shading->shadowInline},
+                                     {"shadow_lanes_bounce_pass", shading->shadowPass}};
             std::printf("%s\n", j.dump().c_str());
         } else {
             if (std::exchange(header, false))  // after the first scene loads, not before an error
@@ -121,8 +125,10 @@ int runPredict() {
             if (shading)
                 std::printf(
                     "%-40s shading keys a warp step: megakernel %.2f, bounce loop %.2f, "
-                    "sorted %.2f\n",
-                    "", shading->megakernel, shading->bounce, shading->sorted);
+                    "sorted %.2f; lanes casting shadow rays: megakernel %.1f, bounce "
+                    "loop %.1f, shadow pass %.1f\n",
+                    "", shading->megakernel, shading->bounce, shading->sorted,
+                    shading->shadowMegakernel, shading->shadowInline, shading->shadowPass);
         }
         std::fflush(stdout);
     }

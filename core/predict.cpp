@@ -136,25 +136,37 @@ ShadingEstimate estimateShadingKeys(const Scene& scene, const RenderOptions& opt
     auto treeOf = [&](std::size_t i) -> const std::vector<RayTreeNode>& {
         return lane[i] < 0 ? none : trees[std::size_t(lane[i])];
     };
-    long long keys = 0, steps = 0;
+    // Sums over warp steps, and over the steps that cast shadow rays.
+    struct Count {
+        long long sum = 0, steps = 0;
+        void add(long long n, long long s = 1) { sum += n, steps += s; }
+        double mean() const { return steps ? double(sum) / double(steps) : 0.0; }
+    };
+    Count keys, shadow;
     for (std::size_t w = 0; w < lane.size(); w += std::size_t(shape.lanes())) {
         std::size_t longest = 0;
         for (std::size_t i = w; i < w + std::size_t(shape.lanes()); ++i)
             longest = std::max(longest, treeOf(i).size());
-        for (std::size_t k = 0; k < longest; ++k, ++steps) {
+        for (std::size_t k = 0; k < longest; ++k) {
             std::vector<int> step;
+            int hits = 0;
             for (std::size_t i = w; i < w + std::size_t(shape.lanes()); ++i)
-                if (k < treeOf(i).size()) step.push_back(shadingKey(scene, treeOf(i)[k].material));
-            keys += distinct(step);
+                if (k < treeOf(i).size()) {
+                    step.push_back(shadingKey(scene, treeOf(i)[k].material));
+                    hits += treeOf(i)[k].material >= 0;
+                }
+            keys.add(distinct(step));
+            if (hits) shadow.add(hits);
         }
         ++e.warps;
     }
-    e.megakernel = steps ? double(keys) / double(steps) : 0.0;
+    e.megakernel = keys.mean();
+    e.shadowMegakernel = shadow.mean();
 
     // The bounce loop: batches of consecutive pixels in strip order, traced bounce by bounce.
     const long long frame = (long long)options.width * options.height;
     const long long starts = (frame + batch - 1) / batch;
-    long long traceKeys = 0, sortedKeys = 0, warpSteps = 0;
+    Count traceKeys, sortedKeys, shadowInline, shadowPass;
     for (long long b : pick(starts, batches, seed + 1)) {
         pixels.clear();
         for (long long k = b * batch; k < std::min(frame, (b + 1) * batch); ++k)
@@ -164,26 +176,35 @@ ShadingEstimate estimateShadingKeys(const Scene& scene, const RenderOptions& opt
         for (int p = 0; p < int(pixels.size()); ++p) list.push_back({p, 0});
         while (!list.empty()) {
             std::vector<int> order;
+            std::vector<char> hit;
             std::vector<std::pair<int, int>> next;
             for (const auto& [p, n] : list) {
                 const RayTreeNode& node = trees[std::size_t(p)][std::size_t(n)];
                 order.push_back(shadingKey(scene, node.material));
+                hit.push_back(node.material >= 0);
                 if (node.reflected >= 0) next.push_back({p, node.reflected});
                 if (node.refracted >= 0) next.push_back({p, node.refracted});
             }
             std::vector<int> sorted = order;
             std::stable_sort(sorted.begin(), sorted.end());
-            for (std::size_t w = 0; w < order.size(); w += 32, ++warpSteps) {
+            for (std::size_t w = 0; w < order.size(); w += 32) {
+                const auto begin = std::ptrdiff_t(w);
                 const auto end = std::ptrdiff_t(std::min(order.size(), w + 32));
-                traceKeys += distinct({order.begin() + std::ptrdiff_t(w), order.begin() + end});
-                sortedKeys += distinct({sorted.begin() + std::ptrdiff_t(w), sorted.begin() + end});
+                traceKeys.add(distinct({order.begin() + begin, order.begin() + end}));
+                sortedKeys.add(distinct({sorted.begin() + begin, sorted.begin() + end}));
+                if (const long long h = std::count(hit.begin() + begin, hit.begin() + end, 1))
+                    shadowInline.add(h);
             }
+            const long long hits = std::count(hit.begin(), hit.end(), 1);
+            shadowPass.add(hits, (hits + 31) / 32);
             list = std::move(next);
         }
         ++e.batches;
     }
-    e.bounce = warpSteps ? double(traceKeys) / double(warpSteps) : 0.0;
-    e.sorted = warpSteps ? double(sortedKeys) / double(warpSteps) : 0.0;
+    e.bounce = traceKeys.mean();
+    e.sorted = sortedKeys.mean();
+    e.shadowInline = shadowInline.mean();
+    e.shadowPass = shadowPass.mean();
     return e;
 }
 

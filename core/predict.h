@@ -63,9 +63,15 @@ glm::ivec2 stripPixel(long long k, int width, int height, int tw = 4, int th = 1
 // strips, each ray's children appended after its list's earlier rays' children), and those lists
 // sorted by key before shading (--persistent-regroup with the bounce loop). 1 when a warp's lanes
 // run one key's code; more when it runs several in turn.
+//
+// And the lanes of 32 that cast shadow rays (those whose ray hit something) in a warp step that
+// casts any: the megakernel's step, the bounce loop's trace (each lane right after its own
+// trace, --persistent-shadows inline), and its shadow pass (each list's hits compacted, 32 a
+// step, --persistent-shadows pass).
 struct ShadingEstimate {
-    double megakernel = 0, bounce = 0, sorted = 0;
-    int warps = 0, batches = 0;  // traced
+    double megakernel = 0, bounce = 0, sorted = 0;                  // keys a warp step
+    double shadowMegakernel = 0, shadowInline = 0, shadowPass = 0;  // lanes casting shadow rays
+    int warps = 0, batches = 0;                                     // traced
 };
 ShadingEstimate estimateShadingKeys(const Scene& scene, const RenderOptions& options,
                                     int warps = 2048, int batches = 32, int batch = 1024,

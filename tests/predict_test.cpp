@@ -188,8 +188,8 @@ TEST(ShadingKeys, APatternElseTheClassElseAMiss) {
     EXPECT_EQ(shadingKey(scene, -1), kShadeMiss);
 }
 
-// Where every ray misses, every warp step in every order runs one key's code; elsewhere between
-// one and all nine keys, the same for the same scene and settings.
+// Where every ray misses, every warp step in every order runs one key's code and casts no shadow
+// ray; elsewhere between one and all nine keys, the same for the same scene and settings.
 TEST(ShadingKeys, OneKeyWhereEveryRayMisses) {
     const Scene empty = test::load("empty");
     RenderOptions o = empty.defaults;
@@ -200,6 +200,8 @@ TEST(ShadingKeys, OneKeyWhereEveryRayMisses) {
     EXPECT_DOUBLE_EQ(e.sorted, 1.0);
     EXPECT_EQ(e.warps, 64);
     EXPECT_EQ(e.batches, 4);
+    for (double lanes : {e.shadowMegakernel, e.shadowInline, e.shadowPass})
+        EXPECT_EQ(lanes, 0.0) << "no hit, no shadow ray";
 
     const Scene spheres = test::load("spheres");
     o = spheres.defaults;
@@ -210,6 +212,11 @@ TEST(ShadingKeys, OneKeyWhereEveryRayMisses) {
         EXPECT_LE(keys, 9.0);
     }
     EXPECT_GT(s.bounce, 1.0) << "a wall of spheres with mirrors: lists that mix keys";
+    // A shadow pass takes a list's hits 32 at a time: no fewer lanes a step than the trace's
+    // steps, whose hits are spread over at least as many steps.
+    EXPECT_GT(s.shadowInline, 0.0);
+    EXPECT_GE(s.shadowPass, s.shadowInline);
+    EXPECT_LE(s.shadowPass, 32.0);
     const ShadingEstimate again = estimateShadingKeys(spheres, o, 64, 4, 256);
     EXPECT_EQ(again.megakernel, s.megakernel);
     EXPECT_EQ(again.bounce, s.bounce);
