@@ -119,30 +119,31 @@ int shadingKey(const Scene& scene, int material) {
     return m.reflectance > 0.0f ? kShadeMirror : kShadePlain;
 }
 
-ShadingEstimate estimateShadingKeys(const Scene& scene, const RenderOptions& options, int warps,
-                                    int batches, int batch, std::uint64_t seed, int threads) {
-    if (warps < 1 || batches < 1 || batch < 1)
-        throw Error("the shading estimate needs at least one warp and one batch");
-    ShadingEstimate e;
+namespace {
+
+// A mean over warp steps: what they add up to, over how many.
+struct Count {
+    long long sum = 0, steps = 0;
+    void add(long long n, long long s = 1) { sum += n, steps += s; }
+    double mean() const { return steps ? double(sum) / double(steps) : 0.0; }
+};
+
+// The megakernel's order: step k of a warp runs the k-th ray (depth first) of each lane's tree
+// that has one. Adds each step's keys to `keys`, and its lanes with a hit to `shadow` where any;
+// returns the warps traced.
+int countMegakernelSteps(const Scene& scene, const RenderOptions& options, int warps,
+                         std::uint64_t seed, int threads, Count& keys, Count& shadow) {
     const WarpShape shape;
-    // The megakernel: step k of a warp runs the k-th ray of each lane's tree that has one.
     const int across = (options.width + shape.width - 1) / shape.width;
     const int down = (options.height + shape.height - 1) / shape.height;
     std::vector<glm::ivec2> pixels;
     std::vector<int> lane;
     warpPixels(pick((long long)across * down, warps, seed), shape, options, pixels, lane);
-    auto trees = referenceRayTreeNodes(scene, options, pixels, threads);
+    const auto trees = referenceRayTreeNodes(scene, options, pixels, threads);
     const std::vector<RayTreeNode> none;
     auto treeOf = [&](std::size_t i) -> const std::vector<RayTreeNode>& {
         return lane[i] < 0 ? none : trees[std::size_t(lane[i])];
     };
-    // Sums over warp steps, and over the steps that cast shadow rays.
-    struct Count {
-        long long sum = 0, steps = 0;
-        void add(long long n, long long s = 1) { sum += n, steps += s; }
-        double mean() const { return steps ? double(sum) / double(steps) : 0.0; }
-    };
-    Count keys, shadow;
     for (std::size_t w = 0; w < lane.size(); w += std::size_t(shape.lanes())) {
         std::size_t longest = 0;
         for (std::size_t i = w; i < w + std::size_t(shape.lanes()); ++i)
@@ -158,40 +159,37 @@ ShadingEstimate estimateShadingKeys(const Scene& scene, const RenderOptions& opt
             keys.add(distinct(step));
             if (hits) shadow.add(hits);
         }
-        ++e.warps;
     }
-    e.megakernel = keys.mean();
-    e.shadowMegakernel = shadow.mean();
+    return int(lane.size()) / shape.lanes();
+}
 
-    // The bounce loop: batches of consecutive pixels in strip order, traced bounce by bounce.
-    const long long frame = (long long)options.width * options.height;
-    const long long starts = (frame + batch - 1) / batch;
-    Count traceKeys, sortedKeys, shadowInline, shadowPass;
-    for (long long b : pick(starts, batches, seed + 1)) {
-        pixels.clear();
-        for (long long k = b * batch; k < std::min(frame, (b + 1) * batch); ++k)
-            pixels.push_back(stripPixel(k, options.width, options.height));
-        trees = referenceRayTreeNodes(scene, options, pixels, threads);
-        std::vector<std::pair<int, int>> list;  // (pixel, node) of one bounce, in list order
-        for (int p = 0; p < int(pixels.size()); ++p) list.push_back({p, 0});
+// The bounce loop's order over one batch's trees: bounce by bounce, 32 consecutive rays of a list
+// a step, each ray's children after its list's earlier rays' children. Adds each step's keys as
+// traced and as sorted, its lanes with a hit (inline shadow rays), and the list's hits 32 a step
+// (a shadow pass).
+struct BounceCounts {
+    Count traced, sorted, shadowInline, shadowPass;
+    void add(const Scene& scene, const std::vector<std::vector<RayTreeNode>>& trees) {
+        std::vector<std::pair<std::size_t, int>> list;  // (pixel, node) of one bounce, in order
+        for (std::size_t p = 0; p < trees.size(); ++p) list.push_back({p, 0});
         while (!list.empty()) {
-            std::vector<int> order;
+            std::vector<int> keys;
             std::vector<char> hit;
-            std::vector<std::pair<int, int>> next;
+            std::vector<std::pair<std::size_t, int>> next;
             for (const auto& [p, n] : list) {
-                const RayTreeNode& node = trees[std::size_t(p)][std::size_t(n)];
-                order.push_back(shadingKey(scene, node.material));
+                const RayTreeNode& node = trees[p][std::size_t(n)];
+                keys.push_back(shadingKey(scene, node.material));
                 hit.push_back(node.material >= 0);
                 if (node.reflected >= 0) next.push_back({p, node.reflected});
                 if (node.refracted >= 0) next.push_back({p, node.refracted});
             }
-            std::vector<int> sorted = order;
-            std::stable_sort(sorted.begin(), sorted.end());
-            for (std::size_t w = 0; w < order.size(); w += 32) {
+            std::vector<int> byKey = keys;
+            std::stable_sort(byKey.begin(), byKey.end());
+            for (std::size_t w = 0; w < keys.size(); w += 32) {
                 const auto begin = std::ptrdiff_t(w);
-                const auto end = std::ptrdiff_t(std::min(order.size(), w + 32));
-                traceKeys.add(distinct({order.begin() + begin, order.begin() + end}));
-                sortedKeys.add(distinct({sorted.begin() + begin, sorted.begin() + end}));
+                const auto end = std::ptrdiff_t(std::min(keys.size(), w + 32));
+                traced.add(distinct({keys.begin() + begin, keys.begin() + end}));
+                sorted.add(distinct({byKey.begin() + begin, byKey.begin() + end}));
                 if (const long long h = std::count(hit.begin() + begin, hit.begin() + end, 1))
                     shadowInline.add(h);
             }
@@ -199,12 +197,35 @@ ShadingEstimate estimateShadingKeys(const Scene& scene, const RenderOptions& opt
             shadowPass.add(hits, (hits + 31) / 32);
             list = std::move(next);
         }
+    }
+};
+
+}  // namespace
+
+ShadingEstimate estimateShadingKeys(const Scene& scene, const RenderOptions& options, int warps,
+                                    int batches, int batch, std::uint64_t seed, int threads) {
+    if (warps < 1 || batches < 1 || batch < 1)
+        throw Error("the shading estimate needs at least one warp and one batch");
+    ShadingEstimate e;
+    Count keys, shadow;
+    e.warps = countMegakernelSteps(scene, options, warps, seed, threads, keys, shadow);
+    e.megakernel = keys.mean();
+    e.shadowMegakernel = shadow.mean();
+
+    // Batches of consecutive pixels in the persistent megakernel's strip order.
+    const long long frame = (long long)options.width * options.height;
+    BounceCounts bounce;
+    for (long long b : pick((frame + batch - 1) / batch, batches, seed + 1)) {
+        std::vector<glm::ivec2> pixels;
+        for (long long k = b * batch; k < std::min(frame, (b + 1) * batch); ++k)
+            pixels.push_back(stripPixel(k, options.width, options.height));
+        bounce.add(scene, referenceRayTreeNodes(scene, options, pixels, threads));
         ++e.batches;
     }
-    e.bounce = traceKeys.mean();
-    e.sorted = sortedKeys.mean();
-    e.shadowInline = shadowInline.mean();
-    e.shadowPass = shadowPass.mean();
+    e.bounce = bounce.traced.mean();
+    e.sorted = bounce.sorted.mean();
+    e.shadowInline = bounce.shadowInline.mean();
+    e.shadowPass = bounce.shadowPass.mean();
     return e;
 }
 
