@@ -348,6 +348,7 @@ bool PersistentPipeline::decide(TrialChoice& choice, const Scene& scene, const R
     std::optional<Error> refused;
     choice.chosen.clear();
     choice.trialsMs = nlohmann::json::object();
+    choice.refused = nlohmann::json::object();
     for (const TrialCandidate& candidate : candidates) {
         double ms = std::numeric_limits<double>::infinity();
         try {
@@ -359,6 +360,7 @@ bool PersistentPipeline::decide(TrialChoice& choice, const Scene& scene, const R
             choice.trialsMs[candidate.name] = ms;
         } catch (const Error& e) {
             choice.trialsMs[candidate.name] = nullptr;
+            choice.refused[candidate.name] = e.what();
             refused = e;
             continue;
         }
@@ -394,8 +396,9 @@ void PersistentPipeline::chooseLoop(const Scene& scene, const RenderOptions& o,
     // of six and 4-7% slower on the two whose noise patterns the regrouped loop sorts.
     RenderOptions bounce = o;
     loopOption().set(bounce.pipelineOptions, std::string("bounce"));
-    const bool decided =
-        decide(loop_, scene, regrouped, {{"regrouped", regrouped}, {"bounce", bounce}});
+    // Keyed by the options as given: --persistent-batch and --persistent-shadows shape the
+    // bounce loop's trial, though the regrouped loop runs without them.
+    const bool decided = decide(loop_, scene, o, {{"regrouped", regrouped}, {"bounce", bounce}});
     if (loop_.chosen == "bounce")
         regrouped = bounce;
     else  // the trial's scratch, which can be gigabytes at high bounce limits, is not kept
@@ -404,6 +407,7 @@ void PersistentPipeline::chooseLoop(const Scene& scene, const RenderOptions& o,
     stats_.extras["persist_loop"] = loop_.chosen;
     stats_.extras["persist_loop_trials_ms"] = loop_.trialsMs;
     stats_.extras["persist_loop_decided"] = decided;  // this frame timed the loops
+    if (!loop_.refused.empty()) stats_.extras["persist_loop_refused"] = loop_.refused;
     stats_.note += "; the " + loop_.chosen + " loop, the faster of two trial frames each";
 }
 

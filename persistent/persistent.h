@@ -66,12 +66,12 @@ class PersistentPipeline : public DevicePipeline {
     // The options with --persistent-schedule auto's choice set.
     RenderOptions chooseSchedule(const Scene& scene, const RenderOptions& options);
     // A choice the traced warps cannot make, made by trial frames once per scene and settings:
-    // the candidate chosen, each one's best time (null where the device refused it), and the
-    // scene and settings it was made for.
+    // the candidate chosen, each one's best time (null where the device refused it) and why a
+    // refused one was, and the scene and settings it was made for.
     struct TrialChoice {
         std::optional<FrameKey> key;
         std::string chosen;
-        nlohmann::json trialsMs;
+        nlohmann::json trialsMs, refused;
     };
     struct TrialCandidate {
         std::string name;
@@ -79,8 +79,9 @@ class PersistentPipeline : public DevicePipeline {
     };
     // Renders two frames of each candidate (the first may pay for building its program) and
     // keeps the fastest in `choice`, unless `choice` was made for `base`'s scene and settings
-    // already; returns whether it timed them. A candidate the device refuses (an rt::Error) is
-    // left out; where all are, the last refusal is thrown.
+    // already; returns whether it timed them. A candidate that fails (an rt::Error: scratch past
+    // the device, a launch it refuses) is left out with its message; where all do, the last
+    // failure is thrown.
     bool decide(TrialChoice& choice, const Scene& scene, const RenderOptions& base,
                 const std::vector<TrialCandidate>& candidates);
     // Under --persistent-schedule auto, what the traced warps do not tell: the nested loop's

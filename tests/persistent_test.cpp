@@ -428,10 +428,15 @@ TEST(Persistent, AutoScheduleTimesTheRegroupedAndBounceLoops) {
     EXPECT_NE(persist.stats().note.find("the " + loop + " loop"), std::string::npos)
         << persist.stats().note;
     EXPECT_TRUE(sameBits(mega.render(scene, o), first));
-    // The next frame keeps the loop without timing again.
+    EXPECT_FALSE(x.contains("persist_loop_refused")) << x.dump();
+    // The next frame keeps the loop without timing again; a batch size that shapes the bounce
+    // loop's trial times again.
     persist.render(scene, o);
     EXPECT_FALSE(persist.stats().extras.value("persist_loop_decided", true));
     EXPECT_EQ(persist.stats().extras.value("persist_loop", ""), loop);
+    setOption(o, "persistent-batch", 256ll);
+    persist.render(scene, o);
+    EXPECT_TRUE(persist.stats().extras.value("persist_loop_decided", false));
 
     o.bounces = 14;
     setOption(o, "persistent-batch", 65536ll);
@@ -442,6 +447,13 @@ TEST(Persistent, AutoScheduleTimesTheRegroupedAndBounceLoops) {
     const nlohmann::json y = persist.stats().extras;
     EXPECT_EQ(y.value("persist_loop", ""), "regrouped") << y.dump();
     EXPECT_TRUE(y.at("persist_loop_trials_ms").at("bounce").is_null()) << y.dump();
+    // Why, in its own words: the bounce loop's scratch refusal names the batch.
+    EXPECT_EQ(y.at("persist_loop_refused")
+                  .at("bounce")
+                  .get<std::string>()
+                  .rfind("--persistent-batch 65536: ", 0),
+              0u)
+        << y.dump();
     EXPECT_TRUE(sameBits(mega.render(scene, o), refused));
 }
 
