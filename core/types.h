@@ -46,17 +46,19 @@ RT_DEV_BEGIN
 // the ray loop, and the warp steps.
 #define RT_COUNT_LANES_ACTIVE RT_RAY_TYPES
 #define RT_COUNT_WARP_STEPS (RT_RAY_TYPES + 1)
-// Then the phase clocks of the regrouped persistent loop, a diagnostic built only with
-// RT_PERSIST_PHASE_CLOCKS (e.g. RTLAB_CL_OPTIONS=-DRT_PERSIST_PHASE_CLOCKS) on NVIDIA: the cycles
-// its warps spend in each phase of a step, in units of 64, summed over warps.
+// Then the phase clocks of the persistent megakernel's regrouped and bounce loops, a diagnostic
+// built only with RT_PERSIST_PHASE_CLOCKS (e.g. RTLAB_CL_OPTIONS=-DRT_PERSIST_PHASE_CLOCKS) on
+// NVIDIA: the cycles their warps spend in each phase, in units of 64, summed over warps.
 #define RT_COUNT_PHASES (RT_RAY_TYPES + 2)
-#define RT_PHASE_BOOKKEEPING 0  // end of a tree, taking a pixel, the last step's results
-#define RT_PHASE_TRACE 1        // the lane's own ray, to the warp's slowest lane
+#define RT_PHASE_BOOKKEEPING 0  // pixels, stacks and results; the bounce loop's batches and sums
+#define RT_PHASE_TRACE 1        // the warp's rays, and their shadow rays but in a shadow pass
 #define RT_PHASE_TRACE_WAIT 2   // at the barrier after the trace, for the group's slowest warp
-#define RT_PHASE_FILE 3         // filing the hits in key order, to the next barrier
-#define RT_PHASE_SHADE 4        // shading the sorted hits (with their shadow rays)
+#define RT_PHASE_FILE 3         // filing the hits: in key order; the bounce loop's staged hits
+#define RT_PHASE_SHADE 4        // shading the hits
 #define RT_PHASE_SHADE_WAIT 5   // at the barrier after the shading
-#define RT_PHASES 6
+#define RT_PHASE_SHADOW 6       // the bounce loop's shadow pass (--persistent-shadows pass)
+#define RT_PHASE_SHADOW_WAIT 7  // at the barrier after it
+#define RT_PHASES 8
 #define RT_COUNTERS (RT_RAY_TYPES + 2 + RT_PHASES)
 
 typedef struct Float3 {

@@ -95,6 +95,49 @@ inline bool Persistent_Refill(bool idle, int refill, uint* wanting) {
 inline int Persistent_TakeTogether(global int* next, uint wanting) { return atomic_inc(next); }
 #endif
 
+// The phase clocks (RT_PERSIST_PHASE_CLOCKS, a diagnostic; the counting frame only, on NVIDIA):
+// at each mark the warp's lanes meet (bar.warp.sync) and its first lane adds the cycles since the
+// last mark to phase `slot` (RT_PHASE_*, core/types.h), in units of 64. The meetings are the
+// clocks' own: read the phases' shares, not their cycles (scripts/charts_phases.py). Without
+// the clocks a PhaseClock is a placeholder and PHASE_MARK compiles to nothing.
+#if defined(RT_PERSIST_PHASE_CLOCKS) && defined(RT_WARP_PTX) && defined(RT_COUNT_RAYS) && \
+    defined(RT_COUNT_LANES)
+#define PHASE_CLOCKS 1
+typedef struct PhaseClock {
+    ulong t;     // the cycle count at the last mark
+    uint warp;   // the caller's warp's lanes
+    bool first;  // the caller is its warp's first lane
+} PhaseClock;
+
+inline ulong Phase_Now(void) {
+    ulong c;
+    __asm__ volatile("mov.u64 %0, %%clock64;" : "=l"(c));
+    return c;
+}
+
+// Starts the clock of a lane of a one-dimensional work-group of `lanes` lanes.
+inline PhaseClock Phase_Start(int lane, int lanes) {
+    PhaseClock c;
+    const int warpLanes = min(32, lanes - (lane & ~31));
+    c.warp = warpLanes == 32 ? 0xffffffffu : (1u << warpLanes) - 1u;
+    c.first = (lane & 31) == 0;
+    c.t = Phase_Now();
+    return c;
+}
+
+inline void Phase_Mark(const SceneData* sc, int slot, PhaseClock* c) {
+    __asm__ volatile("bar.warp.sync %0;" ::"r"(c->warp));
+    const ulong now = Phase_Now();
+    if (c->first) atomic_add(&sc->rayCounts[RT_COUNT_PHASES + slot], (uint)((now - c->t) >> 6));
+    c->t = now;
+}
+#define PHASE_MARK(sc, slot, clock) Phase_Mark(sc, slot, clock)
+#else
+typedef int PhaseClock;
+inline PhaseClock Phase_Start(int lane, int lanes) { return 0; }
+#define PHASE_MARK(sc, slot, clock) ((void)(clock))
+#endif
+
 // A lane's pixel: which one (-1: none), its AA sample, the current sample's sum and the sum of
 // its finished samples. The stack of pending rays and its top stay apart, in private arrays.
 typedef struct PersistentLane {
@@ -335,6 +378,7 @@ typedef struct Bounce {
     global BounceHit* hits;    // staged: one a ray of the bounce
     global int* order;         // staged: hit indices, for the shadow pass and the sorted shading
     int start, first, count, sample, slots;
+    PhaseClock* phases;  // the caller's phase clock (RT_PERSIST_PHASE_CLOCKS)
 } Bounce;
 
 // The trace: every ray of `in` (the batch's camera rays at depth 0) to its closest hit, with its
@@ -369,6 +413,7 @@ inline void Bounce_TracePass(const SceneData* sc, const Bounce* b, int depth, in
                                      Sampling_PointKey(xy.x, xy.y, b->sample, p.depth));
 #endif
         }
+        PHASE_MARK(sc, RT_PHASE_TRACE, b->phases);
 #ifdef BOUNCE_STAGED
         if (i < n) {
             global BounceHit* h = &b->hits[i];
@@ -385,9 +430,11 @@ inline void Bounce_TracePass(const SceneData* sc, const Bounce* b, int depth, in
         const int at = Bounce_Place(&b->c->casting, casts ? 1 : 0, &b->warp);
         if (casts) b->order[at] = i;
 #endif
+        PHASE_MARK(sc, RT_PHASE_FILE, b->phases);
 #else
         Bounce_Shade(sc, i < n, &node, &p, pixel, slot, &b->trees[(size_t)pixel * b->slots], out,
                      &b->c->produced, &b->warp);
+        PHASE_MARK(sc, RT_PHASE_SHADE, b->phases);
 #endif
     }
 }
@@ -410,6 +457,7 @@ inline void Bounce_ShadowPass(const SceneData* sc, const Bounce* b) {
             for (int l = 0; l < sc->settings.lightCount; ++l)
                 h->node.occluded[l] = node.occluded[l];
         }
+        PHASE_MARK(sc, RT_PHASE_SHADOW, b->phases);
     }
 }
 
@@ -446,6 +494,7 @@ inline void Bounce_ShadePass(const SceneData* sc, const Bounce* b, int n, global
         }
         Bounce_Shade(sc, k < n, &h.node, &p, h.ray.pixel, h.ray.slot,
                      &b->trees[(size_t)h.ray.pixel * b->slots], out, &b->c->produced, &b->warp);
+        PHASE_MARK(sc, RT_PHASE_SHADE, b->phases);
     }
 }
 
@@ -475,6 +524,8 @@ kernel __attribute__((reqd_work_group_size(RT_PERSIST_BOUNCE, 1, 1))) void Persi
 #endif
     b.first = first;
     b.count = count;
+    PhaseClock phases = Phase_Start(lane, RT_PERSIST_BOUNCE);
+    b.phases = &phases;
     Bounce_Reset(&counters, lane);
     for (;;) {
         barrier(CLK_LOCAL_MEM_FENCE);  // every lane has read the last batch's start
@@ -487,23 +538,28 @@ kernel __attribute__((reqd_work_group_size(RT_PERSIST_BOUNCE, 1, 1))) void Persi
             global BounceRay* in = lists;
             global BounceRay* out = lists + widest;
             // One bounce at a time: rays [0, n) of `in` (the camera rays at depth 0), their
-            // children appended to `out`. The group meets between passes, each of which reads
-            // what other lanes wrote in the last.
+            // children appended to `out`. The group meets after each pass, whose successor reads
+            // what other lanes wrote in it.
             for (int depth = 0, n = pixels; n > 0; ++depth) {
+                PHASE_MARK(&sc, RT_PHASE_BOOKKEEPING, &phases);
                 Bounce_TracePass(&sc, &b, depth, n, in, out);
-#ifdef RT_PERSIST_BOUNCE_SHADOW_PASS
                 barrier(CLK_LOCAL_MEM_FENCE | CLK_GLOBAL_MEM_FENCE);
+                PHASE_MARK(&sc, RT_PHASE_TRACE_WAIT, &phases);
+#ifdef RT_PERSIST_BOUNCE_SHADOW_PASS
                 Bounce_ShadowPass(&sc, &b);
+                barrier(CLK_LOCAL_MEM_FENCE | CLK_GLOBAL_MEM_FENCE);
+                PHASE_MARK(&sc, RT_PHASE_SHADOW_WAIT, &phases);
 #endif
 #ifdef RT_PERSIST_BOUNCE_SORT
-                barrier(CLK_LOCAL_MEM_FENCE | CLK_GLOBAL_MEM_FENCE);
                 Bounce_SortPass(&b, n, lane);
+                barrier(CLK_LOCAL_MEM_FENCE | CLK_GLOBAL_MEM_FENCE);
+                PHASE_MARK(&sc, RT_PHASE_FILE, &phases);
 #endif
 #ifdef BOUNCE_STAGED
-                barrier(CLK_LOCAL_MEM_FENCE | CLK_GLOBAL_MEM_FENCE);
                 Bounce_ShadePass(&sc, &b, n, out);
-#endif
                 barrier(CLK_LOCAL_MEM_FENCE | CLK_GLOBAL_MEM_FENCE);
+                PHASE_MARK(&sc, RT_PHASE_SHADE_WAIT, &phases);
+#endif
                 n = counters.produced;
                 barrier(CLK_LOCAL_MEM_FENCE);  // every lane has read the count
                 Bounce_Reset(&counters, lane);
@@ -522,6 +578,7 @@ kernel __attribute__((reqd_work_group_size(RT_PERSIST_BOUNCE, 1, 1))) void Persi
                 Megakernel_Store(image, at, c);
             }
             barrier(CLK_GLOBAL_MEM_FENCE);  // the next sample rewrites trees other lanes summed
+            PHASE_MARK(&sc, RT_PHASE_BOOKKEEPING, &phases);
         }
     }
 }
@@ -672,30 +729,6 @@ inline RegroupShade Regroup_Shade(const SceneData* sc, const Node* n, const Pend
     return s;
 }
 
-#if defined(RT_PERSIST_PHASE_CLOCKS) && defined(RT_WARP_PTX) && defined(RT_COUNT_RAYS) && \
-    defined(RT_COUNT_LANES)
-// The phase clocks (RT_PERSIST_PHASE_CLOCKS, a diagnostic; the counting frame only, on NVIDIA):
-// at each mark the warp's lanes meet (bar.warp.sync) and its first lane adds the cycles since the
-// last mark to phase `slot` (RT_PHASE_*, core/types.h). The meetings are the clocks' own: read
-// the phases' shares, not their cycles (scripts/charts_phases.py).
-inline ulong Phase_Clock(void) {
-    ulong c;
-    __asm__ volatile("mov.u64 %0, %%clock64;" : "=l"(c));
-    return c;
-}
-#define PHASE_MARK(sc, slot, t, warp, first)                                                   \
-    do {                                                                                       \
-        __asm__ volatile("bar.warp.sync %0;" ::"r"(warp));                                     \
-        const ulong now_ = Phase_Clock();                                                      \
-        if (first)                                                                             \
-            atomic_add(&(sc)->rayCounts[RT_COUNT_PHASES + (slot)], (uint)((now_ - (t)) >> 6)); \
-        (t) = now_;                                                                            \
-    } while (0)
-#define PHASE_CLOCKS 1
-#else
-#define PHASE_MARK(sc, slot, t, warp, first)
-#endif
-
 kernel __attribute__((reqd_work_group_size(RG_LANES, 1, 1))) void Persistent_RenderRegrouped(
     RT_SCENE_PARAMS, global float* image, global int* next, int first, int count, int refill) {
     RT_SCENE_INIT(sc);
@@ -713,12 +746,7 @@ kernel __attribute__((reqd_work_group_size(RG_LANES, 1, 1))) void Persistent_Ren
     bool drained = false;  // the counter has no pixel left for this lane
     if (lane < RG_KEYS) keys[0][lane] = 0;
     barrier(CLK_LOCAL_MEM_FENCE);
-#ifdef PHASE_CLOCKS
-    const int phaseLanes = min(32, RG_LANES - (lane & ~31));  // this lane's warp
-    const uint phaseWarp = phaseLanes == 32 ? 0xffffffffu : (1u << phaseLanes) - 1u;
-    const bool phaseFirst = (lane & 31) == 0;
-    ulong phaseT = Phase_Clock();
-#endif
+    PhaseClock phases = Phase_Start(lane, RG_LANES);
     for (int step = 0;; step = step == 2 ? 0 : step + 1) {
         Persistent_EndOfTree(&sc, image, &l, stack, &top, samples);
         if (l.pixel < 0 && !drained) {
@@ -728,7 +756,7 @@ kernel __attribute__((reqd_work_group_size(RG_LANES, 1, 1))) void Persistent_Ren
             else
                 Persistent_Begin(&sc, &l, stack, &top, k, first, count);
         }
-        PHASE_MARK(&sc, RT_PHASE_BOOKKEEPING, phaseT, phaseWarp, phaseFirst);
+        PHASE_MARK(&sc, RT_PHASE_BOOKKEEPING, &phases);
         local int* counts = keys[step];
         if (lane < RG_KEYS) keys[step == 2 ? 0 : step + 1][lane] = 0;
 
@@ -744,9 +772,9 @@ kernel __attribute__((reqd_work_group_size(RG_LANES, 1, 1))) void Persistent_Ren
             key = Regroup_KeyOf(&sc, &node);
         }
         const int rank = atomic_inc(&counts[key]);
-        PHASE_MARK(&sc, RT_PHASE_TRACE, phaseT, phaseWarp, phaseFirst);
+        PHASE_MARK(&sc, RT_PHASE_TRACE, &phases);
         barrier(CLK_LOCAL_MEM_FENCE);
-        PHASE_MARK(&sc, RT_PHASE_TRACE_WAIT, phaseT, phaseWarp, phaseFirst);
+        PHASE_MARK(&sc, RT_PHASE_TRACE_WAIT, &phases);
         // The whole work-group leaves together, once none of its lanes holds a ray: every lane
         // must reach every barrier.
         if (counts[RG_IDLE] == RG_LANES) break;
@@ -762,7 +790,7 @@ kernel __attribute__((reqd_work_group_size(RG_LANES, 1, 1))) void Persistent_Ren
             slots[slot].hit.p = p;
         }
         barrier(CLK_LOCAL_MEM_FENCE);
-        PHASE_MARK(&sc, RT_PHASE_FILE, phaseT, phaseWarp, phaseFirst);
+        PHASE_MARK(&sc, RT_PHASE_FILE, &phases);
 
         // Shade the lane-th hit of that order.
         if (lane < busy) {
@@ -770,9 +798,9 @@ kernel __attribute__((reqd_work_group_size(RG_LANES, 1, 1))) void Persistent_Ren
             const Pending q = slots[lane].hit.p;
             slots[lane].shade = Regroup_Shade(&sc, &n, &q);
         }
-        PHASE_MARK(&sc, RT_PHASE_SHADE, phaseT, phaseWarp, phaseFirst);
+        PHASE_MARK(&sc, RT_PHASE_SHADE, &phases);
         barrier(CLK_LOCAL_MEM_FENCE);
-        PHASE_MARK(&sc, RT_PHASE_SHADE_WAIT, phaseT, phaseWarp, phaseFirst);
+        PHASE_MARK(&sc, RT_PHASE_SHADE_WAIT, &phases);
 
         // Take back this lane's own result, in Megakernel_TraceNext's order.
         if (l.pixel >= 0) {
