@@ -826,8 +826,10 @@ class PersistTest(unittest.TestCase):
 
 
 class PhasesTest(unittest.TestCase):
-    """scripts/charts_phases.py: the regrouped persistent megakernel's phase clocks turned into
+    """scripts/charts_phases.py: the persistent megakernel's phase clocks turned into
     milliseconds, beside the queue wavefront's kernels."""
+
+    BASE = {"scene": "map/map-s16-x25-o0-m16", "status": "ok", "width": 64, "height": 32}
 
     @staticmethod
     def write(d, name, rows):
@@ -836,12 +838,13 @@ class PhasesTest(unittest.TestCase):
             f.write("\n".join(json.dumps(r) for r in rows) + "\n")
         return path
 
-    def run_script(self, persist_extras, queue=True, queue_arg=None):
+    def run_script(self, persist_extras, queue=True, queue_arg=None, more=()):
         d = tempfile.mkdtemp()
-        base = {"scene": "map/map-s16-x25-o0-m16", "status": "ok", "width": 64, "height": 32}
+        base = self.BASE
         rows = [dict(base, pipeline="mega", layout="weighted", device_ms=8.0),
                 dict(base, pipeline="persist", layout="weighted", device_ms=4.0,
-                     extras=persist_extras)]
+                     persistent_loop="flat", persistent_regroup="pattern",
+                     extras=persist_extras)] + list(more)
         path = self.write(d, "rows.jsonl", rows)
         with open(os.path.join(d, "sweep.json"), "w") as f:
             json.dump(dict(META, sweep="persist-phase"), f)
@@ -853,17 +856,40 @@ class PhasesTest(unittest.TestCase):
             args += ["--queue", queue_arg or f"queue={q}"]
         return d, subprocess.run(args, capture_output=True, text=True)
 
+    @staticmethod
+    def lines(d):
+        with open(os.path.join(d, "phases.md")) as f:
+            return [x.strip() for x in f if x.startswith("| `s16")]
+
     def test_phase_shares_of_the_device_time_and_queue_parts(self):
-        # Cycles 1:4:1:0:2:0 of 4 ms: 0.5, 2, 0.5, 0, 1, 0 ms.
+        # Cycles 1:4:1:0:2:0 of 4 ms: 0.5, 2, 0.5, 0, 1, 0 ms. The regrouped loop casts its
+        # shadow rays in its trace; the queue's trace and shadow kernels add up beside it.
         extras = {"phase_mcycles_bookkeeping": 10.0, "phase_mcycles_trace": 40.0,
                   "phase_mcycles_trace_wait": 10.0, "phase_mcycles_shade": 20.0}
         d, p = self.run_script(extras)
         self.assertEqual(p.returncode, 0, p.stderr)
-        line = next(x for x in open(os.path.join(d, "phases.md")) if x.startswith("| `s16"))
-        self.assertEqual(line.strip(), "| `s16-x25-o0` | 8.000 | 4.000 (2.00x) | 0.50 | 2.00 | "
-                         "0.50 | 0.00 | 1.00 | 0.00 | 2.000 (4.00x) | 0.50 | 0.25 | 0.75 | 0.50 |")
+        self.assertEqual(self.lines(d), [
+            "| `s16-x25-o0` | weighted megakernel | 8.000 | | | | | | |",
+            "| `s16-x25-o0` | regrouped by pattern | 4.000 (2.00x) | 2.00 | in the trace | 1.00 | "
+            "0.50 | 0.00 | 0.50 |",
+            "| `s16-x25-o0` | queue | 2.000 (4.00x) | 0.75 | 0.25 | 0.75 | — | — | 0.50 |"])
         if HAVE_MPL:
             self.assertGreater(os.path.getsize(os.path.join(d, "phases.png")), 10000)
+
+    def test_a_bounce_loop_with_a_shadow_pass_has_its_shadow_rays_apart(self):
+        # 60 units of 6 ms: trace 2, shadow pass 1, the three waits 0.5 + 0.5, shading 1,
+        # filing (the staged hits and the sort) 0.5, bookkeeping 0.5.
+        bounce = dict(self.BASE, pipeline="persist", layout="weighted", device_ms=6.0,
+                      persistent_loop="bounce", persistent_regroup="pattern",
+                      persistent_shadows="pass", extras={
+                          "phase_mcycles_trace": 20.0, "phase_mcycles_shadow": 10.0,
+                          "phase_mcycles_shadow_wait": 5.0, "phase_mcycles_shade": 10.0,
+                          "phase_mcycles_shade_wait": 5.0, "phase_mcycles_file": 5.0,
+                          "phase_mcycles_bookkeeping": 5.0})
+        d, p = self.run_script({"phase_mcycles_trace": 1.0}, queue=False, more=[bounce])
+        self.assertEqual(p.returncode, 0, p.stderr)
+        self.assertIn("| `s16-x25-o0` | bounce loop, sorted by pattern, shadow pass | "
+                      "6.000 (1.33x) | 3.00 | 1.00 | 1.00 | 1.00 | 0.50 | 0.50 |", self.lines(d))
 
     def test_rows_without_clocks_are_one_line(self):
         _, p = self.run_script({"warp_steps": 5.0}, queue=False)
