@@ -51,6 +51,11 @@ std::map<std::string, double> kernelResources(const cl::Program& program, const 
             if (clGetKernelWorkGroupInfo(k(), device(), CL_KERNEL_PRIVATE_MEM_SIZE, sizeof bytes,
                                          &bytes, nullptr) == CL_SUCCESS)
                 out[name + ".private_bytes"] = double(bytes);
+            // A work-group's local memory, which with the registers sets how many groups a
+            // compute unit holds at once.
+            if (clGetKernelWorkGroupInfo(k(), device(), CL_KERNEL_LOCAL_MEM_SIZE, sizeof bytes,
+                                         &bytes, nullptr) == CL_SUCCESS)
+                out[name + ".local_bytes"] = double(bytes);
         }
     } catch (const cl::Error&) {
         // A driver that cannot say is not an error: the row simply has fewer columns.

@@ -13,8 +13,9 @@ namespace rt {
 
 // "<Kernel>.registers", "<Kernel>.spill_stores", "<Kernel>.spill_loads", "<Kernel>.stack_bytes"
 // (NVIDIA only, from `buildLog`: ClContext::lastBuildLog(), which a program loaded from a
-// binary does not hold itself) and "<Kernel>.private_bytes" (every device that answers) for each
-// kernel of the program. Computed once per program object and log.
+// binary does not hold itself), "<Kernel>.private_bytes" and "<Kernel>.local_bytes" (a work-item's
+// private and a work-group's local memory, every device that answers) for each kernel of the
+// program. Computed once per program object and log.
 std::map<std::string, double> kernelResources(const cl::Program& program, const cl::Device& device,
                                               const std::string& buildLog);
 

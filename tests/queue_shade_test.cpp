@@ -32,14 +32,7 @@ using test::sameBits;
 
 // A wall of 192 spheres, 4 px across at 64x48, of 16 materials at random (scripts/make-map.py):
 // all five patterns, mirrors and glass side by side, so that neighbouring rays differ.
-Scene mapWall() {
-    const std::string dir = test::scratchPath("map/");
-    const std::string cmd = "python3 scripts/make-map.py --out " + dir +
-                            " --size 4 --special 0.5 --octaves 8 --materials 16 --frame 64x48"
-                            " > /dev/null";
-    if (std::system(cmd.c_str()) != 0) throw Error("failed: " + cmd);
-    return loadScene(dir + "map-s4-x50-o8-m16-f64x48.json", readImage);
-}
+Scene mapWall() { return test::mapWall(4, "0.5", 8, "64x48"); }
 
 RenderOptions small(const Scene& scene) {
     RenderOptions o = scene.defaults;

@@ -1,12 +1,15 @@
 // rtlab tests — generated scenes that several test files share.
 #pragma once
 
+#include <cstdlib>
 #include <random>
 #include <string>
 
+#include "core/error.h"
 #include "core/scene.h"
 #include "core/scene_loader.h"
 #include "image/image_io.h"
+#include "scratch_dir.h"
 
 namespace rt::test {
 
@@ -40,6 +43,22 @@ inline Scene soup(int spheres, int triangles, unsigned seed) {
     }
     finalizeScene(s);
     return s;
+}
+
+// A wall of the crossover map (scripts/make-map.py) of spheres `size` px across in a frame of
+// `frame` (WxH), of 16 materials at random, `special` of them mirrors or glass, the patterns at
+// `octaves` noise octaves: written to a scratch folder of its own and loaded.
+inline Scene mapWall(int size, const std::string& special, int octaves, const std::string& frame) {
+    const std::string dir = scratchPath("map-wall/");
+    const std::string cmd = "python3 scripts/make-map.py --out " + dir + " --size " +
+                            std::to_string(size) + " --special " + special + " --octaves " +
+                            std::to_string(octaves) + " --materials 16 --frame " + frame +
+                            " > /dev/null";
+    if (std::system(cmd.c_str()) != 0) throw Error("failed: " + cmd);
+    const std::string percent = std::to_string(int(std::stod(special) * 100 + 0.5));
+    return loadScene(dir + "map-s" + std::to_string(size) + "-x" + percent + "-o" +
+                         std::to_string(octaves) + "-m16-f" + frame + ".json",
+                     readImage);
 }
 
 }  // namespace rt::test

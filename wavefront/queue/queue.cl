@@ -25,6 +25,19 @@
 #define RT_QUEUE_SHADE RT_Q_SHADE_CLASS
 #endif
 
+// --queue-local-pad N, a diagnostic (RT_Q_LOCAL_PAD=N where N > 0): N bytes of local memory
+// that hold nothing, in each work-group of the per-ray stage kernels (extend, shadow, shade),
+// so that fewer of their groups are resident on a compute unit at once. The lanes' volatile
+// stores keep the compiler from dropping the array; nothing reads it. The first statement of a
+// kernel, as local declarations must be at a kernel's scope.
+#ifdef RT_Q_LOCAL_PAD
+#define QUEUE_LOCAL_PAD()                          \
+    local volatile uchar queuePad[RT_Q_LOCAL_PAD]; \
+    queuePad[get_local_id(0) % RT_Q_LOCAL_PAD] = 0
+#else
+#define QUEUE_LOCAL_PAD() (void)0
+#endif
+
 // The pool's fields, one array each (float3 fields as 3 floats, vload3/vstore3).
 typedef struct QueueRays {
     global float* origin;
@@ -150,6 +163,7 @@ inline void Queue_GroupPushesReserve(local const int* count, local int* base,
 kernel void Queue_Extend(RT_SCENE_PARAMS, QUEUE_RAYS_PARAMS(rays), int n, global Node* nodes,
                          global int* shadeQueues, int pool, global int* shadowQueue,
                          global int* counters, int nWord, global uint* rayTally) {
+    QUEUE_LOCAL_PAD();
     local int count[RT_Q_QUEUES + 1], base[RT_Q_QUEUES + 1];
     local int histogram[(RT_Q_MAX_DEPTH + 1) * RT_Q_CLASSES];
     int lid = get_local_id(0), size = get_local_size(0), i = get_global_id(0);
@@ -185,6 +199,7 @@ kernel void Queue_Extend(RT_SCENE_PARAMS, QUEUE_RAYS_PARAMS(rays), int n, global
 kernel void Queue_Shadow(RT_SCENE_PARAMS, global Node* nodes, global const int* shadowQueue,
                          global const int* counters, global const int* rayPixel,
                          global const int* rayMeta, global uint* rayTally) {
+    QUEUE_LOCAL_PAD();
     int k = get_global_id(0);
     if (k >= counters[RT_Q_SHADOW]) return;
     RT_SCENE_INIT(sc);
@@ -232,6 +247,7 @@ inline void Queue_Shade(const SceneData* sc, int cls, int pattern, int i, const 
 // The shade kernel of queue `queue`, whose rays are all of class `cls` and pattern `pattern`.
 #define QUEUE_SHADE_KERNEL(name, queue, cls, pattern)                                         \
     kernel void name(QUEUE_SHADE_PARAMS) {                                                    \
+        QUEUE_LOCAL_PAD();                                                                    \
         int k = get_global_id(0);                                                             \
         if (k >= counters[RT_Q_COUNT + queue]) return;                                        \
         RT_SCENE_INIT(sc);                                                                    \
@@ -263,6 +279,7 @@ QUEUE_SHADE_PATTERN_KERNEL(Queue_ShadeBump, RT_PATTERN_BUMP)
 // From: the hits sorted by material (queue_sort.cl) / To: as above. Every class and pattern in
 // one launch, the class read per ray: neighbouring work-items shade the same material.
 kernel void Queue_ShadeSorted(QUEUE_SHADE_PARAMS) {
+    QUEUE_LOCAL_PAD();
     int k = get_global_id(0);
     if (k >= counters[RT_Q_COUNT + RT_Q_HITS]) return;
     RT_SCENE_INIT(sc);

@@ -27,6 +27,11 @@ namespace rt {
 
 namespace {
 
+// The local memory the extend kernel declares itself (queue.cl): counts and bases of its pushes
+// to the queues, and the histogram of depths and classes. --queue-local-pad comes on top.
+constexpr size_t kExtendLocalBytes =
+    sizeof(int) * (2 * (RT_Q_QUEUES + 1) + (RT_Q_MAX_DEPTH + 1) * RT_Q_CLASSES);
+
 // "Queue_ShadeGlass" -> "shade glass": the stage names --stats prints.
 std::string stageName(const std::string& kernel) {
     std::string out;
@@ -44,6 +49,8 @@ std::vector<std::string> programDefines(const Scene& scene, const RenderOptions&
                                         bool packets, int dropLane) {
     std::vector<std::string> d = featureDefines(scene, o);
     d.push_back("RT_QUEUE_GROUP=" + std::to_string(group));
+    if (const size_t pad = queueLocalPad(o); pad > 0)
+        d.push_back("RT_Q_LOCAL_PAD=" + std::to_string(pad));
     // --queue-shade: the class mode's program is the one it always was.
     if (const QueueShadeMode shade = queueShade(o); shade == QueueShadeMode::Pattern)
         d.push_back("RT_QUEUE_SHADE=RT_Q_SHADE_PATTERN");
@@ -246,6 +253,7 @@ class QueueFrame {
     }
     std::vector<QueueLaunch>& launches() { return launches_; }
     const DeviceScene& scene() const { return scene_; }
+    int group() const { return group_; }  // RT_QUEUE_GROUP, the scans' work-group size
 
   private:
     // Items [offset, offset + items) of the queue: work-items from offset / lanes on.
@@ -467,7 +475,7 @@ class QueuePass {
             else
                 f_.launch(l.kernel, 1);  // one work-group
         }
-        size_t group = size_t(QueuePipeline::groupSize(cl_.device()));
+        size_t group = size_t(f_.group());
         size_t blocks = (n + group - 1) / group;
         f_.kernel("Queue_ScanBlocks").set("n", cl_int(n));
         f_.launch("Queue_ScanBlocks", n);
@@ -609,7 +617,13 @@ Image QueuePipeline::renderFrame(const Scene& scene, const RenderOptions& o) {
     const int C = scene.branching();
     const DeviceInfo& dev = cl_.device();
     size_t pool = poolSize(dev, C, o.bounces, o);
-    int group = groupSize(dev);
+    int group = groupSize(dev, o);
+    if (const size_t pad = queueLocalPad(o); pad + kExtendLocalBytes > dev.localMem)
+        throw Error("--queue-local-pad " + std::to_string(pad) + ": with the extend kernel's own " +
+                        std::to_string(kExtendLocalBytes) + " bytes it passes the " +
+                        std::to_string(dev.localMem) +
+                        " bytes of local memory a work-group has on " + dev.name,
+                    FailureKind::InvalidOption);
     const bool packets = usesPackets(dev, scene, o);
     const std::vector<std::string> defines = programDefines(scene, o, group, packets, dropLane_);
     cl::Program program = this->program("queue.cl", defines);

@@ -95,8 +95,11 @@ class QueuePipeline : public DevicePipeline {
     static int shadeQueues(QueueShadeMode shade);
     // A ray's record in the pool: origin, direction, weight (3 floats each), pixel and meta.
     static constexpr size_t kRayRecordBytes = 3 * 12 + 2 * 4;
-    // Work-group size of the scan (and the most any queue kernel uses): a power of two.
+    // Work-group size of the scan (and the most any queue kernel uses): a power of two, the
+    // device's own choice, or --queue-group where given (refused by name when it is not a power
+    // of two or passes the device's limit).
     static int groupSize(const DeviceInfo& device);
+    static int groupSize(const DeviceInfo& device, const RenderOptions& options);
     // Whether the extend and shadow stages trace packets of kPacket queue entries per work-item
     // (--queue-packets; wavefront/queue/queue_packet.cl), or why not: "" when they do. Throws
     // rt::Error, one line naming the flag, when `on` is asked for and cannot be had.

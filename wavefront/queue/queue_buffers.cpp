@@ -41,6 +41,20 @@ int QueuePipeline::groupSize(const DeviceInfo& device) {
     return int(g);
 }
 
+int QueuePipeline::groupSize(const DeviceInfo& device, const RenderOptions& o) {
+    const int asked = queueGroup(o);
+    if (asked == 0) return groupSize(device);
+    const std::string flag = "--queue-group " + std::to_string(asked);
+    // The scans halve and double their strides over the whole group.
+    if ((asked & (asked - 1)) != 0)
+        throw Error(flag + ": must be a power of two", FailureKind::InvalidOption);
+    if (size_t(asked) > device.maxWorkGroup)
+        throw Error(flag + ": " + device.name + " runs at most " +
+                        std::to_string(device.maxWorkGroup) + " work-items a group",
+                    FailureKind::InvalidOption);
+    return asked;
+}
+
 size_t QueuePipeline::poolSize(const DeviceInfo& device, int branching, int bounces,
                                const RenderOptions& o) {
     size_t widest = 1;  // C^B: a path's widest bounce (every ray spawns C children)

@@ -75,10 +75,64 @@ const PipelineOption& shadeOption() {
     return o;
 }
 
+const PipelineOption& groupOption() {
+    static const PipelineOption o{
+        .name = "queue-group",
+        .type = PipelineOption::Type::Integer,
+        .help =
+            "Queue pipeline: work-items per work-group of its kernels, a power of two up to the "
+            "device's limit [from the device: 256 on GPUs, 64 on CPUs]",
+        .defaultValue = 0ll,  // chosen from the device
+        .min = 1,
+        .max = 1024,
+        .sweepKey = "queue-group",
+        .cellTag = "I",
+        .label = "groups of {}",
+    };
+    return o;
+}
+
+const PipelineOption& localPadOption() {
+    static const PipelineOption o{
+        .name = "queue-local-pad",
+        .type = PipelineOption::Type::Integer,
+        .help =
+            "Queue pipeline, a diagnostic: bytes of local memory that hold nothing, added to "
+            "each work-group of the extend, shadow and shade kernels, so that fewer groups fit "
+            "a compute unit at once (what occupancy is worth to them); the image is the same "
+            "[0]",
+        .defaultValue = 0ll,
+        .min = 0,
+        .max = 1 << 20,
+        .sweepKey = "queue-local-pad",
+        .cellTag = "Z",
+        .label = "with {} B of local pad",
+    };
+    return o;
+}
+
 }  // namespace
 
 std::vector<PipelineOption> queueOptions() {
-    return {launchOption(), poolOption(), packetsOption(), shadeOption()};
+    return {launchOption(), poolOption(),  packetsOption(),
+            shadeOption(),  groupOption(), localPadOption()};
+}
+
+int queueGroup(const RenderOptions& o) { return int(groupOption().integer(o.pipelineOptions)); }
+
+void setQueueGroup(RenderOptions& o, int items) {
+    if (items == 0)
+        o.pipelineOptions.reset(groupOption().name);
+    else
+        groupOption().set(o.pipelineOptions, (long long)(items));
+}
+
+size_t queueLocalPad(const RenderOptions& o) {
+    return size_t(localPadOption().integer(o.pipelineOptions));
+}
+
+void setQueueLocalPad(RenderOptions& o, size_t bytes) {
+    localPadOption().set(o.pipelineOptions, (long long)(bytes));
 }
 
 QueueLaunchMode queueLaunch(const RenderOptions& o) {

@@ -1,5 +1,5 @@
 // rtlab — the queue wavefront's own options (--queue-launch, --pool, --queue-packets,
-// --queue-shade), declared
+// --queue-shade, --queue-group, --queue-local-pad), declared
 // in its registry entry (core/pipeline_options.h) and read back here, typed, from
 // RenderOptions::pipelineOptions. Front ends know them only through the declarations.
 #pragma once
@@ -38,6 +38,14 @@ QueuePacketMode queuePackets(const RenderOptions& options);
 void setQueuePackets(RenderOptions& options, QueuePacketMode mode);
 QueueShadeMode queueShade(const RenderOptions& options);
 void setQueueShade(RenderOptions& options, QueueShadeMode mode);
+// Work-items per group of the queue's kernels; 0: chosen from the device
+// (QueuePipeline::groupSize).
+int queueGroup(const RenderOptions& options);
+void setQueueGroup(RenderOptions& options, int items);  // 0: back to the device's choice
+// A diagnostic: bytes of local memory that hold nothing in each group of the per-ray stage kernels
+// (extend, shadow, shade), so that fewer groups are resident on a compute unit at once.
+size_t queueLocalPad(const RenderOptions& options);
+void setQueueLocalPad(RenderOptions& options, size_t bytes);
 
 // Names as the flags take them: readback, device; auto, on, off; class, pattern, sort. The parsers
 // throw rt::Error naming the flag ("--queue-launch up: must be readback or device").

@@ -90,6 +90,7 @@ inline Hit PacketLanes_Hit(const PacketLanes* l, int j) {
 kernel void Queue_ExtendPacket(RT_SCENE_PARAMS, QUEUE_RAYS_PARAMS(rays), int n, global Node* nodes,
                                global int* shadeQueues, int pool, global int* shadowQueue,
                                global int* counters, int nWord, global uint* rayTally) {
+    QUEUE_LOCAL_PAD();
     local int count[RT_Q_QUEUES + 1], base[RT_Q_QUEUES + 1];
     local int histogram[(RT_Q_MAX_DEPTH + 1) * RT_Q_CLASSES];
     int lid = get_local_id(0), size = get_local_size(0), g = get_global_id(0);
@@ -138,6 +139,7 @@ kernel void Queue_ExtendPacket(RT_SCENE_PARAMS, QUEUE_RAYS_PARAMS(rays), int n, 
 kernel void Queue_ShadowPacket(RT_SCENE_PARAMS, global Node* nodes, global const int* shadowQueue,
                                global const int* counters, global const int* rayPixel,
                                global const int* rayMeta, global uint* rayTally) {
+    QUEUE_LOCAL_PAD();
     int first = get_global_id(0) * RT_PACKET;
     int lanes = min(counters[RT_Q_SHADOW] - first, RT_PACKET);
     if (lanes <= 0) return;
