@@ -24,6 +24,7 @@
 #include "test_device.h"
 #include "test_images.h"
 #include "test_sweep.h"
+#include "wavefront/queue/queue_options.h"
 
 namespace rt {
 namespace {
@@ -335,21 +336,28 @@ TEST(Registry, RecordedRowsKeepTheirCellKeys) {
 
 // Tests and the smoke check run every pipeline in each of its variants: the megakernel in both
 // layouts, the persistent megakernel flat, regrouped, nested, in lockstep and in the schedule auto
-// chooses, the others once at their defaults.
+// chooses, the queue at its defaults and in small padded groups, the others once at their
+// defaults.
 TEST(Registry, VariantsCoverTheMegakernelsLayoutsAndSchedules) {
     std::vector<std::string> names;
     for (const PipelineVariantRun& v : pipelineRegistry().variants(true)) {
         names.push_back(v.name);
         RenderOptions o;
         v.apply(o);
-        if (v.pipeline == "mega")
+        if (v.pipeline == "mega") {
             EXPECT_EQ(megaLayoutName(megaLayout(o)), v.variant.name) << v.name;
-        else if (v.pipeline != "persist")
+        } else if (v.name == "queue-padded") {
+            EXPECT_EQ(queueGroup(o), 64);
+            EXPECT_EQ(queueLocalPad(o), 16384u);
+        } else if (v.pipeline != "persist") {
             EXPECT_EQ(v.name, v.pipeline);
+        }
     }
     EXPECT_EQ(std::count(names.begin(), names.end(), "mega-tree"), 1) << names.size();
     EXPECT_EQ(std::count(names.begin(), names.end(), "mega-weighted"), 1) << names.size();
     EXPECT_EQ(std::count(names.begin(), names.end(), "wave"), 1) << names.size();
+    EXPECT_EQ(std::count(names.begin(), names.end(), "queue"), 1) << names.size();
+    EXPECT_EQ(std::count(names.begin(), names.end(), "queue-padded"), 1) << names.size();
     for (const char* persist :
          {"persist", "persist-regrouped", "persist-nested", "persist-lockstep", "persist-auto"})
         EXPECT_EQ(std::count(names.begin(), names.end(), persist), 1) << persist;

@@ -810,6 +810,7 @@ void registerQueueWavefront(PipelineRegistry& registry) {
     p.settleDefaults = [](RenderOptions& o, bool launchCapGiven) {
         if (queueLaunch(o) == QueueLaunchMode::Device && !launchCapGiven) o.maxLaunchMs = 0;
     };
+    p.variants = queueVariants();
     p.make = [](ClContext* cl) { return std::make_unique<QueuePipeline>(*cl); };
     registry.add(std::move(p));
 }

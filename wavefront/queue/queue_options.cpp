@@ -118,6 +118,15 @@ std::vector<PipelineOption> queueOptions() {
             shadeOption(),  groupOption(), localPadOption()};
 }
 
+std::vector<PipelineVariant> queueVariants() {
+    // Small groups with their local memory padded, as bench/sweeps/queue-occupancy runs them
+    // (16 KiB, which every OpenCL device has twice over), beside the defaults.
+    PipelineVariant padded{"padded", {}};
+    groupOption().set(padded.values, 64ll);
+    localPadOption().set(padded.values, 16384ll);
+    return {PipelineVariant{"", {}}, padded};
+}
+
 int queueGroup(const RenderOptions& o) { return int(groupOption().integer(o.pipelineOptions)); }
 
 void setQueueGroup(RenderOptions& o, int items) {

@@ -28,6 +28,9 @@ enum class QueueShadeMode { Class, Pattern, Sort };
 
 // The declarations, in the order cell keys list them.
 std::vector<PipelineOption> queueOptions();
+// The forms the smoke check and the equivalence tests run: the defaults, and "padded" (groups of
+// 64 with 16 KiB of --queue-local-pad).
+std::vector<PipelineVariant> queueVariants();
 
 QueueLaunchMode queueLaunch(const RenderOptions& options);
 void setQueueLaunch(RenderOptions& options, QueueLaunchMode mode);
