@@ -903,5 +903,74 @@ class PhasesTest(unittest.TestCase):
         self.assertIn("--queue rows.jsonl: expected LABEL=ROWS.jsonl", p.stderr)
 
 
+class OccupancyTest(unittest.TestCase):
+    """scripts/charts_occupancy.py: the queue's stage times beside the warps their kernels keep,
+    estimated from registers, local memory and group size with sm_90's limits."""
+
+    def test_resident_warps_by_registers_local_memory_and_group(self):
+        sys.path.insert(0, SCRIPTS)
+        from charts_occupancy import resident_warps
+        self.assertEqual(resident_warps(46, 420, 256), 40)     # registers: 5 groups of 8 warps
+        self.assertEqual(resident_warps(46, 47524, 256), 32)   # local memory: 4 groups
+        self.assertEqual(resident_warps(46, 47524, 128), 16)
+        self.assertEqual(resident_warps(46, 47524, 64), 8)
+        self.assertEqual(resident_warps(126, 0, 512), 16)      # the bounce loop's one kernel
+        self.assertEqual(resident_warps(16, 0, 32), 32)        # at most 32 groups
+
+    def test_stages_and_warps_a_row(self):
+        d = tempfile.mkdtemp()
+        base = {"scene": "map/map-s16-x25-o0-m16", "status": "ok", "width": 64, "height": 32}
+        res_a = {"Queue_Extend.registers": 46, "Queue_Extend.local_bytes": 420,
+                 "Queue_Shadow.registers": 61, "Queue_Shadow.local_bytes": 0,
+                 "Queue_ShadeGlass.registers": 80, "Queue_ShadeMiss.registers": 18}
+        res_b = dict(res_a, **{"Queue_Extend.local_bytes": 47524,
+                               "Queue_Shadow.local_bytes": 47104,
+                               "Queue_ShadeGlass.local_bytes": 47104,
+                               "Queue_ShadeMiss.local_bytes": 47104})
+        rows = [dict(base, pipeline="mega", layout="weighted", device_ms=5.0),
+                dict(base, pipeline="persist", device_ms=3.0,
+                     options={"persistent-lanes": 0, "persistent-loop": "bounce"},
+                     kernel_resources={"Persistent_RenderBounce.registers": 126}),
+                dict(base, pipeline="queue", device_ms=2.5,
+                     options={"queue-group": 256, "queue-local-pad": 0}, kernel_resources=res_a,
+                     kernel_ms={"extend": 0.5, "shadow": 0.8, "shade glass": 0.4,
+                                "shade miss": 0.1}),
+                dict(base, pipeline="queue", device_ms=3.9,
+                     options={"queue-group": 128, "queue-local-pad": 47104},
+                     kernel_resources=res_b,
+                     kernel_ms={"extend": 0.9, "shadow": 1.5, "shade glass": 0.6,
+                                "shade miss": 0.1})]
+        path = os.path.join(d, "rows.jsonl")
+        with open(path, "w") as f:
+            f.write("\n".join(json.dumps(r) for r in rows) + "\n")
+        with open(os.path.join(d, "sweep.json"), "w") as f:
+            json.dump(dict(META, sweep="queue-occupancy"), f)
+        p = subprocess.run([sys.executable, os.path.join(SCRIPTS, "charts_occupancy.py"), path],
+                           capture_output=True, text=True)
+        self.assertEqual(p.returncode, 0, p.stderr)
+        with open(os.path.join(d, "occupancy.md")) as f:
+            lines = [x.strip() for x in f if x.startswith("| `s16")]
+        self.assertEqual(lines, [
+            "| `s16-x25-o0` | weighted megakernel | 5.000 | | | |",
+            "| `s16-x25-o0` | persistent megakernel | 3.000 (1.67x) | one kernel: 16 warps | | |",
+            "| `s16-x25-o0` | queue, groups of 256 | 2.500 (2.00x) | 0.50 (40) | 0.80 (32) | "
+            "0.50 (24) |",
+            "| `s16-x25-o0` | queue, groups of 128, 47104 B pad | 3.900 (1.28x) | 0.90 (16) | "
+            "1.50 (16) | 0.70 (16) |"])
+        if HAVE_MPL:
+            self.assertGreater(os.path.getsize(os.path.join(d, "occupancy.png")), 10000)
+
+    def test_rows_without_registers_are_one_line(self):
+        d = tempfile.mkdtemp()
+        path = os.path.join(d, "rows.jsonl")
+        with open(path, "w") as f:
+            f.write(json.dumps({"scene": "spheres", "pipeline": "queue", "status": "ok",
+                                "device_ms": 1.0, "kernel_ms": {"extend": 0.5}}) + "\n")
+        p = subprocess.run([sys.executable, os.path.join(SCRIPTS, "charts_occupancy.py"), path],
+                           capture_output=True, text=True)
+        self.assertEqual(p.returncode, 1)
+        self.assertIn("no queue rows with kernel times and registers", p.stderr)
+        self.assertEqual(len(p.stderr.strip().splitlines()), 1, p.stderr)
+
 if __name__ == "__main__":
     unittest.main()
