@@ -61,5 +61,18 @@ class Report(unittest.TestCase):
                 self.assertNotIn(call, text, label)
 
 
+
+class Root(unittest.TestCase):
+    def test_a_folder_that_is_no_checkout_is_one_line(self):
+        import subprocess
+        import sys
+        import tempfile
+        d = tempfile.mkdtemp()
+        p = subprocess.run([sys.executable, PATH, "--root", d], capture_output=True, text=True)
+        self.assertNotEqual(p.returncode, 0)
+        self.assertEqual(p.stderr.strip(), "scripts/nvptx-registers: " + d +
+                         ": not an rtlab checkout (no persistent/persistent.cl)")
+
+
 if __name__ == "__main__":
     unittest.main()
