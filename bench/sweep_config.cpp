@@ -126,7 +126,7 @@ const std::set<std::string> kGroupKeys = {
     "repeats",    "warmup",    "count-rays",    "max-launch-ms", "stop-after-failure",
     "max-frame-s"};
 const std::set<std::string> kTopKeys = {"reference-bounces", "reference-shadow-samples",
-                                        "reference-aa"};
+                                        "reference-aa", "cl-options"};
 
 void applyGroupKey(SweepGroup& g, const std::string& key, const std::string& value,
                    const ValueParser& p) {
@@ -233,6 +233,10 @@ SweepConfig parseSweep(const std::string& text, const fs::path& path) {
             if (key == "reference-shadow-samples")
                 c.referenceShadowSamples = p.integer(value, 1, RT_MAX_SHADOW_SAMPLES);
             if (key == "reference-aa") c.referenceAa = p.integer(value, 1, 16);
+            if (key == "cl-options") {
+                if (value.empty()) p.fail("cl-options: expected compiler options, got nothing");
+                c.clOptions = value;
+            }
         } else if (groupNames.empty()) {
             applyGroupKey(defaults, key, value, p);
             if (key == "repeats") c.repeats = defaults.repeats;

@@ -46,6 +46,10 @@ struct SweepConfig {
     bool countRays = true;  // one extra untimed frame with device ray counters
     // The converged reference the accuracy group is compared against (CPU, double precision).
     int referenceBounces = 12, referenceShadowSamples = 64, referenceAa = 8;
+    // cl-options: compiler options every program of the sweep is built with besides the host's
+    // (a diagnostic's define, e.g. -DRT_PERSIST_PHASE_CLOCKS), as $RTLAB_CL_OPTIONS adds them;
+    // runSweep puts them there for the run, after any the environment has.
+    std::string clOptions;
     std::vector<SweepGroup> groups;
 };
 

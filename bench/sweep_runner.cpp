@@ -782,9 +782,43 @@ void finishMeta(SweepSummary& summary) {
 
 }  // namespace
 
+namespace {
+
+// The sweep's cl-options in $RTLAB_CL_OPTIONS (after any the environment has) while it runs, so
+// that every program build takes them, every row records them, and the cache keeps those
+// builds apart; the environment as it was afterwards.
+class ClOptionsForTheRun {
+  public:
+    explicit ClOptionsForTheRun(const std::string& options) {
+        const char* env = std::getenv("RTLAB_CL_OPTIONS");
+        if (env) before_ = env;
+        had_ = env != nullptr;
+        if (options.empty()) return;
+        set_ = true;
+        const std::string both = before_.empty() ? options : before_ + " " + options;
+        setenv("RTLAB_CL_OPTIONS", both.c_str(), 1);
+    }
+    ~ClOptionsForTheRun() {
+        if (!set_) return;
+        if (had_)
+            setenv("RTLAB_CL_OPTIONS", before_.c_str(), 1);
+        else
+            unsetenv("RTLAB_CL_OPTIONS");
+    }
+    ClOptionsForTheRun(const ClOptionsForTheRun&) = delete;
+    ClOptionsForTheRun& operator=(const ClOptionsForTheRun&) = delete;
+
+  private:
+    std::string before_;
+    bool had_ = false, set_ = false;
+};
+
+}  // namespace
+
 SweepSummary runSweep(const SweepConfig& config, const SweepRunOptions& options,
                       const std::function<void(const nlohmann::json&)>& onStart,
                       const RowSink& sink) {
+    const ClOptionsForTheRun clOptions(config.clOptions);
     const SweepScenes scenes = loadSweepScenes(config, options);
     const SweepPlan plan = planSweep(config, options, scenes);
     std::vector<DeviceInfo> devices = options.devices.empty()

@@ -47,7 +47,7 @@ RT_DEV_BEGIN
 #define RT_COUNT_LANES_ACTIVE RT_RAY_TYPES
 #define RT_COUNT_WARP_STEPS (RT_RAY_TYPES + 1)
 // Then the phase clocks of the persistent megakernel's regrouped and bounce loops, a diagnostic
-// built only with RT_PERSIST_PHASE_CLOCKS (e.g. RTLAB_CL_OPTIONS=-DRT_PERSIST_PHASE_CLOCKS) on
+// built only with RT_PERSIST_PHASE_CLOCKS (a sweep's cl-options, or RTLAB_CL_OPTIONS) on
 // NVIDIA: the cycles their warps spend in each phase, in units of 64, summed over warps.
 #define RT_COUNT_PHASES (RT_RAY_TYPES + 2)
 #define RT_PHASE_BOOKKEEPING 0  // pixels, stacks and results; the bounce loop's batches and sums

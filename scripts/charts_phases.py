@@ -3,7 +3,7 @@
 scenes: one stacked bar per design and scene, in the weighted megakernel's time (so that the
 issue's 2x bar is the line at 0.5).
 
-The persistent rows come from a sweep run with RTLAB_CL_OPTIONS=-DRT_PERSIST_PHASE_CLOCKS (a
+The persistent rows come from a sweep built with -DRT_PERSIST_PHASE_CLOCKS (its cl-options; a
 diagnostic: each warp of the counting frame adds its cycles per phase of the regrouped loop's
 step or of the bounce loop's passes to the row's extras, phase_mcycles_*). A phase's share of
 those cycles times the row's device time (the timed frames, which run without the clocks) is its

@@ -5,7 +5,11 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdlib>
 #include <set>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "bench/sweep_runner.h"
 #include "bench/sweep_schedule.h"
@@ -190,6 +194,42 @@ TEST(SweepRows, TimingExtrasComeFromTheTimedFrames) {
     double busy = r["extras"]["span_ms"].get<double>() - r["extras"]["idle_ms"].get<double>();
     double last = r["frame_ms"].back().get<double>();
     EXPECT_NEAR(busy, last, 1e-6 * std::max(1.0, last)) << r["frame_ms"].dump();
+}
+
+// A sweep's cl-options reach every program it builds (an option the compiler refuses fails the
+// cell, naming it) and every row, after whatever $RTLAB_CL_OPTIONS holds, and the environment is
+// as it was once the sweep is done. The key belongs before the first group and takes something.
+TEST(SweepRows, ClOptionsReachEveryBuildAndLeaveTheEnvironmentAsItWas) {
+    const char* env = std::getenv("RTLAB_CL_OPTIONS");
+    const std::string before = env ? env : "";
+    const std::string cells =
+        "repeats = 1\nwarmup = 0\ncount-rays = no\n[m]\nscenes = spheres\npipelines = mega\n"
+        "sizes = 16x8\nbounces = 1\n";
+    const std::vector<nlohmann::json> fine =
+        test::sweepRows("cl-options = -DRT_SWEEP_OPTION_TEST=1\n" + cells, "cl-options-test");
+    ASSERT_EQ(fine.size(), 1u);
+    EXPECT_EQ(fine[0]["status"], "ok") << fine[0].dump();
+    EXPECT_EQ(fine[0]["cl_options"],
+              (before.empty() ? "" : before + " ") + "-DRT_SWEEP_OPTION_TEST=1");
+    const std::vector<nlohmann::json> refused =
+        test::sweepRows("cl-options = -cl-std=CL9.9\n" + cells, "cl-options-test");
+    ASSERT_EQ(refused.size(), 1u);
+    EXPECT_EQ(refused[0]["status"], "error") << refused[0].dump();
+    EXPECT_NE(refused[0]["error"].get<std::string>().find("CL9.9"), std::string::npos)
+        << refused[0].dump();
+    const char* after = std::getenv("RTLAB_CL_OPTIONS");
+    EXPECT_EQ(after ? std::string(after) : std::string(), before);
+    EXPECT_EQ(after != nullptr, env != nullptr);
+    for (const auto& [text, why] : std::vector<std::pair<std::string, std::string>>{
+             {cells + "cl-options = -DX\n", "belongs before the first [group]"},
+             {"cl-options =\n" + cells, "expected compiler options"}}) {
+        try {
+            bench::parseSweep(text, "cl-options-test");
+            ADD_FAILURE() << text;
+        } catch (const Error& e) {
+            EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << e.what();
+        }
+    }
 }
 
 }  // namespace
