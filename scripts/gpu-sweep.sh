@@ -24,7 +24,8 @@
 #       Unpacks each copied-back folder (images.tar.xz or its parts) and runs
 #       `rtlab sweep SWEEP --import ...` from the measured commit: accuracy against the converged
 #       CPU reference through OpenImageIO, CSV, JSON, the five charts and README.md into
-#       results/<device-slug>/, with the Google Benchmark JSON and the device log beside them.
+#       results/<device-slug>/, with the Google Benchmark JSON and the device log beside them
+#       (the phase and occupancy sweeps' own charts in SWEEP-phases/ and SWEEP-warps/).
 #       Several folders: runs continued with --resume, or the shards of one sweep, merged in the
 #       sweep's cell order.
 #
@@ -173,6 +174,13 @@ import() {
     /usr/bin/python3 scripts/charts.py "$dest/$sweep.json"
     # The persistent megakernel's sweeps have one frame size and many schedules: their own chart.
     case $sweep in persist*) /usr/bin/python3 scripts/charts_persist.py "$dest/$sweep.json" ;; esac
+    # Diagnostic sweeps have a chart of their own, in a folder of their own.
+    case $sweep in
+        persist-phase | persist-bounce-phase)
+            /usr/bin/python3 scripts/charts_phases.py "$dest/$sweep.json" --out "$dest/$sweep-phases" ;;
+        queue-occupancy)
+            /usr/bin/python3 scripts/charts_occupancy.py "$dest/$sweep.json" --out "$dest/$sweep-warps" ;;
+    esac
     /usr/bin/python3 scripts/results-readme.py "$dest/$sweep.json"
     echo "gpu-sweep: $dest/ ready"
 }
