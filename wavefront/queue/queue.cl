@@ -141,8 +141,8 @@ inline int Queue_ShadeQueue(const SceneData* sc, const Node* node, int cls) {
 // counted in local memory (count, histogram) and reserved in the global counters once per group
 // (base: the group's first slot in each queue). Every work-item of the group calls both.
 inline void Queue_GroupPushesBegin(local int* count, local int* histogram, int lid, int size) {
-    for (int k = lid; k < RT_Q_QUEUES + 1; k += size) count[k] = 0;
-    for (int k = lid; k < (RT_Q_MAX_DEPTH + 1) * RT_Q_CLASSES; k += size) histogram[k] = 0;
+    for (int k = lid; k < RT_Q_PUSHES; k += size) count[k] = 0;
+    for (int k = lid; k < RT_Q_DEPTH_CLASSES; k += size) histogram[k] = 0;
     barrier(CLK_LOCAL_MEM_FENCE);
 }
 
@@ -150,9 +150,9 @@ inline void Queue_GroupPushesReserve(local const int* count, local int* base,
                                      local const int* histogram, global int* counters, int lid,
                                      int size) {
     barrier(CLK_LOCAL_MEM_FENCE);
-    for (int k = lid; k < RT_Q_QUEUES + 1; k += size)
+    for (int k = lid; k < RT_Q_PUSHES; k += size)
         base[k] = count[k] ? atomic_add(&counters[RT_Q_COUNT + k], count[k]) : 0;
-    for (int k = lid; k < (RT_Q_MAX_DEPTH + 1) * RT_Q_CLASSES; k += size)
+    for (int k = lid; k < RT_Q_DEPTH_CLASSES; k += size)
         if (histogram[k]) atomic_add(&counters[RT_Q_HISTOGRAM + k], histogram[k]);
     barrier(CLK_LOCAL_MEM_FENCE);
 }
@@ -164,8 +164,8 @@ kernel void Queue_Extend(RT_SCENE_PARAMS, QUEUE_RAYS_PARAMS(rays), int n, global
                          global int* shadeQueues, int pool, global int* shadowQueue,
                          global int* counters, int nWord, global uint* rayTally) {
     QUEUE_LOCAL_PAD();
-    local int count[RT_Q_QUEUES + 1], base[RT_Q_QUEUES + 1];
-    local int histogram[(RT_Q_MAX_DEPTH + 1) * RT_Q_CLASSES];
+    local int count[RT_Q_PUSHES], base[RT_Q_PUSHES];
+    local int histogram[RT_Q_DEPTH_CLASSES];  // RT_Q_EXTEND_LOCAL_INTS in all
     int lid = get_local_id(0), size = get_local_size(0), i = get_global_id(0);
     n = Queue_Length(n, nWord, counters);
     // A launch sized by a bound has whole groups past the queue: they skip the local setup (the

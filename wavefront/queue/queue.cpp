@@ -27,10 +27,8 @@ namespace rt {
 
 namespace {
 
-// The local memory the extend kernel declares itself (queue.cl): counts and bases of its pushes
-// to the queues, and the histogram of depths and classes. --queue-local-pad comes on top.
-constexpr size_t kExtendLocalBytes =
-    sizeof(int) * (2 * (RT_Q_QUEUES + 1) + (RT_Q_MAX_DEPTH + 1) * RT_Q_CLASSES);
+// The local memory the extend kernels declare themselves; --queue-local-pad comes on top.
+constexpr size_t kExtendLocalBytes = sizeof(int) * RT_Q_EXTEND_LOCAL_INTS;
 
 // "Queue_ShadeGlass" -> "shade glass": the stage names --stats prints.
 std::string stageName(const std::string& kernel) {

@@ -53,6 +53,13 @@
 // Then, for the whole frame, rays per bounce (depth 0..16) and class: [depth * CLASSES + class].
 #define RT_Q_HISTOGRAM (RT_Q_OVERFLOW + 1)
 #define RT_Q_MAX_DEPTH 16
-#define RT_Q_WORDS (RT_Q_HISTOGRAM + (RT_Q_MAX_DEPTH + 1) * RT_Q_CLASSES)
+#define RT_Q_DEPTH_CLASSES ((RT_Q_MAX_DEPTH + 1) * RT_Q_CLASSES)
+#define RT_Q_WORDS (RT_Q_HISTOGRAM + RT_Q_DEPTH_CLASSES)
+
+// The local memory a work-group of the extend kernels declares (queue.cl, queue_packet.cl): the
+// count and base of its pushes to each queue and to the shadow queue, and its histogram of depths
+// and classes. The host checks --queue-local-pad against it.
+#define RT_Q_PUSHES (RT_Q_QUEUES + 1)
+#define RT_Q_EXTEND_LOCAL_INTS (2 * RT_Q_PUSHES + RT_Q_DEPTH_CLASSES)
 
 #endif

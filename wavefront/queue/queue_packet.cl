@@ -91,8 +91,8 @@ kernel void Queue_ExtendPacket(RT_SCENE_PARAMS, QUEUE_RAYS_PARAMS(rays), int n, 
                                global int* shadeQueues, int pool, global int* shadowQueue,
                                global int* counters, int nWord, global uint* rayTally) {
     QUEUE_LOCAL_PAD();
-    local int count[RT_Q_QUEUES + 1], base[RT_Q_QUEUES + 1];
-    local int histogram[(RT_Q_MAX_DEPTH + 1) * RT_Q_CLASSES];
+    local int count[RT_Q_PUSHES], base[RT_Q_PUSHES];
+    local int histogram[RT_Q_DEPTH_CLASSES];  // RT_Q_EXTEND_LOCAL_INTS in all
     int lid = get_local_id(0), size = get_local_size(0), g = get_global_id(0);
     int first = g * RT_PACKET;
     n = Queue_Length(n, nWord, counters);
