@@ -57,6 +57,25 @@ def sweep_rows_fixture(groups=("bounces", "resolution")):
     return rows
 
 
+def write_rows(d, name, rows):
+    """rows as JSON lines in d/name; the path."""
+    path = os.path.join(d, name)
+    with open(path, "w") as f:
+        f.write("\n".join(json.dumps(r) for r in rows) + "\n")
+    return path
+
+
+def run_chart(script, rows, sweep, *args, d=None):
+    """rows.jsonl and a sweep.json of sweep `sweep` in d (a new folder unless given), and
+    scripts/`script` run on them with args: (d, the finished process)."""
+    d = d or tempfile.mkdtemp()
+    path = write_rows(d, "rows.jsonl", rows)
+    with open(os.path.join(d, "sweep.json"), "w") as f:
+        json.dump(dict(META, sweep=sweep), f)
+    return d, subprocess.run([sys.executable, os.path.join(SCRIPTS, script), path, *args],
+                             capture_output=True, text=True)
+
+
 def load_script(name):
     spec = importlib.util.spec_from_file_location(name.replace("-", "_"),
                                                   os.path.join(SCRIPTS, name))
@@ -704,15 +723,7 @@ class PersistTest(unittest.TestCase):
                 c("persist", "coherent", 1.5, persistent_regroup="material")]
 
     def run_script(self, rows):
-        d = tempfile.mkdtemp()
-        path = os.path.join(d, "rows.jsonl")
-        with open(path, "w") as f:
-            f.write("\n".join(json.dumps(r) for r in rows) + "\n")
-        with open(os.path.join(d, "sweep.json"), "w") as f:
-            json.dump(dict(META, sweep="persist"), f)
-        p = subprocess.run([sys.executable, os.path.join(SCRIPTS, "charts_persist.py"), path],
-                           capture_output=True, text=True)
-        return d, p
+        return run_chart("charts_persist.py", rows, "persist")
 
     def test_best_schedule_speed_up_and_tie(self):
         d, p = self.run_script(self.rows())
@@ -831,13 +842,6 @@ class PhasesTest(unittest.TestCase):
 
     BASE = {"scene": "map/map-s16-x25-o0-m16", "status": "ok", "width": 64, "height": 32}
 
-    @staticmethod
-    def write(d, name, rows):
-        path = os.path.join(d, name)
-        with open(path, "w") as f:
-            f.write("\n".join(json.dumps(r) for r in rows) + "\n")
-        return path
-
     def run_script(self, persist_extras, queue=True, queue_arg=None, more=()):
         d = tempfile.mkdtemp()
         base = self.BASE
@@ -845,16 +849,13 @@ class PhasesTest(unittest.TestCase):
                 dict(base, pipeline="persist", layout="weighted", device_ms=4.0,
                      persistent_loop="flat", persistent_regroup="pattern",
                      extras=persist_extras)] + list(more)
-        path = self.write(d, "rows.jsonl", rows)
-        with open(os.path.join(d, "sweep.json"), "w") as f:
-            json.dump(dict(META, sweep="persist-phase"), f)
-        args = [sys.executable, os.path.join(SCRIPTS, "charts_phases.py"), path]
+        args = []
         if queue:
-            q = self.write(d, "queue.jsonl", [dict(base, pipeline="queue", device_ms=2.0, kernel_ms={
+            q = write_rows(d, "queue.jsonl", [dict(base, pipeline="queue", device_ms=2.0, kernel_ms={
                 "extend": 0.5, "shadow": 0.25, "shade glass": 0.5, "shade miss": 0.25,
                 "compact": 0.25})])
             args += ["--queue", queue_arg or f"queue={q}"]
-        return d, subprocess.run(args, capture_output=True, text=True)
+        return run_chart("charts_phases.py", rows, "persist-phase", *args, d=d)
 
     @staticmethod
     def lines(d):
@@ -918,7 +919,6 @@ class OccupancyTest(unittest.TestCase):
         self.assertEqual(resident_warps(16, 0, 32), 32)        # at most 32 groups
 
     def test_stages_and_warps_a_row(self):
-        d = tempfile.mkdtemp()
         base = {"scene": "map/map-s16-x25-o0-m16", "status": "ok", "width": 64, "height": 32}
         res_a = {"Queue_Extend.registers": 46, "Queue_Extend.local_bytes": 420,
                  "Queue_Shadow.registers": 61, "Queue_Shadow.local_bytes": 0,
@@ -940,13 +940,7 @@ class OccupancyTest(unittest.TestCase):
                      kernel_resources=res_b,
                      kernel_ms={"extend": 0.9, "shadow": 1.5, "shade glass": 0.6,
                                 "shade miss": 0.1})]
-        path = os.path.join(d, "rows.jsonl")
-        with open(path, "w") as f:
-            f.write("\n".join(json.dumps(r) for r in rows) + "\n")
-        with open(os.path.join(d, "sweep.json"), "w") as f:
-            json.dump(dict(META, sweep="queue-occupancy"), f)
-        p = subprocess.run([sys.executable, os.path.join(SCRIPTS, "charts_occupancy.py"), path],
-                           capture_output=True, text=True)
+        d, p = run_chart("charts_occupancy.py", rows, "queue-occupancy")
         self.assertEqual(p.returncode, 0, p.stderr)
         with open(os.path.join(d, "occupancy.md")) as f:
             lines = [x.strip() for x in f if x.startswith("| `s16")]
@@ -961,13 +955,10 @@ class OccupancyTest(unittest.TestCase):
             self.assertGreater(os.path.getsize(os.path.join(d, "occupancy.png")), 10000)
 
     def test_rows_without_registers_are_one_line(self):
-        d = tempfile.mkdtemp()
-        path = os.path.join(d, "rows.jsonl")
-        with open(path, "w") as f:
-            f.write(json.dumps({"scene": "spheres", "pipeline": "queue", "status": "ok",
-                                "device_ms": 1.0, "kernel_ms": {"extend": 0.5}}) + "\n")
-        p = subprocess.run([sys.executable, os.path.join(SCRIPTS, "charts_occupancy.py"), path],
-                           capture_output=True, text=True)
+        _, p = run_chart("charts_occupancy.py", [{"scene": "spheres", "pipeline": "queue",
+                                                  "status": "ok", "device_ms": 1.0,
+                                                  "kernel_ms": {"extend": 0.5}}],
+                         "queue-occupancy")
         self.assertEqual(p.returncode, 1)
         self.assertIn("no queue rows with kernel times and registers", p.stderr)
         self.assertEqual(len(p.stderr.strip().splitlines()), 1, p.stderr)
