@@ -41,6 +41,17 @@ inline int2 Persistent_PixelOf(int k, int first, int count, int width) {
     return (int2)(strip * tw + j % stripWidth, first / width + band * th + j / stripWidth);
 }
 
+// A kernel whose work-group size is a define tells the compiler so where the host asks
+// (RT_REQD_GROUP_SIZE): a compiler that assumes smaller groups otherwise (LLVM's AMDGPU back end:
+// 256) builds a kernel that cannot launch in groups of 512. NVIDIA's compiler is not asked: with
+// the attribute it built kernels that take at most 256 work-items a group whatever their
+// registers; there the host's register cap (-cl-nv-maxrregcount) makes a group fit.
+#ifdef RT_REQD_GROUP_SIZE
+#define RT_GROUP_LANES(n) __attribute__((reqd_work_group_size(n, 1, 1)))
+#else
+#define RT_GROUP_LANES(n)
+#endif
+
 #ifdef RT_WARP_PTX
 // Whether the warp's lanes without a pixel take new ones this step: once `refill` of its lanes
 // are idle, or all of them. Every lane calls it; *wanting gets the idle lanes (PTX
@@ -498,9 +509,7 @@ inline void Bounce_ShadePass(const SceneData* sc, const Bounce* b, int n, global
     }
 }
 
-// The group size is the compiler's to know: a compiler that assumes smaller groups otherwise
-// (LLVM's AMDGPU back end: 256) builds a kernel that cannot launch in groups of 512.
-kernel __attribute__((reqd_work_group_size(RT_PERSIST_BOUNCE, 1, 1))) void Persistent_RenderBounce(
+kernel RT_GROUP_LANES(RT_PERSIST_BOUNCE) void Persistent_RenderBounce(
     RT_SCENE_PARAMS, global float* image, global int* next, int first, int count,
     global BounceRay* rays, global BounceTerm* terms, int batch, int widest BOUNCE_STAGED_PARAMS) {
     RT_SCENE_INIT(sc);
@@ -729,8 +738,10 @@ inline RegroupShade Regroup_Shade(const SceneData* sc, const Node* n, const Pend
     return s;
 }
 
-kernel __attribute__((reqd_work_group_size(RG_LANES, 1, 1))) void Persistent_RenderRegrouped(
-    RT_SCENE_PARAMS, global float* image, global int* next, int first, int count, int refill) {
+kernel RT_GROUP_LANES(RG_LANES) void Persistent_RenderRegrouped(RT_SCENE_PARAMS,
+                                                                global float* image,
+                                                                global int* next, int first,
+                                                                int count, int refill) {
     RT_SCENE_INIT(sc);
     local RegroupSlot slots[RG_LANES];
     // Key counts, three sets in turn, so that a step needs no barrier before it counts: it

@@ -2,6 +2,7 @@
 #include "persistent/persistent.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <limits>
 
@@ -478,6 +479,9 @@ Image PersistentPipeline::renderScheduled(const Scene& scene, const RenderOption
     if (nested) programDefines.push_back("RT_PERSIST_NESTED");
     if (lockstep) programDefines.push_back("RT_PERSIST_LOCKSTEP");
     if (bounce) programDefines.push_back("RT_PERSIST_BOUNCE=" + std::to_string(local));
+    // The group size declared to the compiler (persistent.cl, RT_GROUP_LANES), except on NVIDIA.
+    if (dev.vendor.find("NVIDIA") == std::string::npos)
+        programDefines.push_back("RT_REQD_GROUP_SIZE");
     const std::string& tile = tileOption().choice(o.pipelineOptions);
     const size_t by = tile.find('x');
     programDefines.push_back("RT_PERSIST_TILE_W=" + tile.substr(0, by));
@@ -504,11 +508,19 @@ Image PersistentPipeline::renderScheduled(const Scene& scene, const RenderOption
                                      : "Persistent_Render");
     // A build can still be too large for the group (its private memory, or a compiler that
     // assumed smaller groups): refused here by name, not by the launch.
-    if (const size_t fits = kernel.maxGroup(dev.device); fits < local)
+    if (const size_t fits = kernel.maxGroup(dev.device); fits < local) {
+        // The registers the build log gives (NVIDIA), which decide the group on most GPUs.
+        const auto used = stats_.kernelResources.find(kernel.name() + ".registers");
+        const std::string registers =
+            used == stats_.kernelResources.end()
+                ? ""
+                : " (" + std::to_string(std::lround(used->second)) + " registers a work-item" +
+                      (registerCap ? ", capped at " + std::to_string(registerCap) : "") + ")";
         throw Error("--persistent-lanes " + std::to_string(local) + ": " + kernel.name() +
-                        " as built for " + dev.name + " runs at most " + std::to_string(fits) +
-                        " work-items a work-group; lower --persistent-lanes",
+                        " as built for " + dev.name + registers + " runs at most " +
+                        std::to_string(fits) + " work-items a work-group; lower --persistent-lanes",
                     FailureKind::InvalidOption);
+    }
     if (registerCap != 0) stats_.extras["persist_register_cap"] = registerCap;
     kernel.set("image", image_.get()).set("next", next_.get());
     if (bounce)
