@@ -339,7 +339,7 @@ cl::Program ClContext::program(const std::string& mainFile, const std::vector<st
     // Kernels pick the cheaper form of a few operations per kind of device (core/cl/accel.cl).
     if (device_.type == "CPU") options += " -DRT_DEVICE_CPU";
     // Registers and spills per kernel in the build log (core/kernel_resources.h).
-    if (device_.vendor.find("NVIDIA") != std::string::npos) options += " -cl-nv-verbose";
+    if (device_.nvidia()) options += " -cl-nv-verbose";
     // Extra compiler options for experiments (e.g. -cl-fast-relaxed-math); part of the cache key.
     if (const char* extra = std::getenv("RTLAB_CL_OPTIONS"); extra && *extra)
         options += std::string(" ") + extra;

@@ -34,6 +34,8 @@ struct DeviceInfo {
     // Registers the work-items of one work-group share, where the device says (NVIDIA's
     // cl_nv_device_attribute_query); 0 elsewhere.
     cl_uint registersPerGroup = 0;
+    // NVIDIA's driver: its build options (-cl-nv-*), build log and inline PTX.
+    bool nvidia() const { return vendor.find("NVIDIA") != std::string::npos; }
     bool correctlyRoundedDivSqrt = false;  // supports -cl-fp32-correctly-rounded-divide-sqrt
     // The driver keeps its own cache of compiled programs, keyed by source and options (PoCL),
     // so rtlab keeps none: see ClContext::program.

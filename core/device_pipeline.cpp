@@ -56,8 +56,7 @@ cl::Program DevicePipeline::rayLoopProgram(const std::string& file,
                                            const RenderOptions& o,
                                            const std::vector<std::string>& nvidiaDefines) {
     countLanes_ = false;
-    if (cl_.device().vendor.find("NVIDIA") == std::string::npos)
-        return program(file, defines, options);
+    if (!cl_.device().nvidia()) return program(file, defines, options);
     std::vector<std::string> nvidia = defines;
     nvidia.insert(nvidia.end(), nvidiaDefines.begin(), nvidiaDefines.end());
     if (o.countRays) nvidia.push_back("RT_COUNT_LANES");

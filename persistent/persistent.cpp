@@ -480,8 +480,7 @@ Image PersistentPipeline::renderScheduled(const Scene& scene, const RenderOption
     if (lockstep) programDefines.push_back("RT_PERSIST_LOCKSTEP");
     if (bounce) programDefines.push_back("RT_PERSIST_BOUNCE=" + std::to_string(local));
     // The group size declared to the compiler (persistent.cl, RT_GROUP_LANES), except on NVIDIA.
-    if (dev.vendor.find("NVIDIA") == std::string::npos)
-        programDefines.push_back("RT_REQD_GROUP_SIZE");
+    if (!dev.nvidia()) programDefines.push_back("RT_REQD_GROUP_SIZE");
     const std::string& tile = tileOption().choice(o.pipelineOptions);
     const size_t by = tile.find('x');
     programDefines.push_back("RT_PERSIST_TILE_W=" + tile.substr(0, by));
