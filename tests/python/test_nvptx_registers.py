@@ -62,6 +62,27 @@ class Report(unittest.TestCase):
 
 
 
+class Accel(unittest.TestCase):
+    def test_each_layout_is_the_hosts_define(self):
+        with open(os.path.join(ROOT, "core", "pipeline.cpp")) as f:
+            pipeline = f.read()
+        self.assertEqual(sorted(nvptx.ACCELS), ["bvh", "cwbvh", "wide"])
+        for name, define in nvptx.ACCELS.items():
+            self.assertIn('d.push_back("%s")' % define, pipeline, name)
+            self.assertNotIn(define, nvptx.WALL)
+
+    def test_the_driver_registers_come_from_rows_of_the_same_layout(self):
+        rows = [{"pipeline": "mega", "accel": "cwbvh",
+                 "kernel_resources": {"Megakernel_Render.registers": 168}},
+                {"pipeline": "mega", "kernel_resources": {"Megakernel_Render.registers": 126}},
+                {"pipeline": "mega", "accel": "bvh", "error": "refused",
+                 "kernel_resources": {"Megakernel_Render.registers": 1}}]
+        mega = lambda r: r["pipeline"] == "mega"
+        self.assertEqual(nvptx.measured(rows, mega)["Megakernel_Render"][0], 126)
+        self.assertEqual(nvptx.measured(rows, mega, "cwbvh")["Megakernel_Render"][0], 168)
+        self.assertEqual(nvptx.measured(rows, mega, "wide"), {})
+
+
 class Root(unittest.TestCase):
     def test_a_folder_that_is_no_checkout_is_one_line(self):
         import subprocess
