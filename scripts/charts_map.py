@@ -33,7 +33,14 @@ def load(path):
         with open(path) as f:
             rows = [json.loads(line) for line in f if line.strip()]
         meta_path = os.path.join(os.path.dirname(path), "sweep.json")
-        meta = json.load(open(meta_path)) if os.path.exists(meta_path) else {}
+        if os.path.exists(meta_path):
+            return json.load(open(meta_path)), rows
+        # Rows that came back without their sweep's JSON (a cut-short device call) still say
+        # where and at which commit they ran.
+        first = rows[0] if rows else {}
+        meta = {k: first[k] for k in ("device", "platform", "driver", "commit", "sweep")
+                if k in first}
+        meta["settings"] = {k: first[k] for k in ("repeats", "warmup") if k in first}
         return meta, rows
     data = json.load(open(path))
     return data["meta"], data["rows"]

@@ -8,6 +8,12 @@ drawn hollow. Also writes a Markdown table beside the chart, both named after th
 (persist.md, persist.png), with every time (the 64-lane, tree-megakernel and one-group series
 too) and the best schedule's speed-up per scene. scripts/gpu-sweep.sh import runs it for these sweeps.
 
+Where the weighted megakernel's row counted its warps (NVIDIA: the extra warp_lanes_active, its
+busy lanes of 32 a warp step), the table and chart also give the idle-lane bound, 32 over those
+lanes: the most that filling the megakernel's idle lanes with the same per-ray code would gain,
+if its steps cost what they do. A schedule past it made the steps themselves cheaper (sorting
+the shading); one short of 2x where the bound is too cannot reach 2x by keeping lanes busy alone.
+
 A sweep about the order pixels are handed out in (every schedule it runs is in several
 --persistent-tile orders, as in the persist-tile sweep) gets a table and chart by tile instead:
 for each schedule and scene, the time at each order and the speed-up of the best one.
@@ -136,6 +142,13 @@ def short(scene):
     return scene.replace("map/", "").replace("-m16", "")
 
 
+def idle_lane_bound(base):
+    """32 over the weighted megakernel's busy lanes a warp step, or None where its row did not
+    count them (the counter is NVIDIA's: core/types.h, RT_COUNT_LANES_ACTIVE)."""
+    lanes = (base or {}).get("extras", {}).get("warp_lanes_active")
+    return 32.0 / lanes if lanes else None
+
+
 def speed_up(base, row):
     """base's time over row's, "(tie)" when inside the frame spread."""
     return f"{base['device_ms'] / row['device_ms']:.2f}x" + (" (tie)" if tied(base, row) else "")
@@ -157,10 +170,13 @@ def table(meta, scenes, grid, path):
              f"`{meta.get('sweep')}`; median device time of the frames in ms. Speed-up: the "
              f"weighted megakernel's time over the fastest persistent schedule's, at the "
              f"compiler's registers and at the better of that and a cap of 64 where the sweep "
-             f"has it; (tie) when the two lie inside each other's frame spread.", "",
+             f"has it; (tie) when the two lie inside each other's frame spread. Idle-lane "
+             f"bound: 32 over the weighted megakernel's busy lanes a warp step, the most that "
+             f"filling its idle lanes with the same per-ray code would gain (— where the device "
+             f"did not count them).", "",
              "| scene | " + " | ".join([BASE] + present) +
-             " | best persist | speed-up | over the better weighted build |",
-             "|---" * (len(present) + 5) + "|"]
+             " | best persist | speed-up | over the better weighted build | idle-lane bound |",
+             "|---" * (len(present) + 6) + "|"]
     for sc in scenes:
         g = grid[sc]
         base = g.get(BASE)
@@ -173,6 +189,9 @@ def table(meta, scenes, grid, path):
             tail.append(speed_up(better, g[best]))
         else:
             tail = ["—", "—", "—"]
+        bound = idle_lane_bound(base)
+        tail.append(f"{bound:.2f}x ({base['extras']['warp_lanes_active']:.1f} lanes)"
+                    if bound else "—")
         lines.append(f"| `{sc}` | " + " | ".join(cols + tail) + " |")
     with open(path, "w") as f:
         f.write("\n".join(lines) + "\n")
@@ -212,6 +231,13 @@ def chart(meta, scenes, grid, path):
             y = i - 0.4 + height * (j + 0.5)
             ax.barh(y, up - 1 if up >= 1 else -(1 - up), left=1, height=height * 0.9,
                     color="white" if tie else color, edgecolor=color, linewidth=1)
+    bounded = False
+    for i, sc in enumerate(scenes):
+        bound = idle_lane_bound(grid[sc].get(BASE))
+        if bound:
+            ax.plot([bound, bound], [i - 0.45, i + 0.45], color="black", linestyle=":",
+                    linewidth=1.2)
+            bounded = True
     ax.set_xscale("log")
     ax.axvline(1, color="black", linewidth=0.8)
     ax.axvline(TARGET, color="#999999", linestyle="--", linewidth=0.8)
@@ -221,6 +247,10 @@ def chart(meta, scenes, grid, path):
     ax.set_xlabel("weighted megakernel's time / this design's time (log; right of 1: faster)")
     log_ticks(ax, "x")
     handles = [Patch(facecolor=DRAWN[s], label=s) for s in present]
+    if bounded:
+        from matplotlib.lines import Line2D
+        handles.append(Line2D([], [], color="black", linestyle=":", linewidth=1.2,
+                              label="idle-lane bound: 32 / the weighted megakernel's busy lanes"))
     legend_row(legend_ax, handles, [h.get_label() for h in handles], ncol=3)
     fig.savefig(path)
     plt.close(fig)

@@ -731,10 +731,10 @@ class PersistTest(unittest.TestCase):
         md = open(os.path.join(d, "persist.md")).read()
         walls = next(line for line in md.splitlines() if line.startswith("| `walls`"))
         # Over the default weighted build, and over the better of it and the capped one.
-        self.assertTrue(walls.endswith("| regrouped by pattern, 128 lanes | 2.50x | 2.00x |"),
+        self.assertTrue(walls.endswith("| regrouped by pattern, 128 lanes | 2.50x | 2.00x | — |"),
                         walls)
         coherent = next(line for line in md.splitlines() if line.startswith("| `coherent`"))
-        self.assertTrue(coherent.endswith("| flat | 1.00x (tie) | 1.00x (tie) |"), coherent)
+        self.assertTrue(coherent.endswith("| flat | 1.00x (tie) | 1.00x (tie) | — |"), coherent)
         # The nested loop is a series of its own, not taken for the flat loop.
         self.assertIn("persist, nested loop", md)
         self.assertIn("| 1.20 |", coherent)
@@ -786,7 +786,7 @@ class PersistTest(unittest.TestCase):
         self.assertNotIn("| best | speed-up |", md.splitlines()[4], "not tabled by order")
         self.assertIn("persist, nested loop, 16x8 strips", md)
         coherent = next(line for line in md.splitlines() if line.startswith("| `coherent`"))
-        self.assertTrue(coherent.endswith("| nested loop, 16x8 strips | 1.11x | 1.11x |"),
+        self.assertTrue(coherent.endswith("| nested loop, 16x8 strips | 1.11x | 1.11x | — |"),
                         coherent)
 
     def test_the_auto_schedule_is_a_series_of_its_own(self):
@@ -804,7 +804,7 @@ class PersistTest(unittest.TestCase):
                                         if line.startswith("| `walls`")))
         walls = next(line for line in md.splitlines() if line.startswith("| `walls`"))
         self.assertIn("| 5.00 |", walls, "the flat loop's time stays")
-        self.assertTrue(walls.endswith("| auto schedule | 3.33x | 2.67x |"), walls)
+        self.assertTrue(walls.endswith("| auto schedule | 3.33x | 2.67x | — |"), walls)
 
     def test_each_bounce_setting_is_a_column_and_the_fastest_is_best(self):
         # The bounce loop's batch, lanes and groups name its series; none is taken for the flat
@@ -824,9 +824,41 @@ class PersistTest(unittest.TestCase):
         walls = next(line for line in md.splitlines() if line.startswith("| `walls`"))
         self.assertIn("| 5.00 |", walls, "the flat loop's time stays")
         self.assertTrue(walls.endswith(
-            "| bounce loop, 1024 px batches, 512 lanes, 1 group a unit | 3.33x | 2.67x |"), walls)
+            "| bounce loop, 1024 px batches, 512 lanes, 1 group a unit | 3.33x | 2.67x | — |"),
+            walls)
         if HAVE_MPL:
             self.assertGreater(os.path.getsize(os.path.join(d, "persist.png")), 10000)
+
+    def test_the_idle_lane_bound_comes_from_the_megakernels_busy_lanes(self):
+        # 32 over the weighted megakernel's busy lanes: 20 lanes bound a schedule that only
+        # fills idle lanes at 1.6x; the capped build's count is not the one read.
+        rows = self.rows()
+        rows[0]["extras"] = {"warp_lanes_active": 20.0}
+        rows[1]["extras"] = {"warp_lanes_active": 8.0}
+        d, p = self.run_script(rows)
+        self.assertEqual(p.returncode, 0, p.stderr)
+        md = open(os.path.join(d, "persist.md")).read()
+        self.assertIn("| idle-lane bound |", md.splitlines()[4])
+        walls = next(line for line in md.splitlines() if line.startswith("| `walls`"))
+        self.assertTrue(walls.endswith("| 2.50x | 2.00x | 1.60x (20.0 lanes) |"), walls)
+        coherent = next(line for line in md.splitlines() if line.startswith("| `coherent`"))
+        self.assertTrue(coherent.endswith("| — |"), coherent)
+        if HAVE_MPL:
+            self.assertGreater(os.path.getsize(os.path.join(d, "persist.png")), 10000)
+
+    def test_rows_without_their_sweep_json_say_where_they_ran(self):
+        # A cut-short device call brings rows back without the sweep's JSON: the table's
+        # heading takes the device, driver, commit and sweep from the rows.
+        d = tempfile.mkdtemp()
+        rows = [dict(r, device="GPU X", driver="9.1", commit="abc1234", sweep="persist-x")
+                for r in self.rows()]
+        path = write_rows(d, "rows.jsonl", rows)
+        p = subprocess.run([sys.executable, os.path.join(SCRIPTS, "charts_persist.py"), path],
+                           capture_output=True, text=True)
+        self.assertEqual(p.returncode, 0, p.stderr)
+        md = open(os.path.join(d, "persist-x.md")).read()
+        self.assertTrue(md.startswith("# Persistent megakernel schedules, GPU X\n"), md[:80])
+        self.assertIn("Driver 9.1, commit `abc1234`, sweep `persist-x`", md)
 
     def test_no_weighted_megakernel_is_one_line(self):
         rows = [r for r in self.rows() if r["pipeline"] != "mega"]
