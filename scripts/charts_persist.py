@@ -142,11 +142,11 @@ def short(scene):
     return scene.replace("map/", "").replace("-m16", "")
 
 
-def idle_lane_bound(base):
-    """32 over the weighted megakernel's busy lanes a warp step, or None where its row did not
-    count them (the counter is NVIDIA's: core/types.h, RT_COUNT_LANES_ACTIVE)."""
-    lanes = (base or {}).get("extras", {}).get("warp_lanes_active")
-    return 32.0 / lanes if lanes else None
+def busy_lanes(base):
+    """The weighted megakernel's busy lanes of 32 a warp step, or None where its row did not
+    count them (the counter is NVIDIA's: core/types.h, RT_COUNT_LANES_ACTIVE). 32 over them is
+    the idle-lane bound."""
+    return (base or {}).get("extras", {}).get("warp_lanes_active") or None
 
 
 def speed_up(base, row):
@@ -189,9 +189,8 @@ def table(meta, scenes, grid, path):
             tail.append(speed_up(better, g[best]))
         else:
             tail = ["—", "—", "—"]
-        bound = idle_lane_bound(base)
-        tail.append(f"{bound:.2f}x ({base['extras']['warp_lanes_active']:.1f} lanes)"
-                    if bound else "—")
+        lanes = busy_lanes(base)
+        tail.append(f"{32 / lanes:.2f}x ({lanes:.1f} lanes)" if lanes else "—")
         lines.append(f"| `{sc}` | " + " | ".join(cols + tail) + " |")
     with open(path, "w") as f:
         f.write("\n".join(lines) + "\n")
@@ -233,9 +232,9 @@ def chart(meta, scenes, grid, path):
                     color="white" if tie else color, edgecolor=color, linewidth=1)
     bounded = False
     for i, sc in enumerate(scenes):
-        bound = idle_lane_bound(grid[sc].get(BASE))
-        if bound:
-            ax.plot([bound, bound], [i - 0.45, i + 0.45], color="black", linestyle=":",
+        lanes = busy_lanes(grid[sc].get(BASE))
+        if lanes:
+            ax.plot([32 / lanes] * 2, [i - 0.45, i + 0.45], color="black", linestyle=":",
                     linewidth=1.2)
             bounded = True
     ax.set_xscale("log")
