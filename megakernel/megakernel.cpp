@@ -30,7 +30,7 @@ std::vector<std::string> MegakernelPipeline::defines(const Scene& scene, const R
 }
 
 std::vector<std::string> MegakernelPipeline::buildOptions(const RenderOptions& o) const {
-    return registerCapBuildOptions(megaMaxRegisters(o), cl_.device().vendor);
+    return registerCapBuildOptions(megaMaxRegisters(o), cl_.device());
 }
 
 size_t MegakernelPipeline::privateBytes(const Scene& scene, const RenderOptions& o) {

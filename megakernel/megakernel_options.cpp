@@ -1,6 +1,8 @@
 // rtlab — the megakernel's option declaration and its typed read-back (megakernel_options.h).
 #include "megakernel/megakernel_options.h"
 
+#include "core/cl_runtime.h"
+
 namespace rt {
 
 namespace {
@@ -79,8 +81,8 @@ PipelineOption registerCapOption(const std::string& name, const std::string& who
     };
 }
 
-std::vector<std::string> registerCapBuildOptions(long long registers, const std::string& vendor) {
-    if (registers == 0 || vendor.find("NVIDIA") == std::string::npos) return {};
+std::vector<std::string> registerCapBuildOptions(long long registers, const DeviceInfo& device) {
+    if (registers == 0 || !device.nvidia()) return {};
     return {"-cl-nv-maxrregcount=" + std::to_string(registers)};
 }
 

@@ -11,6 +11,8 @@
 
 namespace rt {
 
+struct DeviceInfo;  // core/cl_runtime.h
+
 // How a work-item keeps its rays in private memory: the full ray tree of the report (N nodes),
 // or a stack of pending rays, each with the weight it adds to its pixel (B * (C - 1) + 1).
 enum class MegaLayout { Tree, Weighted };
@@ -34,8 +36,8 @@ const char* megaLayoutName(MegaLayout layout);
 // --persistent-max-registers.
 PipelineOption registerCapOption(const std::string& name, const std::string& who,
                                  const std::string& hint, const std::string& cellTag);
-// The build options for a cap of `registers` (0: none) on a device of `vendor`: the NVIDIA flag,
-// or nothing elsewhere.
-std::vector<std::string> registerCapBuildOptions(long long registers, const std::string& vendor);
+// The build options for a cap of `registers` (0: none) on `device`: the NVIDIA flag, or nothing
+// elsewhere.
+std::vector<std::string> registerCapBuildOptions(long long registers, const DeviceInfo& device);
 
 }  // namespace rt

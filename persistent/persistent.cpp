@@ -487,7 +487,7 @@ Image PersistentPipeline::renderScheduled(const Scene& scene, const RenderOption
     programDefines.push_back("RT_PERSIST_TILE_H=" + tile.substr(by + 1));
     const long long registerCap =
         persistentRegisterCap(dev, local, registersOption().integer(o.pipelineOptions));
-    const std::vector<std::string> buildOptions = registerCapBuildOptions(registerCap, dev.vendor);
+    const std::vector<std::string> buildOptions = registerCapBuildOptions(registerCap, dev);
     // On NVIDIA the warp's lanes vote and take pixels together (inline PTX, RT_WARP_PTX).
     const cl::Program program =
         rayLoopProgram("persistent.cl", programDefines, buildOptions, o, {"RT_WARP_PTX"});
