@@ -341,7 +341,7 @@ nlohmann::json sweepSettingsJson(const SweepConfig& c) {
             {"warmup", c.warmup},
             {"count_rays", c.countRays},
             {"reference",
-             {{"pipeline", "cpu"},
+             {{"pipeline", "oracle"},
               {"bounces", c.referenceBounces},
               {"shadow_samples", c.referenceShadowSamples},
               {"aa", c.referenceAa}}},

@@ -99,19 +99,25 @@ std::unique_ptr<Pipeline> PipelineRegistry::make(const std::string& name, ClCont
 
 namespace {
 
+// The CPU reference (the renderers' method in double) or the independent oracle.
 class CpuPipeline : public Pipeline {
   public:
-    const char* name() const override { return "cpu"; }
+    explicit CpuPipeline(bool oracle) : oracle_(oracle) {}
+    const char* name() const override { return oracle_ ? "oracle" : "cpu"; }
     Image render(const Scene& scene, const RenderOptions& options) override {
         checkOptions(scene, options);
         stats_ = {};
         auto t0 = std::chrono::steady_clock::now();
-        Image image = renderReference(scene, options, 0, progress_);
+        Image image = oracle_ ? renderOracle(scene, options, 0, progress_)
+                              : renderReference(scene, options, 0, progress_);
         stats_.hostMs =
             std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
                 .count();
         return image;
     }
+
+  private:
+    bool oracle_;
 };
 
 }  // namespace
@@ -121,10 +127,23 @@ PipelineInfo referencePipelineInfo() {
     p.name = "cpu";
     p.title = "CPU reference";
     p.family = "reference";
-    p.description = "the same algorithm in double precision on the host; the accuracy oracle";
+    p.description =
+        "the same algorithm and method (intersection tests, --offset) in double precision on the "
+        "host; shares the renderers' mistakes, so it is not the accuracy oracle";
     p.reference = true;
     p.supports = {.adaptiveAa = true, .tiling = false, .rowWindow = false};
-    p.make = [](ClContext*) { return std::make_unique<CpuPipeline>(); };
+    p.make = [](ClContext*) { return std::make_unique<CpuPipeline>(false); };
+    return p;
+}
+
+PipelineInfo oraclePipelineInfo() {
+    PipelineInfo p = referencePipelineInfo();
+    p.name = "oracle";
+    p.title = "Independent oracle";
+    p.description =
+        "the accuracy oracle: the algorithm in double precision with no offset rule, its rays "
+        "never offered the flat primitive (or convex sphere) they leave (core/SHADING.md 3)";
+    p.make = [](ClContext*) { return std::make_unique<CpuPipeline>(true); };
     return p;
 }
 

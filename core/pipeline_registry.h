@@ -88,5 +88,7 @@ class PipelineRegistry {
 
 // The CPU reference's entry (core/reference.cpp renders it); the registry lists it first.
 PipelineInfo referencePipelineInfo();
+// The independent accuracy oracle's entry (renderOracle), listed second.
+PipelineInfo oraclePipelineInfo();
 
 }  // namespace rt

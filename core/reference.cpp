@@ -19,111 +19,6 @@
 #include "core/sampling.h"
 
 namespace rt {
-namespace ref {
-
-using glm::dvec3;
-
-// Section 2, Algorithm 2 with a = 1.
-std::optional<double> intersectSpherePlain(const Ray& ray, dvec3 center, double radius) {
-    const dvec3 oc = ray.origin - center;
-    const double doc = glm::dot(ray.dir, oc);
-    const double c = glm::dot(oc, oc) - radius * radius;
-    if (c > 0 && doc > 0) return std::nullopt;  // origin outside, sphere behind the ray
-    const double b = 2 * doc;
-    const double disc = b * b - 4 * c;
-    if (disc < 0) return std::nullopt;
-    const double s = std::sqrt(disc);
-    const double t0 = (-b - s) / 2, t1 = (-b + s) / 2;
-    if (t0 > 0) return t0;
-    if (t1 > 0) return t1;
-    return std::nullopt;
-}
-
-// Section 2, Ray Tracing Gems ch. 7: the discriminant from the perpendicular distance f.
-std::optional<double> intersectSphereRobust(const Ray& ray, dvec3 center, double radius) {
-    const dvec3 oc = ray.origin - center;
-    const double doc = glm::dot(ray.dir, oc);
-    const double c = glm::dot(oc, oc) - radius * radius;
-    if (c > 0 && doc > 0) return std::nullopt;
-    const double bp = -doc;
-    const dvec3 f = oc + bp * ray.dir;
-    const double disc = radius * radius - glm::dot(f, f);
-    if (disc < 0) return std::nullopt;
-    const double q = bp + (bp >= 0 ? 1.0 : -1.0) * std::sqrt(disc);
-    double t0 = c / q, t1 = q;
-    if (t0 > t1) std::swap(t0, t1);
-    if (t0 > 0) return t0;
-    if (t1 > 0) return t1;
-    return std::nullopt;
-}
-
-// Section 2, Algorithm 3 with the two report typos fixed.
-std::optional<TriangleHit> intersectTriangleMT(const Ray& ray, dvec3 v0, dvec3 v1, dvec3 v2) {
-    const dvec3 e1 = v1 - v0, e2 = v2 - v0;
-    const dvec3 h = glm::cross(ray.dir, e2);
-    const double a = glm::dot(e1, h);
-    if (a == 0) return std::nullopt;
-    const double f = 1 / a;
-    const dvec3 s = ray.origin - v0;
-    const double u = f * glm::dot(s, h);
-    if (u < 0 || u > 1) return std::nullopt;
-    const dvec3 q = glm::cross(s, e1);
-    const double v = f * glm::dot(ray.dir, q);
-    if (v < 0 || u + v > 1) return std::nullopt;
-    const double t = f * glm::dot(e2, q);
-    if (!(t > 0)) return std::nullopt;
-    return TriangleHit{t, u, v};
-}
-
-// Section 2, Woop, Benthin and Wald 2013: shear into ray space, 2D edge functions.
-std::optional<TriangleHit> intersectTriangleWatertight(const Ray& ray, dvec3 v0, dvec3 v1,
-                                                       dvec3 v2) {
-    const dvec3& d = ray.dir;
-    int kz = 0;
-    if (std::abs(d.y) > std::abs(d[kz])) kz = 1;
-    if (std::abs(d.z) > std::abs(d[kz])) kz = 2;
-    int kx = (kz + 1) % 3, ky = (kx + 1) % 3;
-    if (d[kz] < 0) std::swap(kx, ky);  // keep the winding
-    const double sx = d[kx] / d[kz], sy = d[ky] / d[kz], sz = 1 / d[kz];
-    const dvec3 a = v0 - ray.origin, b = v1 - ray.origin, c = v2 - ray.origin;
-    const double ax = a[kx] - sx * a[kz], ay = a[ky] - sy * a[kz];
-    const double bx = b[kx] - sx * b[kz], by = b[ky] - sy * b[kz];
-    const double cx = c[kx] - sx * c[kz], cy = c[ky] - sy * c[kz];
-    const double eu = cx * by - cy * bx;  // weight of v0
-    const double ev = ax * cy - ay * cx;  // weight of v1
-    const double ew = bx * ay - by * ax;  // weight of v2
-    if ((eu < 0 || ev < 0 || ew < 0) && (eu > 0 || ev > 0 || ew > 0)) return std::nullopt;
-    const double det = eu + ev + ew;
-    if (det == 0) return std::nullopt;
-    const double tScaled = eu * (sz * a[kz]) + ev * (sz * b[kz]) + ew * (sz * c[kz]);
-    const double t = tScaled / det;
-    if (!(t > 0)) return std::nullopt;
-    return TriangleHit{t, ev / det, ew / det};
-}
-
-dvec3 reflect(dvec3 d, dvec3 n) { return d - 2.0 * n * glm::dot(d, n); }
-
-// Section 6, Algorithm 1 with the report's TIR test and last line fixed.
-std::optional<dvec3> refract(dvec3 d, dvec3 n, double eta) {
-    const double c = -glm::dot(n, d);
-    const double s = eta * eta * (1 - c * c);
-    if (s > 1) return std::nullopt;
-    const double t = std::sqrt(1 - s);
-    return eta * d + (eta * c - t) * n;
-}
-
-// Section 7, Algorithm 5 with the square root fixed.
-double fresnel(double cosI, double n1, double n2) {
-    const double sinT = (n1 / n2) * std::sqrt(std::max(0.0, 1 - cosI * cosI));
-    if (sinT >= 1) return 1;
-    const double cosT = std::sqrt(1 - sinT * sinT);
-    const double rs = (n2 * cosI - n1 * cosT) / (n2 * cosI + n1 * cosT);
-    const double rp = (n1 * cosI - n2 * cosT) / (n1 * cosI + n2 * cosT);
-    return (rs * rs + rp * rp) / 2;
-}
-
-}  // namespace ref
-
 namespace {
 
 using glm::dvec3;
@@ -138,7 +33,16 @@ struct Hit {
     double u = 0, v = 0;  // triangle barycentrics
 };
 
+// The primitive a secondary ray leaves, for the oracle (renderOracle): flat primitives are not
+// offered to it again, a sphere only when the ray goes into it (then by its far root).
+struct Source {
+    int kind = RT_KIND_MISS;
+    int object = -1;
+    bool outward = true;  // leaves a sphere's outside (its outward normal's side)
+};
+
 struct Surface {
+    int kind, object;
     dvec3 p, n;
     dvec3 ng;   // geometric normal, facing the incoming ray like n
     dvec3 err;  // per-component bound on the rounding error of p (bound offset)
@@ -148,16 +52,17 @@ struct Surface {
 
 class Tracer {
   public:
-    Tracer(const Scene& scene, const RenderOptions& options, bool bruteForce)
+    Tracer(const Scene& scene, const RenderOptions& options, bool bruteForce, bool oracle = false)
         : scene_(scene),
           opt_(options),
           bruteForce_(bruteForce),
+          oracle_(oracle),
           spheres_(bruteForce ? refbvh::Bvh() : refbvh::Bvh::overSpheres(scene.spheres)),
           triangles_(bruteForce ? refbvh::Bvh() : refbvh::Bvh::overTriangles(scene.triangles)) {}
 
     // AA sample `sample` (sy n + sx, as the device numbers them) at offset (ox, oy) in the pixel.
     dvec3 pixel(int x, int y, int sample, double ox, double oy) const {
-        return trace(Ray{toD(scene_.camera.position), primaryDir(x + ox, y + oy)}, 0,
+        return trace(Ray{toD(scene_.camera.position), primaryDir(x + ox, y + oy)}, Source{}, 0,
                      PixelSample{x, y, sample});
     }
 
@@ -165,32 +70,32 @@ class Tracer {
     // the first object in that order. The BVHs offer primitives in their own order, and planes
     // go first there to bound the traversals; an exact tie then goes to the object a loop in
     // section 2's order would have kept (better), so the hit is the same.
-    Hit closestHit(const Ray& ray) const {
+    Hit closestHit(const Ray& ray, const Source& from = {}) const {
         Hit best;
         if (bruteForce_) {
             for (std::size_t i = 0; i < scene_.spheres.size(); ++i) {
-                const auto t = sphereT(ray, scene_.spheres[i]);
+                const auto t = sphereT(ray, int(i), from);
                 if (t && *t > 0 && *t < best.t) best = Hit{*t, RT_KIND_SPHERE, int(i)};
             }
             for (std::size_t i = 0; i < scene_.planes.size(); ++i) {
-                const auto t = planeT(ray, scene_.planes[i]);
+                const auto t = planeT(ray, int(i), from);
                 if (t && *t > 0 && *t < best.t) best = Hit{*t, RT_KIND_PLANE, int(i)};
             }
             for (std::size_t i = 0; i < scene_.triangles.size(); ++i) {
-                const auto h = triangleHit(ray, int(i));
+                const auto h = triangleHit(ray, int(i), from);
                 if (h && h->t > 0 && h->t < best.t)
                     best = Hit{h->t, RT_KIND_TRIANGLE, int(i), h->u, h->v};
             }
             return best;
         }
         for (std::size_t i = 0; i < scene_.planes.size(); ++i) {
-            const auto t = planeT(ray, scene_.planes[i]);
+            const auto t = planeT(ray, int(i), from);
             if (t && better(*t, RT_KIND_PLANE, int(i), best)) best = Hit{*t, RT_KIND_PLANE, int(i)};
         }
         spheres_.traverse(
             ray,
             [&](int i) {
-                const auto t = sphereT(ray, scene_.spheres[i]);
+                const auto t = sphereT(ray, i, from);
                 if (t && better(*t, RT_KIND_SPHERE, i, best)) best = Hit{*t, RT_KIND_SPHERE, i};
                 return best.t;
             },
@@ -198,7 +103,7 @@ class Tracer {
         triangles_.traverse(
             ray,
             [&](int i) {
-                const auto h = triangleHit(ray, i);
+                const auto h = triangleHit(ray, i, from);
                 if (h && better(h->t, RT_KIND_TRIANGLE, i, best))
                     best = Hit{h->t, RT_KIND_TRIANGLE, i, h->u, h->v};
                 return best.t;
@@ -208,15 +113,15 @@ class Tracer {
     }
 
     // Section 4: any hit with 0 < t < length blocks the shadow ray.
-    bool occluded(const Ray& ray, double length) const {
+    bool occluded(const Ray& ray, double length, const Source& from = {}) const {
         auto blocks = [&](const std::optional<double>& t) { return t && *t > 0 && *t < length; };
-        for (const dev::Plane& pl : scene_.planes)
-            if (blocks(planeT(ray, pl))) return true;
+        for (std::size_t i = 0; i < scene_.planes.size(); ++i)
+            if (blocks(planeT(ray, int(i), from))) return true;
         if (bruteForce_) {
-            for (const dev::Sphere& s : scene_.spheres)
-                if (blocks(sphereT(ray, s))) return true;
+            for (std::size_t i = 0; i < scene_.spheres.size(); ++i)
+                if (blocks(sphereT(ray, int(i), from))) return true;
             for (std::size_t i = 0; i < scene_.triangles.size(); ++i) {
-                const auto h = triangleHit(ray, int(i));
+                const auto h = triangleHit(ray, int(i), from);
                 if (h && blocks(h->t)) return true;
             }
             return false;
@@ -226,7 +131,7 @@ class Tracer {
         spheres_.traverse(
             ray,
             [&](int i) {
-                blocked = blocks(sphereT(ray, scene_.spheres[i]));
+                blocked = blocks(sphereT(ray, i, from));
                 return blocked ? -1.0 : length;
             },
             length);
@@ -234,7 +139,7 @@ class Tracer {
         triangles_.traverse(
             ray,
             [&](int i) {
-                const auto h = triangleHit(ray, i);
+                const auto h = triangleHit(ray, i, from);
                 blocked = h && blocks(h->t);
                 return blocked ? -1.0 : length;
             },
@@ -265,32 +170,53 @@ class Tracer {
         return glm::normalize(dvec3(o.x * cb + o.z * sb, o.y, o.z * cb - o.x * sb));
     }
 
-    std::optional<double> sphereT(const Ray& ray, const dev::Sphere& s) const {
+    // Whether the oracle keeps primitive (kind, i) from a ray that leaves `from`.
+    bool leaves(const Source& from, int kind, int i) const {
+        return oracle_ && from.kind == kind && from.object == i;
+    }
+
+    std::optional<double> sphereT(const Ray& ray, int i, const Source& from) const {
+        const dev::Sphere& s = scene_.spheres[std::size_t(i)];
+        if (oracle_) {
+            if (!leaves(from, RT_KIND_SPHERE, i))
+                return ref::intersectSphereRobust(ray, toD(s.center), s.radius, false);
+            if (from.outward) return std::nullopt;
+            return ref::intersectSphereFar(ray, toD(s.center), s.radius);
+        }
         return opt_.robustSphere ? ref::intersectSphereRobust(ray, toD(s.center), s.radius)
                                  : ref::intersectSpherePlain(ray, toD(s.center), s.radius);
     }
 
-    static std::optional<double> planeT(const Ray& ray, const dev::Plane& pl) {
-        const dvec3 n = toD(pl.normal);
-        const double den = glm::dot(n, ray.dir);
-        if (den == 0) return std::nullopt;
-        return (double(pl.offset) - glm::dot(n, ray.origin)) / den;
+    std::optional<double> planeT(const Ray& ray, int i, const Source& from) const {
+        if (leaves(from, RT_KIND_PLANE, i)) return std::nullopt;
+        const dev::Plane& pl = scene_.planes[std::size_t(i)];
+        return ref::intersectPlane(ray, toD(pl.normal), double(pl.offset), !oracle_);
     }
 
-    std::optional<ref::TriangleHit> triangleHit(const Ray& ray, int i) const {
-        const dev::Triangle& tr = scene_.triangles[i];
+    std::optional<ref::TriangleHit> triangleHit(const Ray& ray, int i, const Source& from) const {
+        if (leaves(from, RT_KIND_TRIANGLE, i)) return std::nullopt;
+        const dev::Triangle& tr = scene_.triangles[std::size_t(i)];
+        if (oracle_)
+            return ref::intersectTriangleWatertight(ray, toD(tr.v0), toD(tr.v1), toD(tr.v2), false);
         return opt_.watertight
                    ? ref::intersectTriangleWatertight(ray, toD(tr.v0), toD(tr.v1), toD(tr.v2))
                    : ref::intersectTriangleMT(ray, toD(tr.v0), toD(tr.v1), toD(tr.v2));
+    }
+
+    // The primitive a ray spawned at s on `side` (section 3) leaves.
+    static Source source(const Surface& s, double side) {
+        return Source{s.kind, s.object, (side > 0) != s.inside};
     }
 
     // Section 2, normals: the shading normal faces the incoming ray; inside when flipped. Hit
     // points and normals as the device computes them (core/cl/raytree.cl), in double.
     Surface surface(const Ray& ray, const Hit& hit) const {
         Surface s;
+        s.kind = hit.kind, s.object = hit.object;
         s.p = ray.origin + hit.t * ray.dir;
         s.ng = dvec3(0);
-        const bool bound = opt_.offset == RenderOptions::Offset::Bound;
+        // The oracle's points are the bound rule's: on the surface to its own rounding.
+        const bool bound = oracle_ || opt_.offset == RenderOptions::Offset::Bound;
         if (hit.kind == RT_KIND_TRIANGLE) {
             const dev::Triangle& tr = scene_.triangles[hit.object];
             const dvec3 v0 = toD(tr.v0), v1 = toD(tr.v1), v2 = toD(tr.v2);
@@ -310,7 +236,7 @@ class Tracer {
         if (hit.kind == RT_KIND_SPHERE) {
             const dev::Sphere& sp = scene_.spheres[hit.object];
             const dvec3 c = toD(sp.center);
-            if (opt_.robustSphere) {
+            if (oracle_ || opt_.robustSphere) {
                 n = sphereNormal(ray, c, sp.radius, hit.t);
                 s.p = c + double(sp.radius) * n;
             } else {
@@ -345,13 +271,12 @@ class Tracer {
     // gamma(n) of double arithmetic (u = 2^-53): the reference's error bounds are those of its
     // own rounding, about 5e8 times below the device's, so its bound offset is the limit of a
     // vanishing offset that the float pipelines approach (core/SHADING.md section 3).
-    static double gamma(int n) {
-        const double nu = n * std::numeric_limits<double>::epsilon() / 2;
-        return nu / (1 - nu);
-    }
+    static double gamma(int n) { return ref::gamma(n); }
 
     // Section 3: where a secondary ray leaves s, on the normal's side (side 1) or the other.
+    // The oracle spawns at the point itself (its rays skip what they leave, Source).
     dvec3 spawn(const Surface& s, double side) const {
+        if (oracle_) return s.p;
         if (opt_.offset == RenderOptions::Offset::Fixed) return s.p + side * 1e-4 * s.n;
         if (opt_.offset == RenderOptions::Offset::Scaled)
             return s.p + side * 1e-4 *
@@ -390,7 +315,7 @@ class Tracer {
                 q = c + rho * (std::cos(ds.angle) * t + std::sin(ds.angle) * b);
             }
             const double length = glm::length(q - o);
-            if (occluded(Ray{o, (q - o) / length}, length)) ++blocked;
+            if (occluded(Ray{o, (q - o) / length}, length, source(s, 1))) ++blocked;
         }
         return 1 - double(opt_.shadowStrength) * blocked / samples;
     }
@@ -465,6 +390,7 @@ class Tracer {
     // the reflection, o for the surface's own colour against the refraction.
     struct Children {
         std::optional<Ray> reflected, refracted;
+        Source reflectedFrom, refractedFrom;
         double f = 0, o = 1;
     };
 
@@ -476,19 +402,21 @@ class Tracer {
         const double n2 = s.inside ? 1.0 : double(m.ior);
         if (m.reflectance > 0 || transparent) {
             c.reflected = Ray{spawn(s, 1), ref::reflect(d, s.n)};
+            c.reflectedFrom = source(s, 1);
             c.f = transparent ? ref::fresnel(-glm::dot(d, s.n), n1, n2) : double(m.reflectance);
         }
         if (transparent) {
             if (const auto t = ref::refract(d, s.n, n1 / n2)) {
                 c.refracted = Ray{spawn(s, -1), *t};
+                c.refractedFrom = source(s, -1);
                 c.o = m.opacity;
             }
         }
         return c;
     }
 
-    dvec3 trace(const Ray& ray, int depth, PixelSample px) const {
-        const Hit hit = closestHit(ray);
+    dvec3 trace(const Ray& ray, const Source& from, int depth, PixelSample px) const {
+        const Hit hit = closestHit(ray, from);
         if (hit.kind == RT_KIND_MISS) return environment(ray.dir);
         const Surface s = surface(ray, hit);
         const dev::Material& m = scene_.materials[s.material];
@@ -496,8 +424,10 @@ class Tracer {
         const uint32_t key = dev::Sampling_PointKey(px.x, px.y, px.sample, depth);
         const dvec3 baseColour = base(s, d, m, spawn(s, 1), key);
         const Children c = children(s, m, d, depth);
-        const dvec3 reflected = c.reflected ? trace(*c.reflected, depth + 1, px) : dvec3(0);
-        const dvec3 refracted = c.refracted ? trace(*c.refracted, depth + 1, px) : dvec3(0);
+        const dvec3 reflected =
+            c.reflected ? trace(*c.reflected, c.reflectedFrom, depth + 1, px) : dvec3(0);
+        const dvec3 refracted =
+            c.refracted ? trace(*c.refracted, c.refractedFrom, depth + 1, px) : dvec3(0);
         const dvec3 through = c.o * baseColour + (1 - c.o) * refracted;
         return (1 - c.f) * through + c.f * reflected;
     }
@@ -549,6 +479,7 @@ class Tracer {
     const Scene& scene_;
     const RenderOptions& opt_;
     bool bruteForce_;
+    bool oracle_;
     refbvh::Bvh spheres_, triangles_;
 };
 
@@ -577,10 +508,11 @@ void store(Image& image, int x, int y, dvec3 c) {
 }
 
 Image render(const Scene& scene, const RenderOptions& options, int threads,
-             const std::function<void(long long, long long)>& progress, bool bruteForce) {
+             const std::function<void(long long, long long)>& progress, bool bruteForce,
+             bool oracle = false) {
     if (threads <= 0) threads = int(std::max(1u, std::thread::hardware_concurrency()));
     threads = std::min(threads, std::max(1, options.height));
-    const Tracer tracer(scene, options, bruteForce);
+    const Tracer tracer(scene, options, bruteForce, oracle);
     const int n = std::max(1, options.aa);
     Image image(options.width, options.height);
 
@@ -646,6 +578,11 @@ Image render(const Scene& scene, const RenderOptions& options, int threads,
 Image renderReference(const Scene& scene, const RenderOptions& options, int threads,
                       const std::function<void(long long, long long)>& progress) {
     return render(scene, options, threads, progress, false);
+}
+
+Image renderOracle(const Scene& scene, const RenderOptions& options, int threads,
+                   const std::function<void(long long, long long)>& progress) {
+    return render(scene, options, threads, progress, false, true);
 }
 
 Image renderReferenceBruteForce(const Scene& scene, const RenderOptions& options, int threads) {

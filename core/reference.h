@@ -1,5 +1,6 @@
 // rtlab — the CPU reference renderer: the algorithm of core/SHADING.md in double precision with
-// plain recursion, on every core. It is the accuracy oracle for both OpenCL pipelines.
+// plain recursion, on every core: the renderers' method (renderReference) and the independent
+// accuracy oracle (renderOracle).
 #pragma once
 
 #include <functional>
@@ -13,11 +14,22 @@
 
 namespace rt {
 
-// Renders the scene; threads = 0 uses std::thread::hardware_concurrency().
+// Renders the scene with the pipelines' own method (their intersection tests, offsets and
+// options) in double precision; threads = 0 uses std::thread::hardware_concurrency().
 // progress, when set, is called on the calling thread with rows done (over every pass) and the
 // total, ending at the total.
 Image renderReference(const Scene& scene, const RenderOptions& options, int threads = 0,
                       const std::function<void(long long done, long long total)>& progress = {});
+
+// The accuracy oracle (core/SHADING.md section 3): the image the algorithm defines, which no
+// offset rule can reach. Secondary rays start at the hit point itself and are never offered the
+// primitive they leave when it cannot be hit again: a triangle or plane (flat), or a sphere the
+// ray leaves outward (convex); a ray into a sphere from its surface gets the far root. Every
+// other test takes t > 0 exactly, spheres by the robust test, triangles by the watertight one,
+// in double, whatever the options say of offsets and methods. It cannot make the renderers'
+// self-intersection mistake, which the method-sharing reference above repeats.
+Image renderOracle(const Scene& scene, const RenderOptions& options, int threads = 0,
+                   const std::function<void(long long done, long long total)>& progress = {});
 
 // The same image with every primitive tested for every ray, in the order of core/SHADING.md
 // section 2 and without the reference's BVHs: the oracle of those structures in the tests.
@@ -84,17 +96,29 @@ class Queries {
     std::unique_ptr<Impl> impl_;
 };
 
+// gamma(n) = n u / (1 - n u) with u = 2^-53: the relative error bound of n double operations.
+double gamma(int n);
+
 // Nearest t > 0, or nullopt. Plain = report Algorithm 2 with the "behind the ray" check first.
-std::optional<double> intersectSpherePlain(const Ray& ray, glm::dvec3 center, double radius);
-std::optional<double> intersectSphereRobust(const Ray& ray, glm::dvec3 center, double radius);
+// conservative: only a t that is positive beyond the test's own rounding error (the device's
+// rule, core/SHADING.md section 3); otherwise t > 0 as computed.
+std::optional<double> intersectSpherePlain(const Ray& ray, glm::dvec3 center, double radius,
+                                           bool conservative = true);
+std::optional<double> intersectSphereRobust(const Ray& ray, glm::dvec3 center, double radius,
+                                            bool conservative = true);
+// The larger root when it is > 0: where a ray from a point of the sphere into it leaves it.
+std::optional<double> intersectSphereFar(const Ray& ray, glm::dvec3 center, double radius);
 
 struct TriangleHit {
     double t, u, v;  // barycentrics: p = (1-u-v) v0 + u v1 + v v2
 };
 std::optional<TriangleHit> intersectTriangleMT(const Ray& ray, glm::dvec3 v0, glm::dvec3 v1,
-                                               glm::dvec3 v2);
+                                               glm::dvec3 v2, bool conservative = true);
 std::optional<TriangleHit> intersectTriangleWatertight(const Ray& ray, glm::dvec3 v0, glm::dvec3 v1,
-                                                       glm::dvec3 v2);
+                                                       glm::dvec3 v2, bool conservative = true);
+// The plane n.p = offset.
+std::optional<double> intersectPlane(const Ray& ray, glm::dvec3 n, double offset,
+                                     bool conservative = true);
 
 glm::dvec3 reflect(glm::dvec3 d, glm::dvec3 n);
 // n faces the incoming ray; eta = n1/n2. nullopt on total internal reflection.

@@ -7,6 +7,7 @@ const PipelineRegistry& pipelineRegistry() {
     static const PipelineRegistry registry = [] {
         PipelineRegistry r;
         r.add(referencePipelineInfo());
+        r.add(oraclePipelineInfo());
         registerPipelineFolders(r);
         return r;
     }();

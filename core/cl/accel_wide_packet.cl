@@ -173,6 +173,8 @@ inline floatP Packet_Enter(const PacketSlabs* s, float loX, float loY, float loZ
 }
 
 #ifdef RT_WATERTIGHT
+RT_DEFINE_WATERTIGHT_DELTA_T(Packet_WatertightDeltaT, floatP)
+
 // The shear of Triangle_Intersect's watertight test, per ray (its first lines), and the
 // origin's components on its axes. Coherent rays mostly share their axes: then kx, ky, kz
 // hold them and a triangle's vertices are permuted once for all rays, not lane by lane.
@@ -241,12 +243,16 @@ inline intP Packet_Triangle(global const Triangle* tri, const RayPacket* r, floa
     miss |= (det == 0.0f) | ((det < 0.0f) & (T >= 0.0f)) | ((det > 0.0f) & (T <= 0.0f));
     floatP rcp = 1.0f / det;
     floatP t = T * rcp;
+    miss |= t <= Packet_WatertightDeltaT(ax, ay, r->sz * Ak, bx, by, r->sz * Bk, cx, cy, r->sz * Ck,
+                                         U, V, W, rcp);
     *tOut = t;
     *uOut = V * rcp;
     *vOut = W * rcp;
     return ~miss & (t > 0.0f) & (t < hitT);
 }
 #else
+RT_DEFINE_MT_DELTA_T(Packet_MollerTrumboreDeltaT, floatP)
+
 // Triangle_Intersect's Moller-Trumbore for every ray against one triangle, written out per
 // component in the order of cross() and dot(); the lanes where it hits with 0 < t < hitT.
 inline intP Packet_Triangle(global const Triangle* tri, const RayPacket* r, floatP hitT,
@@ -265,8 +271,9 @@ inline intP Packet_Triangle(global const Triangle* tri, const RayPacket* r, floa
     floatP qz = sx * e1.y - sy * e1.x;
     floatP v = f * (r->dx * qx + r->dy * qy + r->dz * qz);
     floatP t = f * (e2.x * qx + e2.y * qy + e2.z * qz);
-    // Triangle_Intersect's early outs, then Hit_Triangle's 0 < t < hit->t.
-    intP miss = (a == 0.0f) | (u < 0.0f) | (u > 1.0f) | (v < 0.0f) | (u + v > 1.0f) | (t <= 0.0f);
+    // Triangle_Intersect's early outs and conservative t > 0, then Hit_Triangle's 0 < t < hit->t.
+    intP miss = (a == 0.0f) | (u < 0.0f) | (u > 1.0f) | (v < 0.0f) | (u + v > 1.0f) |
+                (t <= Packet_MollerTrumboreDeltaT(sx, sy, sz, e1, e2, f));
     *tOut = t;
     *uOut = u;
     *vOut = v;

@@ -60,6 +60,14 @@ inline Float3 F3(float3 v) {
     return r;
 }
 
+// gamma(n) = n u / (1 - n u) with u = 2^-24: the relative error bound of n float operations
+// (Higham; pbrt-v4's error analysis uses the same). The spawn offsets (shade.cl) and the
+// intersectors' conservative t > 0 tests (intersect.cl) are built from it.
+inline float Float_Gamma(int n) {
+    float nu = (float)n * 5.9604645e-8f;
+    return nu / (1.0f - nu);
+}
+
 inline float component(float3 v, int k) { return k == 0 ? v.x : (k == 1 ? v.y : v.z); }
 
 typedef struct Ray {

@@ -62,20 +62,13 @@ inline float3 Shade_Environment(const SceneData* sc, float3 d) {
 }
 
 // ---- secondary-ray origins (section 3) ----
-// gamma(n) = n u / (1 - n u) with u = 2^-24: the relative error bound of n float operations
-// (Higham; pbrt-v4's error analysis uses the same).
-inline float Shade_Gamma(int n) {
-    float nu = (float)n * 5.9604645e-8f;
-    return nu / (1.0f - nu);
-}
-
 // Offset distance of the fixed and scaled rules. Under RT_BOUND_OFFSET only callers that have
 // no hit record use it (Shade_Occlusion): a bound from |p| alone, which misses the error of
 // points computed from larger coordinates (a big sphere near its top), hence Shade_PointError.
 inline float Shade_Offset(float3 p) {
 #if defined(RT_BOUND_OFFSET)
     float3 a = fabs(p);
-    return Shade_Gamma(7) * (a.x + a.y + a.z);
+    return Float_Gamma(7) * (a.x + a.y + a.z);
 #elif defined(RT_SCALED_OFFSET)
     return 1e-4f * fmax(1.0f, fmax(fabs(p.x), fmax(fabs(p.y), fabs(p.z))));
 #else
@@ -87,15 +80,15 @@ inline float Shade_Offset(float3 p) {
 // computes it under RT_BOUND_OFFSET (SHADING.md section 3): reprojected onto the sphere
 // (c + r n), reprojected onto the plane, or interpolated from the triangle's vertices.
 inline float3 Shade_SphereError(float3 center, float radius, float3 n) {
-    return Shade_Gamma(5) * (fabs(center) + radius * fabs(n));
+    return Float_Gamma(5) * (fabs(center) + radius * fabs(n));
 }
 
 inline float3 Shade_PlaneError(float3 p, float offset) {
-    return Shade_Gamma(6) * (fabs(p) + fabs(offset));
+    return Float_Gamma(6) * (fabs(p) + fabs(offset));
 }
 
 inline float3 Shade_TriangleError(float3 v0, float3 v1, float3 v2) {
-    return Shade_Gamma(7) * (fabs(v0) + fabs(v1) + fabs(v2));
+    return Float_Gamma(7) * (fabs(v0) + fabs(v1) + fabs(v2));
 }
 
 // pbrt-v4's OffsetRayOrigin: from p, whose components are off by at most err, move along the

@@ -1,0 +1,118 @@
+#!/usr/bin/env python3
+"""The acne study of issue 51: a sphere over a reflective floor of two triangles, scaled by 1e-4, 1
+and 1e5, rendered with each --offset rule by one or two rtlab binaries (before and after a
+change), each image scored against the independent oracle (`--pipeline oracle` of the after
+binary). Writes a Markdown table of acne rates (pixels more than 2/255 off the oracle, values
+clamped to [0, 1]) per pipeline to standard output.
+
+    scripts/acne-study.py [--before BIN] [--after BIN] [--pipelines mega,cpu] [--size 320x180]
+"""
+import argparse
+import json
+import os
+import struct
+import subprocess
+import sys
+import tempfile
+
+FLOOR_SPHERE = {
+    "description": "A sphere over a reflective floor of two triangles, 24 x 24 units (issue 51).",
+    "camera": {"position": [0, 3, -6], "pitch": -20, "fov": 60},
+    "materials": {
+        "floor": {"ambient": [0.05, 0.05, 0.05], "diffuse": [0.6, 0.6, 0.6],
+                  "specular": [0.3, 0.3, 0.3], "exponent": 20, "reflectance": 0.5},
+        "ball": {"ambient": [0.05, 0.02, 0.02], "diffuse": [0.8, 0.2, 0.2],
+                 "specular": [0.5, 0.5, 0.5], "exponent": 50}},
+    "spheres": [{"center": [0, 1, 2], "radius": 1, "material": "ball"}],
+    "triangles": [
+        {"vertices": [[-12, 0, -12], [12, 0, -12], [12, 0, 12]], "material": "floor"},
+        {"vertices": [[-12, 0, -12], [12, 0, 12], [-12, 0, 12]], "material": "floor"}],
+    "lights": [{"position": [-4, 8, -2], "color": [0.9, 0.9, 0.9], "radius": 0}],
+    "render": {"width": 320, "height": 180, "bounces": 2},
+}
+
+
+def scaled(scene, k):
+    """The scene with every length multiplied by k (angles and colours kept)."""
+    s = json.loads(json.dumps(scene))
+    s["camera"]["position"] = [k * v for v in s["camera"]["position"]]
+    for sp in s["spheres"]:
+        sp["center"] = [k * v for v in sp["center"]]
+        sp["radius"] *= k
+    for t in s["triangles"]:
+        t["vertices"] = [[k * v for v in p] for p in t["vertices"]]
+    for light in s["lights"]:
+        light["position"] = [k * v for v in light["position"]]
+    return s
+
+
+def read_pfm(path):
+    """A PFM image as rows of (r, g, b) floats, top row first."""
+    with open(path, "rb") as f:
+        kind = f.readline().strip()
+        w, h = map(int, f.readline().split())
+        scale = float(f.readline())
+        data = f.read()
+    fmt = "<" if scale < 0 else ">"
+    n = 3 if kind == b"PF" else 1
+    vals = struct.unpack(f"{fmt}{w * h * n}f", data[:4 * w * h * n])
+    rows = [vals[y * w * n:(y + 1) * w * n] for y in range(h)]
+    return list(reversed(rows)), n  # PFM stores the bottom row first
+
+
+def render(binary, scene_file, pipeline, offset, size, out):
+    """Renders to out (.pfm through OpenImageIO's oiiotool from .exr); an error line or None."""
+    exr = out[:-4] + ".exr"
+    r = subprocess.run([binary, "render", scene_file, "--pipeline", pipeline, "--offset", offset,
+                        "--size", size, "-o", exr], capture_output=True, text=True, timeout=600)
+    if r.returncode != 0:
+        return (r.stderr.strip().splitlines() or ["failed"])[-1]
+    subprocess.run(["oiiotool", exr, "-o", out], check=True, timeout=60)
+    return None
+
+
+def acne_rate(image, oracle):
+    """Share of pixels with a channel more than 2/255 off, values clamped to [0, 1]."""
+    (a, n), (b, _) = read_pfm(image), read_pfm(oracle)
+    over = total = 0
+    for ra, rb in zip(a, b):
+        for i in range(0, len(ra), n):
+            total += 1
+            over += any(abs(min(max(x, 0), 1) - min(max(y, 0), 1)) > 2 / 255
+                        for x, y in zip(ra[i:i + n], rb[i:i + n]))
+    return over / total
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--before", help="rtlab binary before the change")
+    ap.add_argument("--after", default="build/bin/rtlab", help="rtlab binary after it")
+    ap.add_argument("--pipelines", default="cpu,mega,queue")
+    ap.add_argument("--size", default="320x180")
+    a = ap.parse_args()
+    pipes = a.pipelines.split(",")
+    runs = [("before", a.before), ("after", a.after)] if a.before else [("after", a.after)]
+    print("| scale | offset | " + " | ".join(f"{w} {p}" for w, _ in runs for p in pipes) + " |")
+    print("|---|---|" + "---|" * (len(runs) * len(pipes)))
+    with tempfile.TemporaryDirectory() as tmp:
+        for k in (1e-4, 1.0, 1e5):
+            path = os.path.join(tmp, f"floor-sphere-{k:g}.json")
+            with open(path, "w") as f:
+                json.dump(scaled(FLOOR_SPHERE, k), f)
+            oracle = os.path.join(tmp, "oracle.pfm")
+            err = render(a.after, path, "oracle", "bound", a.size, oracle)
+            if err:
+                sys.exit(f"acne-study: the oracle failed: {err}")
+            for offset in ("fixed", "scaled", "bound"):
+                cells = []
+                for when, binary in runs:
+                    for p in pipes:
+                        img = os.path.join(tmp, f"{when}-{p}.pfm")
+                        err = render(binary, path, p, offset, a.size, img)
+                        cells.append(err or f"{100 * acne_rate(img, oracle):.1f}%")
+                print(f"| {k:g} | {offset} | " + " | ".join(cells) + " |", flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
