@@ -1,12 +1,12 @@
 #!/usr/bin/env python3
-"""scripts/auto_eval.py: auto within 5% of the better of mega and queue, ties and wins beyond the
+"""tools/rtlab_report/auto_eval.py: auto within 5% of the better of mega and queue, ties and wins beyond the
 frame spread, on rows made to the point."""
 import os
 import sys
 import unittest
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "scripts"))
-import auto_eval  # noqa: E402
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "tools"))
+from rtlab_report import auto_eval  # noqa: E402
 
 
 def row(scene, pipeline, ms, spread=0.01, layout=None, design=None, choice=None):

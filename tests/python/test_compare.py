@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Tests of scripts/compare.py, the one tie rule and the like-with-like win count every result
+"""Tests of tools/rtlab_report/compare.py, the one tie rule and the like-with-like win count every result
 README and chart uses, with numbers from measured rows. Standard library only; CTest runs this
 with /usr/bin/python3.
 """
@@ -9,11 +9,8 @@ import sys
 import unittest
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-SCRIPTS = os.path.join(ROOT, "scripts")
-sys.path.insert(0, SCRIPTS)
-import compare  # noqa: E402
-import readme_winners  # noqa: E402
-import sweep_rows  # noqa: E402
+sys.path.insert(0, os.path.join(ROOT, "tools"))
+from rtlab_report import compare, readme_winners, sweep_rows  # noqa: E402
 
 H200_FULL = os.path.join(ROOT, "results", "nvidia-h200", "full.json")
 

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""The committed results/ against its index and its READMEs (scripts/results_index.py): every
+"""The committed results/ against its index and its READMEs (tools/rtlab_report/results_index.py): every
 folder under results/ must be named in results/README.md, and every commit a README in
 results/ quotes must be recorded by its data (rows, sweep metadata, the tools' logs, or data it
 links to), so that a README cannot claim a measurement its folder does not hold.
@@ -13,8 +13,8 @@ import unittest
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 RESULTS = os.path.join(ROOT, "results")
-sys.path.insert(0, os.path.join(ROOT, "scripts"))
-import results_index  # noqa: E402
+sys.path.insert(0, os.path.join(ROOT, "tools"))
+from rtlab_report import results_index  # noqa: E402
 
 # Commits these READMEs name that no data under them records. None is a measurement's own
 # commit: each is a kernel tree run under another commit's binary (--kernel-dir or
@@ -56,7 +56,7 @@ class CommittedResultsTest(unittest.TestCase):
     def test_every_result_folder_is_in_the_index(self):
         missing = results_index.missing_from_index(RESULTS)
         self.assertEqual(missing, [], "results/README.md leaves these folders out; run "
-                         "/usr/bin/python3 scripts/results-readme.py results")
+                         "python3 -m rtlab_report readme results")
 
     def test_every_quoted_commit_is_in_the_data(self):
         found = set(results_index.readme_problems(RESULTS))

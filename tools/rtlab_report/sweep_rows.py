@@ -1,4 +1,4 @@
-"""What the charts (charts.py) and the generated READMEs (results-readme.py) read from sweep rows.
+"""What the charts (charts.py) and the generated READMEs (results_readme.py) read from sweep rows.
 
 Nothing here knows which pipelines exist: a series is whatever `pipeline` values the rows hold,
 split by `layout` where one pipeline ran several, and by `memory_budget`. A series is titled by

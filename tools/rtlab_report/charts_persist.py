@@ -1,4 +1,3 @@
-#!/usr/bin/env python3
 """Draws the persistent megakernel's schedules against the weighted megakernel, whose per-pixel
 code they share, from a `persist` or `persist-loop` sweep (bench/sweeps/): for each scene, the
 speed-up of each schedule (flat, nested, lockstep, regrouped by pattern or by material, among
@@ -18,16 +17,15 @@ A sweep about the order pixels are handed out in (every schedule it runs is in s
 --persistent-tile orders, as in the persist-tile sweep) gets a table and chart by tile instead:
 for each schedule and scene, the time at each order and the speed-up of the best one.
 
-Usage: scripts/charts_persist.py ROWS.jsonl|SWEEP.json [--out DIR]
+Usage: python3 -m rtlab_report persist-charts ROWS.jsonl|SWEEP.json [--out DIR]
 Needs Debian's python3-matplotlib for the chart; the table needs nothing.
 """
 import argparse
 import os
 import sys
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from charts_map import load  # noqa: E402  (rows.jsonl beside its sweep.json, or a sweep JSON)
-from compare import tied  # noqa: E402
+from .charts_map import load  # rows.jsonl beside its sweep.json, or a sweep JSON
+from .compare import tied
 
 BASE = "weighted megakernel"
 TARGET = 2.0  # the issue's bar on divergent scenes
@@ -201,7 +199,7 @@ def chart(meta, scenes, grid, path):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from matplotlib.patches import Patch
-    from chart_style import figure, legend_row, log_ticks
+    from .chart_style import figure, legend_row, log_ticks
 
     bounce = bounce_series(scenes, grid)
     if bounce:
@@ -320,7 +318,7 @@ def tile_chart(meta, scenes, schedules, tiles, grid, path):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from matplotlib.patches import Patch
-    from chart_style import figure, legend_row, log_ticks
+    from .chart_style import figure, legend_row, log_ticks
 
     r0 = next(iter(grid[scenes[0]].values()))
     fig, panels, legend_ax = figure(
@@ -356,12 +354,12 @@ def tile_chart(meta, scenes, schedules, tiles, grid, path):
     plt.close(fig)
 
 
-def main():
+def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("rows")
     ap.add_argument("--out", default=None, help="folder for <sweep>.png and <sweep>.md "
                     "[beside the rows]")
-    a = ap.parse_args()
+    a = ap.parse_args(argv)
     meta, rows = load(a.rows)
     out = a.out or os.path.dirname(os.path.abspath(a.rows))
     os.makedirs(out, exist_ok=True)
@@ -387,6 +385,3 @@ def main():
               file=sys.stderr)
     print(name + ".md")
 
-
-if __name__ == "__main__":
-    main()

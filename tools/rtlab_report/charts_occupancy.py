@@ -1,4 +1,3 @@
-#!/usr/bin/env python3
 """What occupancy is worth to the queue wavefront's kernels (bench/sweeps/queue-occupancy): each
 stage's device time against the warps its kernel keeps resident on a multiprocessor, as
 --queue-group and --queue-local-pad set them, beside the warps the persistent megakernel's one
@@ -13,7 +12,7 @@ left out. A stage's time is its kernels' device times (kernel_ms); the shade sta
 kernels and is placed at the warps of its heaviest kernel by registers.
 Writes occupancy.md and occupancy.png.
 
-Usage: scripts/charts_occupancy.py ROWS.jsonl [--out DIR]
+Usage: python3 -m rtlab_report occupancy-charts ROWS.jsonl [--out DIR]
 Needs Debian's python3-matplotlib for the chart; the table needs nothing.
 """
 import argparse
@@ -21,8 +20,7 @@ import math
 import os
 import sys
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from charts_map import load  # noqa: E402
+from .charts_map import load
 
 REGISTERS = 65536
 REGISTER_UNIT = 256       # a warp's registers are allocated in units of this many
@@ -120,7 +118,7 @@ def table(meta, grid, path):
              "", f"Driver {meta.get('driver')}, commit `{meta.get('commit')}`, sweep "
              f"`{meta.get('sweep')}`; ms, median device time. Warps: resident on a "
              "multiprocessor, estimated from each kernel's registers and local memory with "
-             "sm_90's limits (scripts/charts_occupancy.py). Speed-up: over the weighted "
+             "sm_90's limits (tools/rtlab_report/charts_occupancy.py). Speed-up: over the weighted "
              "megakernel.", "", "| " + " | ".join(head) + " |", "|---" * len(head) + "|"]
     for scene, g in grid.items():
         mega = g.get("mega")
@@ -147,7 +145,7 @@ def chart(meta, grid, path):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    from chart_style import MARKERS, figure, legend_row
+    from .chart_style import MARKERS, figure, legend_row
 
     fig, panels, legend_ax = figure(
         meta, "The queue's stages against the warps their kernels keep on a multiprocessor, in "
@@ -189,12 +187,12 @@ def chart(meta, grid, path):
     plt.close(fig)
 
 
-def main():
+def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("rows", help="rows.jsonl of bench/sweeps/queue-occupancy")
     ap.add_argument("--out", default=None, help="folder for occupancy.md and occupancy.png "
                     "[beside the rows]")
-    a = ap.parse_args()
+    a = ap.parse_args(argv)
     meta, rows = load(a.rows)
     grid = gather(rows)
     if not grid:
@@ -210,6 +208,3 @@ def main():
               file=sys.stderr)
     print(os.path.join(out, "occupancy.md"))
 
-
-if __name__ == "__main__":
-    main()

@@ -9,10 +9,10 @@ its frame spread. A ratio under 1 is a win over the megakernel only beyond the f
 (compare.py); a tie is drawn hollow, and a star marks the first measured octave count where a
 series wins beyond the spread (never a point interpolated between two measurements).
 """
-from chart_style import figure, legend_row, log_ticks, series_style
+from .chart_style import figure, legend_row, log_ticks, series_style
 from matplotlib.lines import Line2D
-from compare import spread
-from readme_crossover import crossing, crossover_rows, outcome, ratios
+from .compare import spread
+from .readme_crossover import crossing, crossover_rows, outcome, ratios
 
 def style_maps(keys):
     """Line style per bounce limit, marker size per frame size (at most three sizes)."""
@@ -34,7 +34,7 @@ def crossover_chart(meta, all_rows):
     dashes, marks = style_maps(data.keys())
     fig, panels, legend_ax = figure(
         meta, f"Time over the best megakernel against material cost, {meta.get('device')}\n"
-        "filled: a win or loss beyond the frame spread; hollow: a tie (scripts/compare.py)",
+        "filled: a win or loss beyond the frame spread; hollow: a tie (tools/rtlab_report/compare.py)",
         len(materials), cols=3, legend_rows=2.4)
     for ax, m in zip(panels, materials):
         ax.axhline(1, color="black", linewidth=0.8)

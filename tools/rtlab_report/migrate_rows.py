@@ -1,8 +1,7 @@
-#!/usr/bin/python3
 """One-off migration of committed sweep rows: adds the `failure` field, and
 `pipeline_title` for the two pipelines that existed before rows carried it.
 
-Usage: python3 scripts/migrate-rows.py results/*/*.json
+Usage: python3 -m rtlab_report migrate-rows results/*/*.json
 
 Rows written before the field existed say how a cell failed only in English error text; the
 charts and the generated READMEs now read the `failure` field alone, so this script derives it
@@ -110,8 +109,8 @@ def migrate_csv(path, rows):
         f.write(out.getvalue())
 
 
-def main(paths):
-    for path in paths:
+def main(argv=None):
+    for path in argv or []:
         rows = migrate_json(path)
         if rows is None:
             print(f"migrate-rows: skipped {path} (not a sweep JSON)")
@@ -122,6 +121,3 @@ def main(paths):
         print(f"migrate-rows: {path}: {len(rows)} rows")
     return 0
 
-
-if __name__ == "__main__":
-    sys.exit(main(sys.argv[1:]))

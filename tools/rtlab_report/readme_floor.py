@@ -25,8 +25,8 @@ Standard library only.
 import json
 import os
 
-from readme_format import ms, size_label, table
-from sweep_rows import LEGACY_NODE_BYTES, setting
+from .readme_format import ms, size_label, table
+from .sweep_rows import LEGACY_NODE_BYTES, setting
 
 IMAGE_BYTES_PER_PIXEL = 12  # RGB float
 # Rows record their pipeline's record sizes (extras: node_bytes, ray_record_bytes,
@@ -46,7 +46,7 @@ FLOOR_TEXT = (
     "(48 B), each written once and read once. The megakernel keeps its rays in private memory: "
     "its floor is the image alone, so its frame / floor says how far from memory-bound it is. "
     "A lower bound: caches, 32-byte sectors and scene reads only add to it "
-    "(scripts/readme_floor.py).")
+    "(tools/rtlab_report/readme_floor.py).")
 
 
 def read_roofline(folder):

@@ -1,10 +1,10 @@
-"""The Limits section of a result set's README (results-readme.py): how far each pipeline goes
+"""The Limits section of a result set's README (results_readme.py): how far each pipeline goes
 in the `limits` sweep (bench/sweeps/limits): per series the last setting that ran, where its
 global ray tree first tiled, and the first setting that failed and how (the rows' failure field).
 Standard library only.
 """
-from readme_format import clean_meta, gib, ms, size_label, table, tree_text
-from sweep_rows import FAILURES, Series, failure, in_group, limit_series, setting
+from .readme_format import clean_meta, gib, ms, size_label, table, tree_text
+from .sweep_rows import FAILURES, Series, failure, in_group, limit_series, setting
 
 
 def setting_of(r, axis):

@@ -1,10 +1,10 @@
-"""Number and table formatting of the generated READMEs (results-readme.py, readme_limits.py).
+"""Number and table formatting of the generated READMEs (results_readme.py, readme_limits.py).
 Standard library only.
 """
 import math
 import os
 
-from sweep_rows import tree_sizes
+from .sweep_rows import tree_sizes
 
 
 def clean_meta(meta, rows=None):

@@ -1,4 +1,4 @@
-"""What results/ holds, for the index results-readme.py writes and for the test that keeps the
+"""What results/ holds, for the index results_readme.py writes and for the test that keeps the
 index and the READMEs honest (tests/python/test_results_index.py): every result folder, the
 commits its data carries, and the commits its README quotes.
 

@@ -1,11 +1,11 @@
-"""Which pipeline wins, for the generated READMEs (results-readme.py): per scene each series'
+"""Which pipeline wins, for the generated READMEs (results_readme.py): per scene each series'
 time over the fastest (geometric mean and range), wins and ties, counted like with like by
 compare.py's rules, and the sweep's wins in one sentence that names its coverage.
 Standard library only.
 """
-from compare import Tally, Verdict, contenders_with_overlap, geomean, ratios_tie, relative_spread
-from readme_format import table
-from sweep_rows import Series, by_setting
+from .compare import Tally, Verdict, contenders_with_overlap, geomean, ratios_tie, relative_spread
+from .readme_format import table
+from .sweep_rows import Series, by_setting
 
 
 def fastest_text(cells, series):

@@ -1,6 +1,6 @@
 """How two measured cells are compared, in one place: the tie rule, the verdict of a setting and
 win counts over like with like. Every README table, win count, chart and the results index
-(results-readme.py, readme_crossover.py, charts*.py, predict_eval.py, register_study.py) asks
+(results_readme.py, readme_crossover.py, charts*.py, predict_eval.py, register_study.py) asks
 this module, so that a "win" means the same thing everywhere.
 
 The tie rule

@@ -1,4 +1,3 @@
-#!/usr/bin/env python3
 """How `--pipeline auto` does against the designs it chooses from (bench/sweeps/auto): for each
 scene, auto's device time against the better of the megakernel (either layout) and the queue
 wavefront, the bar the designs-at-their-best question sets (within 5% of it everywhere, faster
@@ -10,19 +9,17 @@ A gap inside the measured frame spread is no gap (compare.py's tie rule): auto "
 its time is at most 1.05 times the better one's or ties it, and "faster than both" means faster
 than each beyond the spread.
 
-Usage: scripts/auto_eval.py ROWS.jsonl [ROWS.jsonl...] [--out FILE.md]
+Usage: python3 -m rtlab_report auto-eval ROWS.jsonl [ROWS.jsonl...] [--out FILE.md]
 Rows of one scene from several files are pooled (a later file's cell replaces an earlier one's),
 so that auto measured again at a later commit can be set against the designs measured before;
 the table names each row's commit. Standard library only.
 """
 import argparse
 import json
-import os
 import sys
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from compare import tied  # noqa: E402
-from sweep_rows import own_options  # noqa: E402
+from .compare import tied
+from .sweep_rows import own_options
 
 BAR = 1.05
 
@@ -113,11 +110,11 @@ def table(results, auto="auto", heading="#"):
     return "\n".join(lines) + "\n"
 
 
-def main():
+def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("rows", nargs="+", help="sweep rows (rows.jsonl) of bench/sweeps/auto")
     ap.add_argument("--out", help="write the Markdown table here (default: stdout)")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     cells = load(args.rows)
     present = [a for a in AUTO_SERIES.values() if any(a in d for d in cells.values())]
     present += sorted({k for d in cells.values() for k in d
@@ -132,6 +129,3 @@ def main():
     else:
         sys.stdout.write(text)
 
-
-if __name__ == "__main__":
-    main()

@@ -1,7 +1,6 @@
-#!/usr/bin/python3
 """Draws the result charts of a sweep from the JSON that `rtlab sweep` writes.
 
-Usage: /usr/bin/python3 scripts/charts.py results/<device-slug>/<sweep>.json [--out DIR]
+Usage: python3 -m rtlab_report charts results/<device-slug>/<sweep>.json [--out DIR]
 
 Writes, next to the JSON unless --out says otherwise, each chart whose group the sweep has:
   time-vs-resolution.png   device ms per frame against resolution      (group [resolution])
@@ -25,15 +24,14 @@ import math
 import os
 import sys
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from chart_style import (DPI, LINESTYLES, MARKERS, MISSING_MARKER, figure,  # noqa: E402
+from .chart_style import (DPI, LINESTYLES, MARKERS, MISSING_MARKER, figure,
                          legend_height, legend_row, log_ticks, place_labels, plt, point_boxes,
                          resolution_axis, series_style)
-from compare import PARETO_RTOL, pareto, spread  # noqa: E402
-from matplotlib.lines import Line2D  # noqa: E402
-from matplotlib.patches import Patch  # noqa: E402
-from matplotlib.ticker import MaxNLocator  # noqa: E402
-from sweep_rows import Series, failure, in_group  # noqa: E402
+from .compare import PARETO_RTOL, pareto, spread
+from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
+from matplotlib.ticker import MaxNLocator
+from .sweep_rows import Series, failure, in_group
 
 KERNEL_COLORS = {"megakernel": "#1f77b4", "centers": "#6baed6", "edges": "#08519c",
                  "trace": "#d62728", "image": "#ff9896", "reset": "#7f7f7f"}
@@ -406,8 +404,8 @@ CHARTS = {"time-vs-resolution.png": time_vs_resolution, "time-vs-bounces.png": t
 
 def draw_all(meta, all_rows):
     """{file name: figure} for every chart the rows have data for."""
-    import charts_crossover
-    import charts_limits
+    from . import charts_crossover
+    from . import charts_limits
     rows = [r for r in all_rows if failure(r) == ""]
     figs = {name: chart(meta, rows) for name, chart in CHARTS.items()}
     figs["limits.png"] = charts_limits.limits_chart(meta, all_rows)
@@ -415,11 +413,11 @@ def draw_all(meta, all_rows):
     return figs
 
 
-def main():
+def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("json")
     ap.add_argument("--out", help="output folder [the JSON's folder]")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     sweep = load(args.json)
     if sweep is None:
         sys.exit(f"{ap.prog}: {args.json}: not a sweep JSON (one with \"meta\" and \"rows\")")
@@ -435,6 +433,3 @@ def main():
     print(f"charts: done in {out}")
     return 0
 
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -13,10 +13,10 @@ import zlib
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-from matplotlib.transforms import Bbox  # noqa: E402
-from sweep_rows import own_options  # noqa: E402
-from matplotlib.ticker import (FixedLocator, FuncFormatter, MaxNLocator,  # noqa: E402
+import matplotlib.pyplot as plt
+from matplotlib.transforms import Bbox
+from .sweep_rows import own_options
+from matplotlib.ticker import (FixedLocator, FuncFormatter, MaxNLocator,
                                NullFormatter, NullLocator)
 
 

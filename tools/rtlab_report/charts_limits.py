@@ -9,12 +9,12 @@ allocation, the memory budget, max-launch-ms) is in the legend under each column
 data. Series and failure kinds come from the rows (sweep_rows.limit_series), colours from
 the palette in chart_style.py.
 """
-from chart_style import (DPI, footer_text, log_ticks, place_labels, plt,  # noqa: F401
+from .chart_style import (DPI, footer_text, log_ticks, place_labels, plt,  # noqa: F401
                          point_boxes, resolution_axis, series_style)
 from matplotlib.lines import Line2D
 from matplotlib.ticker import MaxNLocator
 from matplotlib.transforms import offset_copy
-from sweep_rows import FAILURES_SHORT, in_group, limit_series, memory_tiles
+from .sweep_rows import FAILURES_SHORT, in_group, limit_series, memory_tiles
 
 PANELS = (("device ms per frame", lambda r: r["device_ms"]),
           ("global memory allocated, MiB", lambda r: r.get("device_bytes", 0) / 2**20),

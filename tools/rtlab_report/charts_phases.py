@@ -1,4 +1,3 @@
-#!/usr/bin/env python3
 """Where the persistent megakernel's time goes, beside the queue wavefront's kernels on the same
 scenes: one stacked bar per design and scene, in the weighted megakernel's time (so that the
 issue's 2x bar is the line at 0.5).
@@ -19,15 +18,14 @@ queue's extend and shadow kernels together: the table sets "trace and shadow ray
 for every design, and says how much of it the shadow rays are where they are apart.
 Writes phases.md and phases.png.
 
-Usage: scripts/charts_phases.py PHASE_ROWS.jsonl [--queue LABEL=ROWS.jsonl ...] [--out DIR]
+Usage: python3 -m rtlab_report phase-charts PHASE_ROWS.jsonl [--queue LABEL=ROWS.jsonl ...] [--out DIR]
 Needs Debian's python3-matplotlib for the chart; the table needs nothing.
 """
 import argparse
 import os
 import sys
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from charts_map import load  # noqa: E402
+from .charts_map import load
 
 # The phases of the regrouped loop's step and of the bounce loop's passes (RT_PHASE_*,
 # core/types.h), as the rows' extras name them.
@@ -158,7 +156,7 @@ def chart(meta, scenes, grid, path):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from matplotlib.patches import Patch
-    from chart_style import figure, legend_row
+    from .chart_style import figure, legend_row
 
     most = max(len(grid[sc]["bars"]) for sc in scenes)
     fig, panels, legend_ax = figure(
@@ -192,14 +190,14 @@ def chart(meta, scenes, grid, path):
     plt.close(fig)
 
 
-def main():
+def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("rows", help="rows.jsonl of a sweep run with -DRT_PERSIST_PHASE_CLOCKS")
     ap.add_argument("--queue", action="append", default=[], metavar="LABEL=ROWS",
                     help="queue wavefront rows to set beside it, under a label")
     ap.add_argument("--out", default=None, help="folder for phases.md and phases.png "
                     "[beside the rows]")
-    a = ap.parse_args()
+    a = ap.parse_args(argv)
     meta, rows = load(a.rows)
     queues = []
     for spec in a.queue:
@@ -223,6 +221,3 @@ def main():
               file=sys.stderr)
     print(os.path.join(out, "phases.md"))
 
-
-if __name__ == "__main__":
-    main()

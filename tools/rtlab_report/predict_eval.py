@@ -1,4 +1,3 @@
-#!/usr/bin/env python3
 """How often `rtlab predict` names the winner: reads the predictions (`rtlab predict --json`, one
 object a scene) and measured sweep rows, finds the fastest design of every scene where every
 design ran (a tie by compare.py's rule, through charts_map.verdict), fits the
@@ -8,19 +7,17 @@ or a design that gives each work-item a whole ray tree (the megakernel in either
 report's tree wavefront)? Settings where the queue and a design of the other kind tie are left out of the score and
 counted apart; a tie between two designs of one kind still answers the question.
 
-Usage: scripts/predict_eval.py --predictions P.jsonl --fit ROWS.jsonl... --test ROWS.jsonl...
+Usage: python3 -m rtlab_report predict --predictions P.jsonl --fit ROWS.jsonl... --test ROWS.jsonl...
                                [--out FILE.md] [--chart FILE.png]
 The table needs the standard library only; the chart (the queue's time over the best of the
 other kind against the predicted busy lanes, with the fitted threshold) needs matplotlib.
 """
 import argparse
 import json
-import os
 import sys
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from charts_map import load, verdict  # noqa: E402
-from sweep_rows import Series, family, own_options  # noqa: E402
+from .charts_map import load, verdict
+from .sweep_rows import Series, family, own_options
 
 
 def scene_key(path_or_name):
@@ -118,7 +115,7 @@ def chart(meta, groups, predictions, threshold, path):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    from chart_style import figure, legend_row, log_ticks
+    from .chart_style import figure, legend_row, log_ticks
 
     fig, (ax,), legend_ax = figure(meta, "The queue wavefront's frame time over the best design "
                                    "with one ray tree a work-item, against the busy lanes "
@@ -150,14 +147,14 @@ def chart(meta, groups, predictions, threshold, path):
     plt.close(fig)
 
 
-def main():
+def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--predictions", required=True)
     ap.add_argument("--fit", nargs="+", required=True)
     ap.add_argument("--test", nargs="*", default=[])
     ap.add_argument("--out")
     ap.add_argument("--chart")
-    a = ap.parse_args()
+    a = ap.parse_args(argv)
     predictions = {}
     with open(a.predictions) as f:
         for line in f:
@@ -197,6 +194,3 @@ def main():
             f.write(text)
     print(text)
 
-
-if __name__ == "__main__":
-    main()

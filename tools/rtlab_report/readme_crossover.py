@@ -1,7 +1,7 @@
 """The generated README's Crossover section (bench/sweeps/crossover): per pipeline its
 time over the best megakernel against material cost and material count, where it first wins,
 and why, measured: the kernels' registers and spills (NVIDIA build log) or private bytes per
-work-item, and each wavefront stage's share of device time. Used by results-readme.py; the
+work-item, and each wavefront stage's share of device time. Used by results_readme.py; the
 ratios and crossings are also what charts_crossover.py draws.
 
 The sweep's scenes are divergence-o<K>-m<M> (scripts/make-divergence.py): K noise octaves in
@@ -16,9 +16,9 @@ import math
 import re
 from collections import defaultdict
 
-from compare import relative_spread, tied
-from readme_format import table
-from sweep_rows import Series, failure, family, in_group
+from .compare import relative_spread, tied
+from .readme_format import table
+from .sweep_rows import Series, failure, family, in_group
 
 SCENE = re.compile(r"divergence-o(\d+)-m(\d+)$")
 MEGA = "megakernel"  # the family every other series is divided by

@@ -1,4 +1,3 @@
-#!/usr/bin/env python3
 """Draws the crossover map of a `map` sweep (bench/sweeps/map, scenes of scripts/make-map.py):
 which design is fastest at each (sphere size on screen, share of mirrors and glass), one panel per
 shading cost (and per triangle count of the mesh walls of bench/sweeps/map-mesh), the cell
@@ -10,7 +9,7 @@ missing: wins are counted only where every design ran. Also writes a Markdown ta
 chart with every time, the winner, the margin and the megakernel's busy lanes per warp where
 the rows carry them.
 
-Usage: scripts/charts_map.py ROWS.jsonl|SWEEP.json... [--out DIR]
+Usage: python3 -m rtlab_report map-charts ROWS.jsonl|SWEEP.json... [--out DIR]
   (the rows of `rtlab-bench --sweep map`, `map-dense` or `map-mesh`, or the JSON `rtlab sweep` writes; several
   files are drawn as one map, the first one's meta naming device, driver and commit)
 Needs Debian's python3-matplotlib for the chart; the table needs nothing.
@@ -21,9 +20,8 @@ import os
 import re
 import sys
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from compare import Verdict  # noqa: E402
-from sweep_rows import Series, family  # noqa: E402
+from .compare import Verdict
+from .sweep_rows import Series, family
 
 NAME = re.compile(r"map-s(\d+)(?:-t(\d+))?-x(\d+)-o(\d+)-m(\d+)(?:-f\d+x\d+)?$")
 
@@ -50,7 +48,7 @@ def cells(rows):
     """{(size, special, octaves, materials, triangles): {series key: row}} for the map's scenes;
     triangles is the mesh walls' count an object, 0 for spheres."""
     # A selector (`--pipeline auto`) renders with one of the designs on the map: it is no
-    # contender of its own (scripts/auto_eval.py sets it against them).
+    # contender of its own (tools/rtlab_report/auto_eval.py sets it against them).
     rows = [r for r in rows if family(r) != "selector"]
     series = Series(rows)
     out = {}
@@ -79,7 +77,7 @@ def table(meta, series, grid, keys, path):
              f"commit {meta.get('commit', '?')})", "",
              "Device time of a frame (median of the timed frames, ms); the "
              "winner's margin is the runner-up's time over the winner's, a tie when the medians "
-             "differ by no more than the larger of the two cells' frame spreads (scripts/compare.py). In "
+             "differ by no more than the larger of the two cells' frame spreads (tools/rtlab_report/compare.py). In "
              "brackets after a megakernel's time: its mean busy lanes of a 32-lane warp over the "
              "steps of its ray loop (counted on NVIDIA only).", ""]
     mesh = any(g[4] for g in grid)  # a triangles column only for mesh walls
@@ -120,7 +118,7 @@ def chart(meta, series, grid, keys, path):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from matplotlib.patches import Patch
-    from chart_style import TIE_COLOR, figure, legend_row, series_fill, text_on
+    from .chart_style import TIE_COLOR, figure, legend_row, series_fill, text_on
 
     # A panel per (triangles an object, octaves): one per shading cost on the sphere map.
     kinds = sorted({(g[4], g[2]) for g in grid})
@@ -190,14 +188,14 @@ def drop_rows(rows, drops):
     return [r for r in rows if not any(str(r.get(f)) == v for f, v in pairs)]
 
 
-def main():
+def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("rows", nargs="+")
     ap.add_argument("--out", default=None, help="folder for map.png and map.md [beside the first]")
     ap.add_argument("--drop", action="append", default=[], metavar="FIELD=VALUE",
                     help="leave out the rows whose FIELD is VALUE (persistent_schedule=auto); "
                          "repeat for more")
-    a = ap.parse_args()
+    a = ap.parse_args(argv)
     meta, rows = load(a.rows[0])
     for more in a.rows[1:]:
         rows += load(more)[1]
@@ -217,6 +215,3 @@ def main():
         print("charts_map: no matplotlib (scripts/setup installs it): table only", file=sys.stderr)
     print(os.path.join(out, "map.md"))
 
-
-if __name__ == "__main__":
-    main()

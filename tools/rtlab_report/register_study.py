@@ -1,20 +1,17 @@
-#!/usr/bin/env python3
 """rtlab — the register study's table (scripts/register-study): for each build variant of the
 weighted megakernel, the registers and spills NVIDIA's build log gives for Megakernel_Render, the
 occupancy they allow, and the device time on each scene against the plain build. A time whose
-median is within the frame spread of the plain build's is a tie (scripts/compare.py).
+median is within the frame spread of the plain build's is a tie (tools/rtlab_report/compare.py).
 
-  scripts/register_study.py DIR      (DIR holds one folder of sweep rows per variant)
+  tools/rtlab_report/register_study.py DIR      (DIR holds one folder of sweep rows per variant)
 Standard library only.
 """
 import json
 import math
-import os
 import pathlib
 import sys
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from compare import tied  # noqa: E402
+from .compare import tied
 
 ORDER = ["plain", "packed-stack", "outline-query", "outline-surface", "outline-shadows",
          "outline-step", "outline-pattern", "cap-128", "cap-96", "cap-64", "query-cap-128"]
@@ -37,8 +34,8 @@ def load(folder):
     return rows
 
 
-def main():
-    root = pathlib.Path(sys.argv[1])
+def main(argv=None):
+    root = pathlib.Path((argv or sys.argv[1:])[0])
     variants = {d.name: load(d) for d in sorted(root.iterdir()) if (d / "rows.jsonl").exists()}
     names = [n for n in ORDER if n in variants] + sorted(set(variants) - set(ORDER))
     if "plain" not in variants:
@@ -53,7 +50,7 @@ def main():
           f"{first.get('repeats')} frames after {first.get('warmup')} warm-up frames; registers "
           f"from the build log; occupancy derived (65,536 registers a multiprocessor, 64 warps, "
           f"8 registers a lane at a time, work-groups of 4 warps). Times in ms; ×: against the "
-          f"plain build, *tie* where the medians differ by no more than the larger frame spread (scripts/compare.py).\n")
+          f"plain build, *tie* where the medians differ by no more than the larger frame spread (tools/rtlab_report/compare.py).\n")
     head = ["variant", "options", "registers", "spills st/ld", "warps/SM", "occupancy"] + scenes
     print("| " + " | ".join(head) + " |")
     print("|" + "---|" * len(head))
@@ -83,6 +80,3 @@ def main():
             cells.append(text)
         print("| " + " | ".join(cells) + " |")
 
-
-if __name__ == "__main__":
-    main()
