@@ -8,16 +8,36 @@ report's tree wavefront)? Settings where the queue and a design of the other kin
 counted apart; a tie between two designs of one kind still answers the question.
 
 Usage: python3 -m rtlab_report predict --predictions P.jsonl --fit ROWS.jsonl... --test ROWS.jsonl...
-                               [--out FILE.md] [--chart FILE.png]
+                               [--threshold T] [--out FILE.md] [--chart FILE.png]
+The rule is scored at the threshold rtlab ships (core/predict.h's kQueueBelowLanes, or
+--threshold): that is the rule `auto` and `rtlab predict` apply. The threshold that would fit
+these FIT rows best is found too and stated beside it, never silently put in its place; the
+FIT rows are called the fit set, the TEST rows the test set.
 The table needs the standard library only; the chart (the queue's time over the best of the
 other kind against the predicted busy lanes, with the fitted threshold) needs matplotlib.
 """
 import argparse
 import json
+import os
+import re
 import sys
 
 from .charts_map import load, verdict
 from .sweep_rows import Series, family, own_options
+
+
+SHIPPED_SOURCE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "core",
+                              "predict.h")
+
+
+def shipped_threshold(path=SHIPPED_SOURCE):
+    """kQueueBelowLanes as core/predict.h defines it, or None without the source."""
+    try:
+        with open(path) as f:
+            m = re.search(r"kQueueBelowLanes\s*=\s*([0-9.]+)", f.read())
+    except OSError:
+        return None
+    return float(m.group(1)) if m else None
 
 
 def scene_key(path_or_name):
@@ -111,7 +131,7 @@ def score(rows, predictions, threshold):
     return lines, hits, scored, ties, missing, worst
 
 
-def chart(meta, groups, predictions, threshold, path):
+def chart(meta, groups, predictions, threshold, path, fitted=None):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -121,7 +141,7 @@ def chart(meta, groups, predictions, threshold, path):
                                    "with one ray tree a work-item, against the busy lanes "
                                    "`rtlab predict` counts on the CPU", 1, cols=1, panel=(8, 4.2))
     handles = []
-    for (title, rows), (color, marker) in zip(groups, (("#1f77b4", "o"), ("#d62728", "^"))):
+    for (title, rows), (color, marker) in zip(groups, (("#555555", "o"), ("#e08214", "^"))):
         xs, ys = [], []
         for scene, winner, runner, margin, tie, series, by_key, *partial in rows:
             p = predictions.get(scene_key(scene))
@@ -132,13 +152,25 @@ def chart(meta, groups, predictions, threshold, path):
             xs.append(p["busy_lanes"])
             ys.append(ran["queue"] / min(others))
         if xs:
-            handles.append(ax.scatter(xs, ys, s=26, color=color, marker=marker, alpha=0.8,
+            # Hollow markers: where points of the two sets fall together, both stay visible.
+            handles.append(ax.scatter(xs, ys, s=30, facecolors="none", edgecolors=color,
+                                      marker=marker, linewidths=1.2,
                                       label=f"{title} ({len(xs)})"))
     ax.axhline(1.0, color="#555555", linewidth=0.8)
-    ax.axvline(threshold, color="#555555", linewidth=0.8, linestyle="--")
-    ax.text(threshold, ax.get_ylim()[1], f" threshold {threshold:.1f}", va="top", fontsize=8)
     ax.set_yscale("log")
     log_ticks(ax)
+    # Headroom above the points for the thresholds' labels (log axis: a factor).
+    lo, hi = ax.get_ylim()
+    ax.set_ylim(lo, hi * 1.45)
+    top = hi * 1.4
+    ax.axvline(threshold, color="#222222", linewidth=1.0, linestyle="--")
+    ax.text(threshold, top, f"shipped threshold {threshold:.1f} ", va="top", ha="right",
+            fontsize=8)
+    if fitted is not None and abs(fitted - threshold) >= 0.05:
+        # The best fit to these rows, where it differs from the rule rtlab applies.
+        ax.axvline(fitted, color="#888888", linewidth=0.8, linestyle=":")
+        ax.text(fitted, top / 1.15, f"best fit to the fit set {fitted:.2f} ", va="top",
+                ha="right", fontsize=8, color="#555555")
     ax.set_xlim(0, 32.5)
     ax.set_xlabel("predicted busy lanes of 32 (weighted megakernel)")
     ax.set_ylabel("queue time / best other (below 1: queue wins)")
@@ -152,6 +184,8 @@ def main(argv=None):
     ap.add_argument("--predictions", required=True)
     ap.add_argument("--fit", nargs="+", required=True)
     ap.add_argument("--test", nargs="*", default=[])
+    ap.add_argument("--threshold", type=float,
+                    help="busy lanes below which the queue is named [core/predict.h's]")
     ap.add_argument("--out")
     ap.add_argument("--chart")
     a = ap.parse_args(argv)
@@ -167,18 +201,25 @@ def main(argv=None):
               for s, w, u, _, tie, _, _, *rest in fit
               if not undecided(w, u, tie) and scene_key(s) in predictions]
     if not points:
-        sys.exit("predict_eval: no fitted setting has a prediction (scene names differ?)")
-    t = fit_threshold(points)
+        sys.exit("predict_eval: no setting of the fit set has a prediction (scene names differ?)")
+    fitted = fit_threshold(points)
+    t = a.threshold if a.threshold is not None else shipped_threshold()
+    if t is None:
+        sys.exit("predict_eval: no core/predict.h to read the shipped threshold from; "
+                 "give --threshold")
+    _, fit_hits, fit_scored, *_ = score(fit, predictions, fitted)
     head = ["| scene | predicted busy lanes | measured (weighted) | predicted | fastest | margin | right |",
             "|---|---|---|---|---|---|---|"]
     out = [f"# The predictor on {meta.get('device', '?')} (driver {meta.get('driver', '?')}, "
            f"commit {meta.get('commit', '?')})", "",
-           f"Rule: the queue wavefront wins below **{t:.1f}** busy lanes of 32 (fitted on the "
-           f"{len(points)} settings of the fit set not tied between the two kinds), a design with one ray tree a "
-           "work-item at or above. Busy lanes predicted by `rtlab predict` (CPU, 2048 warps of "
-           "16x2 pixels, no shading); measured ones from the weighted megakernel's counting frame.",
+           f"Rule, as rtlab ships it: the queue wavefront wins below **{t:.1f}** busy lanes of "
+           "32, a design with one ray tree a work-item at or above. Busy lanes predicted by "
+           "`rtlab predict` (CPU, 2048 warps of 16x2 pixels, no shading); measured ones from the "
+           "weighted megakernel's counting frame. The threshold that fits this fit set best "
+           f"(the {len(points)} settings not tied between the two kinds) is {fitted:.2f}, which "
+           f"scores {fit_hits} of {fit_scored} on it; the scores below are the shipped rule's.",
            ""]
-    for title, rows in (("Fit", fit), ("Test (not fitted to)", test)):
+    for title, rows in (("Fit set", fit), ("Test set (not fitted to)", test)):
         if not rows:
             continue
         lines, hits, scored, ties, missing, worst = score(rows, predictions, t)
@@ -188,9 +229,8 @@ def main(argv=None):
                 ""] + head + lines + [""]
     text = "\n".join(out) + "\n"
     if a.chart:
-        chart(meta, [("fitted: the map", fit), ("not fitted to", test)], predictions, t, a.chart)
+        chart(meta, [("fit set", fit), ("test set", test)], predictions, t, a.chart, fitted)
     if a.out:
         with open(a.out, "w") as f:
             f.write(text)
     print(text)
-

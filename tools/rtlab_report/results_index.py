@@ -13,17 +13,19 @@ a quote matches a carried commit it is a prefix of.
 Standard library only.
 """
 import csv
+import io
 import json
 import lzma
 import os
 import re
+import tarfile
 
 DATA_ENDINGS = (".json", ".jsonl", ".jsonl.xz", ".csv", ".txt")
 HEX = r"[0-9a-f]{7,40}"
 QUOTED = re.compile(rf"`({HEX})`|\bcommits?\s+`?({HEX})\b")
 LOGGED = re.compile(rf"\b(?:rtlab_)?commit[:=]?\s+({HEX})\b")
 # Links, and paths in backticks ("(`../accels-2f20b57/`)"), that a README points at.
-LINK = re.compile(r"\]\(([^)\s#]+)\)|`(\.\.?/[^`\s]*)`")
+LINK = re.compile(r"\]\(([^)\s#]+)(?:#[^)\s]*)?\)|`(\.\.?/[^`\s]*)`")
 
 
 def folders(results):
@@ -52,30 +54,94 @@ def _commits_in(value, found):
             _commits_in(v, found)
 
 
-def file_commits(path):
-    """The commits one data file carries (empty when it cannot be read)."""
+def data_commits_of(name, data):
+    """The commits the bytes of one data file, named name, carry (empty when unreadable)."""
     found = set()
     try:
-        if path.endswith(".txt"):
-            with open(path, errors="replace") as f:
-                found |= {m.group(1).lower() for m in LOGGED.finditer(f.read())}
-        elif path.endswith(".csv"):
-            with open(path, newline="") as f:
-                for row in csv.DictReader(f):
-                    if row.get("commit"):
-                        found.add(row["commit"].lower())
-        elif path.endswith(".json"):
-            with open(path) as f:
-                _commits_in(json.load(f), found)
+        if name.endswith(".xz"):
+            data, name = lzma.decompress(data), name[:-3]
+        text = data.decode("utf-8", errors="replace")
+        if name.endswith(".txt"):
+            found |= {m.group(1).lower() for m in LOGGED.finditer(text)}
+        elif name.endswith(".csv"):
+            for row in csv.DictReader(io.StringIO(text, newline="")):
+                if row.get("commit"):
+                    found.add(row["commit"].lower())
+        elif name.endswith(".json"):
+            _commits_in(json.loads(text), found)
         else:
-            opener = lzma.open if path.endswith(".xz") else open
-            with opener(path, "rt") as f:
-                for line in f:
-                    if line.strip():
-                        _commits_in(json.loads(line), found)
-    except (OSError, ValueError, lzma.LZMAError, UnicodeDecodeError, csv.Error):
+            for line in text.splitlines():
+                if line.strip():
+                    _commits_in(json.loads(line), found)
+    except (ValueError, lzma.LZMAError, csv.Error):
         pass
     return found
+
+
+def file_commits(path):
+    """The commits one data file carries (empty when it cannot be read); an experiment's
+    archive (results/archive/NAME.tar.xz): those of the data files inside it."""
+    if path.endswith(".tar.xz"):
+        return archive_commits(path)
+    try:
+        with open(path, "rb") as f:
+            return data_commits_of(path, f.read())
+    except OSError:
+        return set()
+
+
+_ARCHIVES = {}
+
+
+def archive_commits(path):
+    """The commits the data files inside a tarball carry (read once a run)."""
+    key = os.path.abspath(path)
+    if key not in _ARCHIVES:
+        found = set()
+        try:
+            with tarfile.open(path, "r:xz") as tar:
+                for m in tar:
+                    if m.isfile() and m.name.endswith(DATA_ENDINGS):
+                        found |= data_commits_of(m.name, tar.extractfile(m).read())
+        except (OSError, tarfile.TarError, lzma.LZMAError):
+            pass
+        _ARCHIVES[key] = found
+    return _ARCHIVES[key]
+
+
+def page_archives(page):
+    """The archives an experiment page (results/experiments/NAME.md) links to: its own first,
+    then any whose data it draws on."""
+    with open(page) as f:
+        return [os.path.normpath(os.path.join(os.path.dirname(page), a))
+                for a, _ in LINK.findall(f.read()) if a.endswith(".tar.xz")]
+
+
+def page_archive(page):
+    """The archive of an experiment page's own raw files, or None."""
+    found = page_archives(page)
+    return found[0] if found else None
+
+
+def target_commits(target):
+    """The commits behind a link into results/: a folder's data, a data file's, an experiment
+    page's archive's, a README's folder's."""
+    if os.path.isdir(target):
+        return data_commits(target)
+    folder, name = os.path.split(target)
+    if os.path.basename(folder) == "experiments":
+        # A page, or a chart beside it (NAME-chart.png): the archives the page links.
+        page = next((os.path.join(folder, p) for p in sorted(os.listdir(folder), key=len,
+                                                              reverse=True)
+                     if p.endswith(".md") and (name == p or name.startswith(p[:-3] + "-"))), None)
+        found = set()
+        for archive in page_archives(page) if page else []:
+            found |= archive_commits(archive) if os.path.exists(archive) else set()
+        return found
+    if not target.endswith(DATA_ENDINGS + (".tar.xz",)):
+        # A README or a chart: its folder's data.
+        return data_commits(folder)
+    return file_commits(target)
 
 
 def data_commits(folder, recursive=True):
@@ -108,6 +174,12 @@ def unbacked_quotes(readme, carried):
     return [q for q in quotes if not any(c.startswith(q) for c in carried)]
 
 
+def exists(target):
+    """A link target that is there, or a README link whose folder is (the folder stands for it)."""
+    return os.path.exists(target) or (target.endswith(".md") and
+                                       os.path.isdir(os.path.dirname(target)))
+
+
 def linked_data(readme, results):
     """The files and folders inside results/ a README links to."""
     here = os.path.dirname(os.path.abspath(readme))
@@ -115,17 +187,16 @@ def linked_data(readme, results):
     with open(readme) as f:
         targets = {os.path.normpath(os.path.join(here, a or b)) for a, b in LINK.findall(f.read())
                    if "://" not in (a or b)}
-    # A link to another README stands for the folder it describes.
-    targets = {os.path.dirname(t) if t.endswith(".md") else t for t in targets}
-    return [t for t in targets if (t == top or t.startswith(top + os.sep)) and os.path.exists(t)]
+    return [t for t in targets if (t == top or t.startswith(top + os.sep)) and exists(t)]
 
 
 def readme_commits(readme, results):
     """The commits a README's data carries: its folder's, and what it links to inside
-    results/."""
+    results/ (a link to another README: that README's folder; to an experiment's page: its
+    archive)."""
     carried = data_commits(os.path.dirname(os.path.abspath(readme)))
     for target in linked_data(readme, results):
-        carried |= data_commits(target) if os.path.isdir(target) else file_commits(target)
+        carried |= target_commits(target)
     return carried
 
 
