@@ -35,6 +35,27 @@ SERIES_STYLES = {
     ("auto", None): ("#E69F00", "P"),         # orange
     ("cpu", None): ("#000000", "X"),          # black: the CPU reference
 }
+
+# One design's variants (the persistent megakernel's schedules, tile orders), where a chart
+# shows several side by side: shades of the design's own colour family, none of them another
+# design's colour, so that a colour never names two designs across the charts.
+VARIANT_SHADES = {
+    "persist": ["#56B4E9", "#8fd3f5", "#2a9fd6", "#b9e3f7", "#3c7fb1", "#7fb8da", "#1a5a88",
+                "#a9c6de", "#5e9cc9", "#d4ecf9", "#28688f", "#93cbea", "#4aa3d8", "#c3d8ea"],
+}
+
+
+def design_color(pipeline, layout=None):
+    """The palette's colour of a design, by pipeline (and the megakernel's layout)."""
+    return (SERIES_STYLES.get((pipeline, layout)) or SERIES_STYLES[(pipeline, None)])[0]
+
+
+def variant_color(pipeline, i):
+    """The i-th variant's colour of one design (VARIANT_SHADES), its own colour first."""
+    shades = VARIANT_SHADES.get(pipeline) or [design_color(pipeline)]
+    return shades[i % len(shades)]
+
+
 # Pipelines not listed above: a colour none of them uses, picked by a stable hash of the name.
 OTHER_COLORS = ["#8c564b", "#7f7f7f", "#bcbd22", "#17becf", "#9467bd"]
 OTHER_MARKERS = "<>ph*"

@@ -27,7 +27,8 @@ import sys
 from .chart_style import (DPI, LINESTYLES, MARKERS, MISSING_MARKER, figure,
                          legend_height, legend_row, log_ticks, place_labels, plt, point_boxes,
                          resolution_axis, series_style)
-from .compare import PARETO_RTOL, pareto, spread
+from .compare import (ERROR_DECIMALS, PARETO_RTOL, error_agreement, error_setting, pareto,
+                      spread)
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 from matplotlib.ticker import MaxNLocator
@@ -312,23 +313,29 @@ def ms_text(v):
     return f"{v:.3g} ms" if v < 100 else f"{v:.0f} ms"
 
 
-def shared_error(rows):
-    """(settings where every series' frame has the same error, settings measured on more than
-    one series): equal errors mean equal images, the points differ only in time."""
+def error_groups(rows, series):
+    """The cells of one panel, grouped by setting: [(cells, one)] where one is True when the
+    cells' errors agree within compare.PARETO_RTOL (the same image up to float rounding), so
+    that they are drawn as one point, not overprinted."""
     by = {}
     for r in rows:
-        k = (r["scene"], r["width"], r["height"], r["bounces"], r["shadow_samples"], r["aa"])
-        by.setdefault(k, []).append(r["rmse"])
-    multi = [v for v in by.values() if len(v) > 1]
-    return sum(1 for v in multi if max(v) == min(v)), len(multi)
+        by.setdefault(error_setting(r), []).append(r)
+    out = []
+    for cells in by.values():
+        errors = [r["rmse"] for r in cells]
+        out.append((sorted(cells, key=lambda r: r["device_ms"]),
+                    max(errors) <= min(errors) * (1 + PARETO_RTOL) or max(errors) == 0))
+    return out
 
 
 def speed_vs_accuracy(meta, rows):
-    """Device ms against RMSE, a panel per scene, a point per cell in its series' colour and
-    marker (one size: the front's labels say B, shadow samples and AA). The Pareto front joins
-    points only where the error drops by more than compare.PARETO_RTOL, so two pipelines
-    rendering the same image do not split it. A series of the sweep without accuracy cells is
-    named in the legend as missing."""
+    """Device ms against RMSE, a panel per scene. Where the designs' errors at a setting agree
+    within compare.PARETO_RTOL (the same image), the setting is one point, in the colour and
+    marker of its fastest design, with a grey line to its slowest: their points would share a
+    height and overprint. Where they differ, a point per design. The Pareto front joins points
+    only where the error drops by more than PARETO_RTOL. The title counts exactly equal errors
+    apart from errors equal only once rounded (compare.error_agreement). A series of the sweep
+    without accuracy cells is named in the legend as missing."""
     every = Series(rows)
     rows = [r for r in in_group(rows, "accuracy") if r.get("rmse") is not None]
     if not rows:
@@ -338,24 +345,32 @@ def speed_vs_accuracy(meta, rows):
     series, scenes = every, scenes_of(rows)
     present = {series.key(r) for r in rows}
     absent = [series.label(k) for k in series.keys if k not in present]
-    same, multi = shared_error(rows)
-    note = (f"\nthe error is the same on every pipeline at {same} of the {multi} settings run on "
-            "more than one (the same image): their points share a height, only the time differs"
-            if multi else "")
+    a = error_agreement(rows)
+    note = ""
+    if a["settings"] and a["equal"] == a["settings"]:
+        note = f"\nerrors of the designs exactly equal at all {a['settings']} settings"
+    elif a["settings"]:
+        note = (f"\nerrors of the designs exactly equal at {a['equal']} of {a['settings']} "
+                f"settings, equal once rounded to {ERROR_DECIMALS} decimals at {a['rounded']} "
+                f"more, apart at {a['differ']} (largest gap {a['worst']:.1g} relative)")
     fig, panels, legend_ax = figure(
         meta, "Speed against accuracy (error from the converged CPU reference, log-log)\n"
         f"reference: CPU double, B={ref.get('bounces')}, {ref.get('shadow_samples')} shadow "
         f"samples, aa={ref.get('aa')}" + note, len(scenes), legend_rows=2.2)
-    labelled = []
+    labelled, shown = [], set()
     for ax, scene in zip(panels, scenes):
         srows = [r for r in rows if r["scene"] == scene]
-        for key in series.keys:
-            pts = [r for r in srows if series.key(r) == key]
-            if pts:
-                st = series_style(series, key)
-                ax.scatter([r["device_ms"] for r in pts], [max(r["rmse"], 1e-6) for r in pts],
-                           s=22, marker=st["marker"], color=st["color"], alpha=0.6,
-                           linewidths=0)
+        for cells, one in error_groups(srows, series):
+            drawn = cells[:1] if one else cells
+            shown |= {series.key(r) for r in drawn}
+            if one and len(cells) > 1:
+                ax.plot([cells[0]["device_ms"], cells[-1]["device_ms"]],
+                        [max(cells[0]["rmse"], 1e-6)] * 2, color="#aaaaaa", linewidth=0.9,
+                        zorder=1)
+            for r in drawn:
+                st = series_style(series, series.key(r))
+                ax.scatter([r["device_ms"]], [max(r["rmse"], 1e-6)], s=24, marker=st["marker"],
+                           color=st["color"], linewidths=0, zorder=3)
         front = pareto([(r["device_ms"], max(r["rmse"], 1e-6), r) for r in srows])
         ax.step([p[0] for p in front], [p[1] for p in front], where="post", color="black",
                 linewidth=1.1)
@@ -374,10 +389,15 @@ def speed_vs_accuracy(meta, rows):
     for k in (k for k in series.keys if k in present):
         st = series_style(series, k)
         handles.append(Line2D([], [], linestyle="none", marker=st["marker"], color=st["color"]))
-        labels.append(series.label(k))
+        # A design never the fastest of a shared error has no marker of its own: say so.
+        labels.append(series.label(k) + ("" if k in shown else ": never the fastest, inside "
+                                         "the grey lines"))
     for name in absent:
         handles.append(Line2D([], [], linestyle="none", marker=MISSING_MARKER, color="#777777"))
         labels.append(f"{name}: not measured in this sweep's accuracy cells")
+    handles.append(Line2D([], [], color="#aaaaaa", linewidth=0.9))
+    labels.append("one setting, errors within 1%: its fastest design's marker, a line to the "
+                  "slowest design's time")
     handles.append(Line2D([], [], color="black", marker="o", markerfacecolor="none"))
     labels.append(f"Pareto front (errors within {PARETO_RTOL:.0%} are one level; labelled: B "
                   "bounce limit, s shadow samples, aa)")

@@ -21,7 +21,7 @@ import re
 import sys
 
 from .compare import Verdict
-from .sweep_rows import Series, family
+from .sweep_rows import Series, family, own_options
 
 NAME = re.compile(r"map-s(\d+)(?:-t(\d+))?-x(\d+)-o(\d+)-m(\d+)(?:-f\d+x\d+)?$")
 
@@ -122,6 +122,7 @@ def chart(meta, series, grid, keys, path):
 
     # A panel per (triangles an object, octaves): one per shading cost on the sphere map.
     kinds = sorted({(g[4], g[2]) for g in grid})
+    won = set()
     r0 = next(iter(next(iter(grid.values())).values()))
     fig, panels, legend_ax = figure(meta, "Fastest design per setting and its margin over the "
                                     f"runner-up ({r0['width']}x{r0['height']}, B = {r0['bounces']})",
@@ -143,23 +144,47 @@ def chart(meta, series, grid, keys, path):
                     continue
                 winner, runner, margin, tie = v
                 fill = TIE_COLOR if tie else series_fill(series, winner)
+                won.add(winner)
                 ax.add_patch(plt.Rectangle((i - 0.5, j - 0.5), 1, 1, facecolor=fill,
                                            edgecolor="white", hatch="//" if tie else None))
                 text = "tie" if tie else f"{margin:.2f}x"
-                ax.text(i, j, text, ha="center", va="center", fontsize=9,
+                ax.text(i, j + (0.12 if tie else 0), text, ha="center", va="center", fontsize=9,
                         color="black" if tie else text_on(fill), fontweight="bold")
+                if tie:
+                    # Which two tie: the fastest and the runner-up, by short name.
+                    ax.text(i, j - 0.18, f"{short_name(series, winner)} ~\n"
+                            f"{short_name(series, runner)}", ha="center", va="center",
+                            fontsize=6.5, color="#333333", linespacing=0.95)
         ax.set_xticks(range(len(sizes)), [f"{s} px" for s in sizes])
         ax.set_yticks(range(len(specials)), [f"{x}%" for x in specials])
         ax.set_xlabel("icosphere size on screen" if t else "sphere size on screen")
         ax.set_ylabel("mirrors and glass")
         ax.set_title(f"{t} triangles an object, {o} octaves" if t else f"{o} noise octaves",
                      fontsize=10)
+    # Only the designs that fill a cell; the others are named as never the fastest.
     handles = [Patch(facecolor=series_fill(series, k), label=series.label(k))
-               for k in keys]
-    handles.append(Patch(facecolor=TIE_COLOR, hatch="//", label="tie (inside the frame spread)"))
+               for k in keys if k in won]
+    handles.append(Patch(facecolor=TIE_COLOR, hatch="//", label="tie (inside the frame spread): "
+                         "the two fastest named"))
+    never = [series.label(k) for k in keys if k not in won]
+    if never:
+        handles.append(Patch(facecolor="white", edgecolor="#999999",
+                             label="measured, never the fastest: " + "; ".join(never)))
     legend_row(legend_ax, handles, [h.get_label() for h in handles], ncol=len(handles))
     fig.savefig(path)
     plt.close(fig)
+
+
+SHORT = {"mega": "mega", "persist": "persist", "wave": "tree wave", "queue": "queue",
+         "auto": "auto"}
+
+
+def short_name(series, key):
+    """A design's name short enough for a cell: the pipeline, and the megakernel's layout."""
+    r = series.first[key]
+    name = SHORT.get(r["pipeline"], r["pipeline"])
+    layout = own_options(r).get("layout")
+    return f"{name} ({layout})" if r["pipeline"] == "mega" and layout else name
 
 
 def commits_of(meta, rows):

@@ -107,19 +107,30 @@ ORDER = ["persist, flat", "persist, flat, whole-warp refill", "persist, nested l
          "persist, lockstep loop, 128 registers, 4 groups a unit",
          "persist, lockstep loop, 64 registers, 8 groups a unit",
          CAPPED, "tree megakernel", "tree wavefront", "queue wavefront"]
-# The chart draws these; the table lists every series above.
-DRAWN = {"persist, flat": "#56B4E9", "persist, flat, whole-warp refill": "#999999",
-         "persist, nested loop": "#E69F00", "persist, nested loop, 16x8 strips": "#F0E442",
-         "persist, flat, 64 registers, 8 groups a unit": "#8fd3f5",
-         "persist, regrouped by pattern, 128 lanes": "#0072B2",
-         "persist, regrouped by material, 256 lanes": "#002b55",
-         "persist, regrouped by pattern, 256 lanes, 128 registers, 2 groups a unit": "#7b3294",
-         "persist, regrouped by pattern, 256 lanes, 80 registers, 3 groups a unit": "#c2a5cf",
-         "persist, regrouped by pattern, 256 lanes, 64 registers, 4 groups a unit": "#a6dba0",
-         AUTO: "#000000", "persist, lockstep loop": "#b15928",
-         "persist, lockstep loop, 128 registers, 4 groups a unit": "#fdbf6f",
-         CAPPED: "#009E73", "tree wavefront": "#D55E00", "queue wavefront": "#CC79A7",
-         BOUNCE_BEST: "#d62728"}
+# The chart draws these; the table lists every series above. Colours from the one palette
+# (chart_style): the persistent megakernel's schedules in shades of its own colour, the other
+# designs in theirs.
+DRAWN_PERSIST = ["persist, flat", "persist, flat, whole-warp refill", "persist, nested loop",
+                 "persist, nested loop, 16x8 strips",
+                 "persist, flat, 64 registers, 8 groups a unit",
+                 "persist, regrouped by pattern, 128 lanes",
+                 "persist, regrouped by material, 256 lanes",
+                 "persist, regrouped by pattern, 256 lanes, 128 registers, 2 groups a unit",
+                 "persist, regrouped by pattern, 256 lanes, 80 registers, 3 groups a unit",
+                 "persist, regrouped by pattern, 256 lanes, 64 registers, 4 groups a unit",
+                 "persist, lockstep loop", "persist, lockstep loop, 128 registers, 4 groups a unit",
+                 BOUNCE_BEST]
+DRAWN = {s: ("persist", i) for i, s in enumerate(DRAWN_PERSIST)}
+DRAWN.update({AUTO: ("auto", 0), CAPPED: ("mega-weighted", 0), "tree wavefront": ("wave", 0),
+              "queue wavefront": ("queue", 0)})
+
+
+def drawn_color(s):
+    from .chart_style import design_color, variant_color
+    design, i = DRAWN[s]
+    if design == "mega-weighted":
+        return design_color("mega", "weighted")
+    return variant_color(design, i) if design == "persist" else design_color(design)
 
 
 def cells(rows):
@@ -218,7 +229,7 @@ def chart(meta, scenes, grid, path):
         legend_rows=1.6)
     height = 0.8 / len(present)
     for j, s in enumerate(present):
-        color = DRAWN[s]
+        color = drawn_color(s)
         for i, sc in enumerate(scenes):
             g = grid[sc]
             if s not in g or BASE not in g:
@@ -243,7 +254,7 @@ def chart(meta, scenes, grid, path):
     ax.set_ylim(len(scenes) - 0.5, -1)
     ax.set_xlabel("weighted megakernel's time / this design's time (log; right of 1: faster)")
     log_ticks(ax, "x")
-    handles = [Patch(facecolor=DRAWN[s], label=s) for s in present]
+    handles = [Patch(facecolor=drawn_color(s), label=s) for s in present]
     if bounded:
         from matplotlib.lines import Line2D
         handles.append(Line2D([], [], color="black", linestyle=":", linewidth=1.2,
@@ -253,7 +264,10 @@ def chart(meta, scenes, grid, path):
     plt.close(fig)
 
 
-TILE_COLORS = ["#999999", "#0072B2", "#56B4E9", "#009E73", "#E69F00", "#D55E00", "#CC79A7"]
+# Tile orders are variants of the persistent megakernel: shades of its colour.
+def tile_color(j):
+    from .chart_style import variant_color
+    return variant_color("persist", j)
 
 
 def about_order(rows):
@@ -329,7 +343,7 @@ def tile_chart(meta, scenes, schedules, tiles, grid, path):
     height = 0.8 / len(tiles)
     for ax, schedule in zip(panels, schedules):
         for j, tile in enumerate(tiles):
-            color = TILE_COLORS[j % len(TILE_COLORS)]
+            color = tile_color(j)
             for i, sc in enumerate(scenes):
                 g = grid[sc]
                 if (schedule, tile) not in g or BASE not in g:
@@ -347,7 +361,7 @@ def tile_chart(meta, scenes, schedules, tiles, grid, path):
         ax.set_ylim(len(scenes) - 0.5, -0.5)
         ax.set_xlabel("weighted megakernel's time / this one's (log)", fontsize=8)
         log_ticks(ax, "x")
-    handles = [Patch(facecolor=TILE_COLORS[j % len(TILE_COLORS)], label=f"{t} strips")
+    handles = [Patch(facecolor=tile_color(j), label=f"{t} strips")
                for j, t in enumerate(tiles)]
     legend_row(legend_ax, handles, [h.get_label() for h in handles], ncol=len(tiles))
     fig.savefig(path)

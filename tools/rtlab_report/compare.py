@@ -146,6 +146,48 @@ def geomean(xs):
 
 
 PARETO_RTOL = 0.01
+# Errors are compared exactly, and where they differ only past this many decimal places (float
+# rounding of the same image), said so apart: never folded into "equal".
+ERROR_DECIMALS = 9
+
+
+def error_setting(r):
+    return (r["scene"], r["width"], r["height"], r["bounces"], r["shadow_samples"], r["aa"],
+            r.get("accel"))
+
+
+def error_agreement(rows):
+    """How alike the designs' errors are, over the settings scored on more than one series:
+    {"settings": n, "equal": exactly equal RMSE, "rounded": equal only once rounded to
+    ERROR_DECIMALS decimal places, "differ": the rest, "worst": the largest relative gap}."""
+    by = {}
+    for r in rows:
+        if r.get("rmse") is not None:
+            by.setdefault(error_setting(r), []).append(r["rmse"])
+    out = {"settings": 0, "equal": 0, "rounded": 0, "differ": 0, "worst": 0.0}
+    for v in by.values():
+        if len(v) < 2:
+            continue
+        out["settings"] += 1
+        if max(v) == min(v):
+            out["equal"] += 1
+        elif len({round(x, ERROR_DECIMALS) for x in v}) == 1:
+            out["rounded"] += 1
+        else:
+            out["differ"] += 1
+        if max(v) > 0:
+            out["worst"] = max(out["worst"], (max(v) - min(v)) / max(v))
+    return out
+
+
+def agreement_text(a):
+    """One sentence of error_agreement's counts, exact equality kept apart from rounding."""
+    if not a["settings"]:
+        return ""
+    return (f"The designs' errors are exactly equal in {a['equal']} of the {a['settings']} "
+            f"settings scored on more than one, equal once rounded to {ERROR_DECIMALS} decimal "
+            f"places (not exactly) in {a['rounded']} more, and differ beyond that in "
+            f"{a['differ']} (largest relative gap {a['worst']:.2g}).")
 
 
 def pareto(points, rtol=PARETO_RTOL):

@@ -28,7 +28,7 @@ import os
 import re
 import sys
 
-from .compare import PARETO_RTOL, pareto
+from .compare import PARETO_RTOL, agreement_text, error_agreement, pareto
 from .readme_format import accel_label, clean_meta, ms, size_label, table, tree_text
 from .readme_crossover import crossover_section
 from .readme_floor import floor_section
@@ -121,6 +121,10 @@ def pareto_table(rows):
                          f"{r['rmse']:.4f}", f"{r['psnr_db']:.1f}"])
     out = table(["Scene", "Pipeline", "B", "Shadow samples", "AA", "Device ms", "RMSE",
                  "PSNR dB"], body)
+    # How alike the designs' errors are, exact equality apart from equality after rounding.
+    agree = agreement_text(error_agreement(scored))
+    if agree:
+        out = agree + "\n\n" + out
     # A frame with a NaN or infinite pixel has no error score (rmse is null): name each one.
     broken = [r for r in in_group(rows, "accuracy") if r.get("nonfinite_pixels")]
     for r in broken:
