@@ -102,7 +102,13 @@ def page(results, name, paths, files, base):
     if os.path.exists(source) and source.endswith((".md", ".txt")):
         with open(source, errors="replace") as f:
             text = f.read()
-    title, setting, finding = draft(text, name)
+    if source.endswith(".txt"):
+        # A tool's printout: its first line says what ran; the whole of it, verbatim, is the
+        # finding (a page must not reflow a table of columns).
+        title, setting, finding = name, text.splitlines()[0] if text else "", \
+            ["```\n" + text.rstrip() + "\n```"]
+    else:
+        title, setting, finding = draft(text, name)
     pages = os.path.join(results, "experiments")
     old = os.path.dirname(source)
     setting, finding = relink(setting, old, pages), [relink(p, old, pages) for p in finding]
