@@ -27,7 +27,9 @@
 #       results/<device-slug>/, with the Google Benchmark JSON and the device log beside them
 #       (the phase and occupancy sweeps' own charts in SWEEP-phases/ and SWEEP-warps/).
 #       Several folders: runs continued with --resume, or the shards of one sweep, merged in the
-#       sweep's cell order.
+#       sweep's cell order. results/<device-slug>/ is the device's published set: an experiment
+#       imports elsewhere (RTLAB_RESULTS_DIR=/tmp/exp) and is filed with
+#       `python3 tools/rtlab_report experiment results NAME ...` (results/README.md says how).
 #
 # On the GPU host (from the folder that holds carry/gpu-sweep/):
 #   OUT=/path/to/out bash carry/gpu-sweep/smoke.sh     (the smoke check: every cell must PASS)

@@ -74,6 +74,37 @@ class ScriptsStayScriptsTest(unittest.TestCase):
         self.assertEqual(left, [])
 
 
+class ExperimentArchiveTest(unittest.TestCase):
+    def test_archive_leaves_out_patches_is_stable_and_gets_a_page(self):
+        import tarfile
+        import tempfile
+        from rtlab_report import experiments, results_check
+        with tempfile.TemporaryDirectory() as src, tempfile.TemporaryDirectory() as into:
+            exp = os.path.join(src, "dev", "exp-1")
+            os.makedirs(exp)
+            with open(os.path.join(exp, "README.md"), "w") as f:
+                f.write("# Is A faster than B?\n\nOne GPU at `8380cd2`.\n\n"
+                        "**A is 1.5x faster.**\n")
+            with open(os.path.join(exp, "rows.jsonl"), "w") as f:
+                f.write('{"commit": "8380cd2fad99"}\n')
+            open(os.path.join(exp, "kernels.patch"), "w").close()
+            self.assertEqual(experiments.main([src, "exp-1", "dev/exp-1", "--into", into]), None)
+            archive = os.path.join(into, "archive", "exp-1.tar.xz")
+            with open(archive, "rb") as f:
+                first = f.read()
+            experiments.main([src, "exp-1", "dev/exp-1", "--into", into])
+            with open(archive, "rb") as f:
+                self.assertEqual(f.read(), first)  # re-archiving churns nothing
+            with tarfile.open(archive) as tar:
+                self.assertEqual(tar.getnames(), ["dev/exp-1/README.md", "dev/exp-1/rows.jsonl"])
+            with open(os.path.join(into, "experiments", "exp-1.md")) as f:
+                text = f.read()
+            self.assertTrue(text.startswith("# Is A faster than B?\n"))
+            self.assertIn("- **Commits in the data**: `8380cd2`.", text)
+            self.assertIn("**A is 1.5x faster.**", text)
+            self.assertEqual(results_check.page_problems(into), [])
+
+
 class ShippedThresholdTest(unittest.TestCase):
     def test_the_rule_scored_is_the_one_core_predict_h_ships(self):
         with open(os.path.join(ROOT, "core", "predict.h")) as f:

@@ -3,8 +3,9 @@ files go into one tarball, results/archive/NAME.tar.xz (patch files left out: th
 history), and a page, results/experiments/NAME.md, says what it asked, on what, at which commit,
 what it found and where its raw data is.
 
-Usage: python3 -m rtlab_report experiment RESULTS NAME PATH... [--base COMMIT]
-    PATH: folders or files under RESULTS; the first one's README.md (or the file itself, when it
+Usage: python3 -m rtlab_report experiment RESULTS NAME PATH... [--base COMMIT] [--into DIR]
+    PATH: folders or files under RESULTS (results/, or where a sweep was imported with
+    RTLAB_RESULTS_DIR); the archive and the page go into --into [RESULTS]; the first one's README.md (or the file itself, when it
     is a note) gives the page its title, setting and findings. --base names the commit whose
     tree still holds the files as they were, patches included. Remove the PATHs afterwards
     (git rm -r); the tool only writes.
@@ -43,11 +44,12 @@ def members(results, paths):
     return out
 
 
-def write_archive(results, name, files):
-    """results/archive/NAME.tar.xz of the files, byte for byte the same on every run (sorted
+def write_archive(results, name, files, into=None):
+    """INTO/archive/NAME.tar.xz of the files, byte for byte the same on every run (sorted
     members, no owners, no times), so that re-archiving does not churn history."""
-    os.makedirs(os.path.join(results, "archive"), exist_ok=True)
-    path = os.path.join(results, "archive", name + ".tar.xz")
+    into = into or results
+    os.makedirs(os.path.join(into, "archive"), exist_ok=True)
+    path = os.path.join(into, "archive", name + ".tar.xz")
     with tarfile.open(path, "w:xz", preset=9, format=tarfile.PAX_FORMAT) as tar:
         for rel in files:
             with open(os.path.join(results, rel), "rb") as f:
@@ -95,7 +97,7 @@ def relink(text, old_dir, new_dir):
     return re.sub(r"(\]\s*)\(([^)\s]+)\)", fix, text)
 
 
-def page(results, name, paths, files, base):
+def page(results, name, paths, files, base, into=None):
     first = os.path.join(results, paths[0])
     source = os.path.join(first, "README.md") if os.path.isdir(first) else first
     text = ""
@@ -109,7 +111,7 @@ def page(results, name, paths, files, base):
             ["```\n" + text.rstrip() + "\n```"]
     else:
         title, setting, finding = draft(text, name)
-    pages = os.path.join(results, "experiments")
+    pages = os.path.join(into or results, "experiments")
     old = os.path.dirname(source)
     setting, finding = relink(setting, old, pages), [relink(p, old, pages) for p in finding]
     device = paths[0].split("/")[0]
@@ -122,7 +124,8 @@ def page(results, name, paths, files, base):
     # The title is the question the experiment asked.
     lines = [f"# {title}", "",
              f"- **Device**: " + (f"[`{device}`](../{device}/README.md)."
-                                  if os.path.exists(os.path.join(results, device, "README.md"))
+                                  if os.path.exists(os.path.join(into or results, device,
+                                                                 "README.md"))
                                   else f"`{device}` (no published set of its own)."),
              "- **Commits in the data**: " + (", ".join(f"`{c}`" for c in shown) or "none recorded")
              + ".",
@@ -146,10 +149,11 @@ def main(argv=None):
     ap.add_argument("name")
     ap.add_argument("paths", nargs="+")
     ap.add_argument("--base", default="")
+    ap.add_argument("--into", help="the results folder that gets the archive and page [RESULTS]")
     a = ap.parse_args(argv)
     files = members(a.results, a.paths)
     if not files:
         sys.exit(f"experiment: nothing under {a.paths}")
-    archive = write_archive(a.results, a.name, files)
-    doc = page(a.results, a.name, a.paths, files, a.base)
+    archive = write_archive(a.results, a.name, files, a.into)
+    doc = page(a.results, a.name, a.paths, files, a.base, a.into)
     print(f"experiment {a.name}: {len(files)} files, {os.path.getsize(archive) // 1024} KiB; {doc}")

@@ -197,7 +197,10 @@ def write_index(results):
            "data lies.",
            "- [`archive/`](archive/): the raw files of each experiment, one `NAME.tar.xz` each "
            "(`tar -xJf results/archive/NAME.tar.xz` puts them back where they were). Patch "
-           "files are not kept: the code each experiment ran is in git history.",
+           "files are not kept: the code each experiment ran is in git history. A new "
+           "experiment, imported elsewhere (`RTLAB_RESULTS_DIR=/tmp/exp scripts/gpu-sweep.sh "
+           "import ...`), is filed with `python3 tools/rtlab_report experiment /tmp/exp NAME "
+           "DEVICE-SLUG --into results`, then this index rewritten.",
            "",
            "Wins and ties: " + RATIO_TEXT,
            "",
