@@ -141,7 +141,8 @@ def chart(meta, groups, predictions, threshold, path, fitted=None):
                                    "with one ray tree a work-item, against the busy lanes "
                                    "`rtlab predict` counts on the CPU", 1, cols=1, panel=(8, 4.2))
     handles = []
-    for (title, rows), (color, marker) in zip(groups, (("#555555", "o"), ("#e08214", "^"))):
+    # Fit and test sets are not designs: greys, told apart by marker (no design colour reused).
+    for (title, rows), (color, marker) in zip(groups, (("#888888", "o"), ("#111111", "^"))):
         xs, ys = [], []
         for scene, winner, runner, margin, tie, series, by_key, *partial in rows:
             p = predictions.get(scene_key(scene))
