@@ -228,11 +228,16 @@ def chart(meta, scenes, grid, path):
         f"tie", 1, cols=1, panel=(10, 0.1 * len(scenes) * len(present) + 1.0),
         legend_rows=1.6)
     height = 0.8 / len(present)
+    missing = False
     for j, s in enumerate(present):
         color = drawn_color(s)
         for i, sc in enumerate(scenes):
             g = grid[sc]
             if s not in g or BASE not in g:
+                # Not measured (or no weighted megakernel to set it against): a cross at 1.
+                ax.plot([1], [i - 0.4 + height * (j + 0.5)], marker="x", ms=4, color=color,
+                        linestyle="none")
+                missing = True
                 continue
             up = g[BASE]["device_ms"] / g[s]["device_ms"]
             tie = tied(g[BASE], g[s])
@@ -255,6 +260,10 @@ def chart(meta, scenes, grid, path):
     ax.set_xlabel("weighted megakernel's time / this design's time (log; right of 1: faster)")
     log_ticks(ax, "x")
     handles = [Patch(facecolor=drawn_color(s), label=s) for s in present]
+    if missing:
+        from matplotlib.lines import Line2D
+        handles.append(Line2D([], [], marker="x", color="#555555", linestyle="none",
+                              label="not measured on that scene"))
     if bounded:
         from matplotlib.lines import Line2D
         handles.append(Line2D([], [], color="black", linestyle=":", linewidth=1.2,
