@@ -34,6 +34,13 @@ class CommittedResultsTest(unittest.TestCase):
                 self.assertEqual(subs, [], f"results/{entry} holds folders: an experiment's "
                                  "files go to archive/ (python3 -m rtlab_report experiment)")
 
+    def test_each_published_set_is_at_one_commit(self):
+        several = {slug for slug, c in results_check.set_commits(RESULTS).items() if len(c) > 1}
+        self.assertEqual(sorted(several - results_check.NOT_YET_ONE_COMMIT), [],
+                         "a published set must be measured at one commit")
+        self.assertEqual(sorted(results_check.NOT_YET_ONE_COMMIT - several), [],
+                         "now at one commit: take these out of NOT_YET_ONE_COMMIT")
+
     def test_index_names_everything_and_every_page_has_its_archive(self):
         self.assertEqual(results_check.index_problems(RESULTS), [],
                          "run /usr/bin/python3 tools/rtlab_report readme results")
