@@ -123,7 +123,7 @@ def page(results, name, paths, files, base, into=None):
     where = ", ".join(f"`{p}`" for p in paths)
     # The title is the question the experiment asked.
     lines = [f"# {title}", "",
-             f"- **Device**: " + (f"[`{device}`](../{device}/README.md)."
+             "- **Device**: " + (f"[`{device}`](../{device}/README.md)."
                                   if os.path.exists(os.path.join(into or results, device,
                                                                  "README.md"))
                                   else f"`{device}` (no published set of its own)."),

@@ -13,7 +13,6 @@ import csv
 import io
 import json
 import os
-import sys
 
 TITLES = {"mega": "megakernel", "wave": "wavefront"}
 KINDS = ("private_tree", "tree_row", "out_of_memory", "opencl", "invalid_option", "skipped",

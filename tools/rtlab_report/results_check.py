@@ -18,7 +18,6 @@ Standard library only.
 import json
 import os
 import re
-import sys
 import tarfile
 
 from . import results_index
@@ -60,7 +59,6 @@ NOT_YET_ONE_COMMIT = {
 def set_commits(results):
     """{device folder: the commits its sweeps' metadata records} (the `commit` of each
     NAME.json's meta at the folder's top)."""
-    import json
     out = {}
     for slug in top_entries(results):
         folder = os.path.join(results, slug)

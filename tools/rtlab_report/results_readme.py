@@ -32,7 +32,7 @@ from .compare import PARETO_RTOL, agreement_text, error_agreement, pareto
 from .readme_format import accel_label, clean_meta, ms, size_label, table, tree_text
 from .readme_crossover import crossover_section
 from .readme_floor import floor_section
-from .readme_limits import limits_section, limits_summary
+from .readme_limits import limits_section
 from .readme_winners import fastest_text, winner_table
 from . import results_index
 from .sweep_rows import Series, by_setting, failure, in_group
