@@ -1,9 +1,10 @@
 // rtlab sweep CONFIG — runs a named sweep (bench/sweeps/, format in bench/sweeps/README.md) on one
 // device or several (--devices), or one share of it (--shard), scores the accuracy group against
 // the converged CPU reference, and writes results/<device-slug>/<sweep>.{json,csv}, the five
-// charts (scripts/charts.py) and README.md (scripts/results-readme.py). With --import DIR... it
-// does the same for what `rtlab-bench --sweep` measured on other machines (continued runs and
-// shards merged in cell order); --export-scenes makes the scene folder that rtlab-bench can read.
+// charts and README.md (the charts and readme commands of tools/rtlab_report). With --import
+// DIR... it does the same for what `rtlab-bench --sweep` measured on other machines (continued
+// runs and shards merged in cell order); --export-scenes makes the scene folder that rtlab-bench
+// can read.
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
@@ -132,22 +133,25 @@ void writeCsv(const nlohmann::json& rows, const fs::path& path) {
     }
 }
 
-fs::path scriptPath(const std::string& name) {
-    for (fs::path p : {fs::path("scripts") / name, fs::path(RTLAB_SOURCE_DIR) / "scripts" / name})
-        if (fs::exists(p)) return p;
+// The report package (tools/rtlab_report), run as a folder: python3 tools/rtlab_report COMMAND.
+fs::path reportTool() {
+    for (fs::path p : {fs::path("tools") / "rtlab_report",
+                       fs::path(RTLAB_SOURCE_DIR) / "tools" / "rtlab_report"})
+        if (fs::exists(p / "__main__.py")) return p;
     return {};
 }
 
 // Charts and README through Debian's Python (python3-matplotlib, scripts/setup); a missing
 // Python is a warning, not a failed sweep: the data are written already.
 void drawCharts(const fs::path& json) {
-    for (const char* script : {"charts.py", "results-readme.py"}) {
-        fs::path p = scriptPath(script);
-        if (p.empty()) {
-            std::fprintf(stderr, "rtlab sweep: scripts/%s not found; skipped\n", script);
-            continue;
-        }
-        std::string cmd = "/usr/bin/python3 '" + p.string() + "' '" + json.string() + "'";
+    fs::path tool = reportTool();
+    if (tool.empty()) {
+        std::fprintf(stderr, "rtlab sweep: tools/rtlab_report not found; no charts or README\n");
+        return;
+    }
+    for (const char* command : {"charts", "readme"}) {
+        std::string cmd =
+            "/usr/bin/python3 '" + tool.string() + "' " + command + " '" + json.string() + "'";
         if (std::system(cmd.c_str()) != 0)
             std::fprintf(stderr,
                          "rtlab sweep: %s failed (is python3-matplotlib installed? run "

@@ -109,8 +109,8 @@ inline int Persistent_TakeTogether(global int* next, uint wanting) { return atom
 // The phase clocks (RT_PERSIST_PHASE_CLOCKS, a diagnostic; the counting frame only, on NVIDIA):
 // at each mark the warp's lanes meet (bar.warp.sync) and its first lane adds the cycles since the
 // last mark to phase `slot` (RT_PHASE_*, core/types.h), in units of 64. The meetings are the
-// clocks' own: read the phases' shares, not their cycles (scripts/charts_phases.py). Without
-// the clocks a PhaseClock is a placeholder and PHASE_MARK compiles to nothing.
+// clocks' own: read the phases' shares, not their cycles (tools/rtlab_report/charts_phases.py).
+// Without the clocks a PhaseClock is a placeholder and PHASE_MARK compiles to nothing.
 #if defined(RT_PERSIST_PHASE_CLOCKS) && defined(RT_WARP_PTX) && defined(RT_COUNT_RAYS) && \
     defined(RT_COUNT_LANES)
 #define PHASE_CLOCKS 1

@@ -27,7 +27,9 @@
 #       results/<device-slug>/, with the Google Benchmark JSON and the device log beside them
 #       (the phase and occupancy sweeps' own charts in SWEEP-phases/ and SWEEP-warps/).
 #       Several folders: runs continued with --resume, or the shards of one sweep, merged in the
-#       sweep's cell order.
+#       sweep's cell order. results/<device-slug>/ is the device's published set: an experiment
+#       imports elsewhere (RTLAB_RESULTS_DIR=/tmp/exp) and is filed with
+#       `python3 tools/rtlab_report experiment results NAME ...` (results/README.md says how).
 #
 # On the GPU host (from the folder that holds carry/gpu-sweep/):
 #   OUT=/path/to/out bash carry/gpu-sweep/smoke.sh     (the smoke check: every cell must PASS)
@@ -40,6 +42,8 @@
 # ... past 15 MiB). Copy that folder back here and import it.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+# The report package's commands (charts, readme, ...), through Debian's python3-matplotlib.
+report() { /usr/bin/python3 tools/rtlab_report "$@"; }
 ROOT=$PWD
 BUILD=$ROOT/build-gpu
 CARRY=carry/gpu-sweep
@@ -171,17 +175,17 @@ import() {
         [ ! -f "$dir/gbench.json" ] || cp "$dir/gbench.json" "$dest/$sweep-google-benchmark-$n.json"
         [ ! -f "$dir/log.txt" ] || cp "$dir/log.txt" "$dest/$sweep-device-log-$n.txt"
     done
-    /usr/bin/python3 scripts/charts.py "$dest/$sweep.json"
+    report charts "$dest/$sweep.json"
     # The persistent megakernel's sweeps have one frame size and many schedules: their own chart.
-    case $sweep in persist*) /usr/bin/python3 scripts/charts_persist.py "$dest/$sweep.json" ;; esac
+    case $sweep in persist*) report persist-charts "$dest/$sweep.json" ;; esac
     # Diagnostic sweeps have a chart of their own, in a folder of their own.
     case $sweep in
         persist-phase | persist-bounce-phase)
-            /usr/bin/python3 scripts/charts_phases.py "$dest/$sweep.json" --out "$dest/$sweep-phases" ;;
+            report phase-charts "$dest/$sweep.json" --out "$dest/$sweep-phases" ;;
         queue-occupancy)
-            /usr/bin/python3 scripts/charts_occupancy.py "$dest/$sweep.json" --out "$dest/$sweep-warps" ;;
+            report occupancy-charts "$dest/$sweep.json" --out "$dest/$sweep-warps" ;;
     esac
-    /usr/bin/python3 scripts/results-readme.py "$dest/$sweep.json"
+    report readme "$dest/$sweep.json"
     echo "gpu-sweep: $dest/ ready"
 }
 

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Tests of the result charts and READMEs (scripts/charts.py, results-readme.py, sweep_rows.py):
+"""Tests of the result charts and READMEs (rtlab_report/charts.py, results_readme.py, sweep_rows.py):
 what a reader sees — one legend entry per visible line, labels that do not overlap, log axes
 labelled in one style, no placeholder PNG — and that pipelines, titles and failure kinds come
 from the rows, so that a third pipeline needs no code. CTest runs this with /usr/bin/python3
@@ -15,13 +15,14 @@ import tempfile
 import unittest
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-SCRIPTS = os.path.join(ROOT, "scripts")
-sys.path.insert(0, SCRIPTS)
-import sweep_rows  # noqa: E402
+# The package's entry point, run as a command; its modules imported from tools/.
+TOOL = os.path.join(ROOT, "tools", "rtlab_report")
+sys.path.insert(0, os.path.join(ROOT, "tools"))
+from rtlab_report import sweep_rows  # noqa: E402
 
 try:
-    import charts  # noqa: E402
-    import chart_style  # noqa: E402
+    from rtlab_report import charts  # noqa: E402
+    from rtlab_report import chart_style  # noqa: E402
     HAVE_MPL = True
 except ImportError:
     HAVE_MPL = False
@@ -65,23 +66,20 @@ def write_rows(d, name, rows):
     return path
 
 
-def run_chart(script, rows, sweep, *args, d=None):
+def run_chart(command, rows, sweep, *args, d=None):
     """rows.jsonl and a sweep.json of sweep `sweep` in d (a new folder unless given), and
-    scripts/`script` run on them with args: (d, the finished process)."""
+    `python3 tools/rtlab_report command` run on them with args: (d, the finished process)."""
     d = d or tempfile.mkdtemp()
     path = write_rows(d, "rows.jsonl", rows)
     with open(os.path.join(d, "sweep.json"), "w") as f:
         json.dump(dict(META, sweep=sweep), f)
-    return d, subprocess.run([sys.executable, os.path.join(SCRIPTS, script), path, *args],
+    return d, subprocess.run([sys.executable, TOOL, command, path, *args],
                              capture_output=True, text=True)
 
 
 def load_script(name):
-    spec = importlib.util.spec_from_file_location(name.replace("-", "_"),
-                                                  os.path.join(SCRIPTS, name))
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    """A module of the package by its name."""
+    return importlib.import_module("rtlab_report." + name)
 
 
 def crossover_fixture():
@@ -101,7 +99,7 @@ def crossover_fixture():
 
 class CrossoverTest(unittest.TestCase):
     def test_crossing_is_the_first_win_beyond_the_spread_never_interpolated(self):
-        import readme_crossover as rc
+        from rtlab_report import readme_crossover as rc
         mega = {"device_ms": 10.0, "device_ms_min": 9.9, "device_ms_max": 10.1}
 
         def point(k, ms, lo, hi):
@@ -118,7 +116,7 @@ class CrossoverTest(unittest.TestCase):
         self.assertIsNone(rc.crossing([point(0, 20.0, 19, 21), same]))
 
     def test_section_states_the_crossover_and_the_registers(self):
-        import readme_crossover
+        from rtlab_report import readme_crossover
         doc = "\n".join(readme_crossover.crossover_section(
             {"meta": META, "rows": crossover_fixture()}, "x.json", False))
         # The fixture's rows carry no frame spread: only equal medians tie, so the queue's 0.8
@@ -130,7 +128,7 @@ class CrossoverTest(unittest.TestCase):
 
     @unittest.skipUnless(HAVE_MPL, "needs matplotlib")
     def test_chart_has_a_panel_per_material_count(self):
-        import charts_crossover
+        from rtlab_report import charts_crossover
         fig = charts_crossover.crossover_chart(META, crossover_fixture())
         titles = [ax.get_title() for ax in fig.axes if ax.get_title()]
         self.assertEqual(titles, ["1 distinct material", "4 distinct materials"])
@@ -203,7 +201,7 @@ class RowsTest(unittest.TestCase):
         self.assertEqual(sweep_rows.failure({"status": "error"}), "other")
 
     def test_migration_maps_messages_to_the_fixed_kinds(self):
-        migrate = load_script("migrate-rows.py")
+        migrate = load_script("migrate_rows")
         self.assertEqual(migrate.classify({"status": "ok"}), "")
         self.assertEqual(migrate.classify({"status": "skipped"}), "skipped")
         self.assertEqual(migrate.classify({"status": "error", "failure": "allocation"}),
@@ -232,7 +230,7 @@ class ReadmeTest(unittest.TestCase):
         return path
 
     def run_readme(self, *args):
-        return subprocess.run([sys.executable, os.path.join(SCRIPTS, "results-readme.py"), *args],
+        return subprocess.run([sys.executable, TOOL, "readme", *args],
                               capture_output=True, text=True, check=True)
 
     def test_a_sweep_does_not_rewrite_the_index_unless_asked(self):
@@ -250,9 +248,9 @@ class ReadmeTest(unittest.TestCase):
             path = os.path.join(tmp, "not-a-sweep.json")
             with open(path, "w") as f:
                 f.write("[1, 2")
-            scripts = ["results-readme.py"] + (["charts.py"] if HAVE_MPL else [])
-            for script in scripts:
-                done = subprocess.run([sys.executable, os.path.join(SCRIPTS, script), path],
+            commands = ["readme"] + (["charts"] if HAVE_MPL else [])
+            for command in commands:
+                done = subprocess.run([sys.executable, TOOL, command, path],
                                       capture_output=True, text=True)
                 self.assertNotEqual(done.returncode, 0)
                 self.assertIn("not a sweep JSON", done.stderr)
@@ -292,7 +290,7 @@ class ReadmeTest(unittest.TestCase):
                 self.assertIn(f"| {title}: time / fastest", text)
 
     def test_floor_counts_each_design_s_bytes(self):
-        import readme_floor
+        from rtlab_report import readme_floor
         px = 320 * 180
         mega = row("mega", "megakernel", "tree", "s", 3)
         self.assertEqual(readme_floor.floor_bytes(mega), px * 12)  # the image alone
@@ -345,7 +343,7 @@ class ChartsTest(unittest.TestCase):
             path = os.path.join(tmp, "t.json")
             with open(path, "w") as f:
                 json.dump({"meta": META, "rows": sweep_rows_fixture(("bounces",))}, f)
-            subprocess.run([sys.executable, os.path.join(SCRIPTS, "charts.py"), path],
+            subprocess.run([sys.executable, TOOL, "charts", path],
                            capture_output=True, check=True)
             written = sorted(os.listdir(tmp))
         self.assertIn("time-vs-bounces.png", written)
@@ -442,7 +440,7 @@ class ChartsTest(unittest.TestCase):
         self.assertIn("megakernel (weighted): not measured in this sweep's accuracy cells", texts)
 
     def test_crossover_star_only_at_a_win_beyond_the_spread(self):
-        import charts_crossover
+        from rtlab_report import charts_crossover
         rows = crossover_fixture()
         for r in rows:  # every cell's frames spread by 30%: the queue's 0.8 is a tie
             r.update(device_ms_min=r["device_ms"] * 0.85, device_ms_max=r["device_ms"] * 1.15)
@@ -451,7 +449,8 @@ class ChartsTest(unittest.TestCase):
         self.assertEqual(stars, [])
         fig = charts_crossover.crossover_chart(META, crossover_fixture())
         stars = [line for ax in fig.axes[:2] for line in ax.lines if line.get_marker() == "*"]
-        self.assertEqual([tuple(s.get_xdata()) for s in stars], [(4,), (4,)])
+        # At K = 4, drawn a little apart in x (charts_crossover's dodge) so points never overprint.
+        self.assertEqual([round(s.get_xdata()[0]) for s in stars], [4, 4])
 
     def test_pipelines_have_distinct_colours_in_line_charts(self):
         fig = charts.time_vs_bounces(META, sweep_rows_fixture())
@@ -510,14 +509,14 @@ class CommittedChartsTest(unittest.TestCase):
         self.assertGreater(sum(len(ax.texts) for ax in fig.axes), 6)
 
     def test_limits_labels_do_not_overlap(self):
-        import charts_limits
+        from rtlab_report import charts_limits
         meta, rows = charts.load(os.path.join(self.SET, "limits.json"))
         fig = charts_limits.limits_chart(meta, rows)
         self.assertEqual(texts_overlap(fig), [])
 
 
 class MapTest(unittest.TestCase):
-    """scripts/charts_map.py: the winner of each map setting, its margin, ties inside the frame
+    """rtlab_report/charts_map.py: the winner of each map setting, its margin, ties inside the frame
     spread, and settings some design missed left out of the win count."""
 
     def rows(self):
@@ -537,9 +536,7 @@ class MapTest(unittest.TestCase):
         return out
 
     def test_winner_margin_ties_and_missing(self):
-        spec = importlib.util.spec_from_file_location("charts_map", os.path.join(SCRIPTS, "charts_map.py"))
-        m = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(m)
+        m = load_script("charts_map")
         series, grid = m.cells(self.rows())
         keys = series.keys
         self.assertEqual(sorted(grid), [(4, 50, 8, 16, 0), (64, 0, 8, 16, 0), (256, 0, 8, 16, 0)])
@@ -557,9 +554,7 @@ class MapTest(unittest.TestCase):
         self.assertIn("| 4 | 50% | 8 | 9.000 (7.2) | 3.000 | queue | 3.00x |", text)
 
     def test_drop_leaves_out_rows_by_a_field(self):
-        spec = importlib.util.spec_from_file_location("charts_map", os.path.join(SCRIPTS, "charts_map.py"))
-        m = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(m)
+        m = load_script("charts_map")
         rows = [{"pipeline": "persist", "persistent_schedule": "auto", "persistent_groups": 2},
                 {"pipeline": "persist", "persistent_schedule": "flags", "persistent_groups": 4},
                 {"pipeline": "mega"}]
@@ -568,9 +563,7 @@ class MapTest(unittest.TestCase):
         self.assertEqual(len(m.drop_rows(rows, ["persistent_groups=4", "pipeline=mega"])), 1)
 
     def test_mesh_walls_are_their_own_settings_with_a_triangles_column(self):
-        spec = importlib.util.spec_from_file_location("charts_map", os.path.join(SCRIPTS, "charts_map.py"))
-        m = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(m)
+        m = load_script("charts_map")
         rows = []
         for scene, times in [("map/map-s16-t20-x50-o8-m16", {"mega": 9.0, "queue": 3.0}),
                              ("map/map-s16-t320-x50-o8-m16", {"mega": 4.0, "queue": 5.0})]:
@@ -588,9 +581,7 @@ class MapTest(unittest.TestCase):
         self.assertIn("| 16 | 320 | 50% | 8 | 4.000 | 5.000 | mega | 1.25x |", text)
 
     def test_a_map_joined_from_two_binaries_names_both_commits(self):
-        spec = importlib.util.spec_from_file_location("charts_map", os.path.join(SCRIPTS, "charts_map.py"))
-        m = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(m)
+        m = load_script("charts_map")
         rows = [dict(r, commit=c) for r, c in zip(self.rows(), ["9e9a1ebb88a9", "9e9a1ebb88a9",
                                                                "8c4e049bdf7b"])]
         self.assertEqual(m.commits_of({"commit": "8c4e049bdf7b"}, rows), "9e9a1eb, 8c4e049")
@@ -599,14 +590,12 @@ class MapTest(unittest.TestCase):
 
 
 class PredictEvalTest(unittest.TestCase):
-    """scripts/predict_eval.py: the busy-lane threshold fitted between the settings the queue won
+    """rtlab_report/predict_eval.py: the busy-lane threshold fitted between the settings the queue won
     and those it lost, the score on rows it was not fitted to, and ties between two designs of
     one kind still counted."""
 
     def load(self):
-        spec = importlib.util.spec_from_file_location("predict_eval", os.path.join(SCRIPTS, "predict_eval.py"))
-        m = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(m)
+        m = load_script("predict_eval")
         return m
 
     def rows(self, times):
@@ -660,13 +649,11 @@ class PredictEvalTest(unittest.TestCase):
 
 
 class RegisterStudyTest(unittest.TestCase):
-    """scripts/register_study.py: occupancy from registers as the map's table derives it, and a
+    """rtlab_report/register_study.py: occupancy from registers as the map's table derives it, and a
     variant's time a tie when its frames' range overlaps the plain build's."""
 
     def load(self):
-        spec = importlib.util.spec_from_file_location("register_study", os.path.join(SCRIPTS, "register_study.py"))
-        m = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(m)
+        m = load_script("register_study")
         return m
 
     def test_occupancy(self):
@@ -688,7 +675,7 @@ class RegisterStudyTest(unittest.TestCase):
                 os.makedirs(os.path.join(d, name))
                 with open(os.path.join(d, name, "rows.jsonl"), "w") as f:
                     f.writelines(json.dumps(r) + "\n" for r in rs)
-            out = subprocess.run([sys.executable, os.path.join(SCRIPTS, "register_study.py"), d],
+            out = subprocess.run([sys.executable, TOOL, "register-study", d],
                                  capture_output=True, text=True, check=True).stdout
         self.assertIn("| plain | `-` | 142 | 0/0 | 12 | 19% | 10.000 |", out)
         self.assertIn("| packed-stack | `-DRT_PACKED_STACK` | 120 | 0/0 | 16 | 25% | 8.000 (0.80×) |", out)
@@ -723,7 +710,7 @@ class PersistTest(unittest.TestCase):
                 c("persist", "coherent", 1.5, persistent_regroup="material")]
 
     def run_script(self, rows):
-        return run_chart("charts_persist.py", rows, "persist")
+        return run_chart("persist-charts", rows, "persist")
 
     def test_best_schedule_speed_up_and_tie(self):
         d, p = self.run_script(self.rows())
@@ -853,7 +840,7 @@ class PersistTest(unittest.TestCase):
         rows = [dict(r, device="GPU X", driver="9.1", commit="abc1234", sweep="persist-x")
                 for r in self.rows()]
         path = write_rows(d, "rows.jsonl", rows)
-        p = subprocess.run([sys.executable, os.path.join(SCRIPTS, "charts_persist.py"), path],
+        p = subprocess.run([sys.executable, TOOL, "persist-charts", path],
                            capture_output=True, text=True)
         self.assertEqual(p.returncode, 0, p.stderr)
         md = open(os.path.join(d, "persist-x.md")).read()
@@ -869,7 +856,7 @@ class PersistTest(unittest.TestCase):
 
 
 class PhasesTest(unittest.TestCase):
-    """scripts/charts_phases.py: the persistent megakernel's phase clocks turned into
+    """rtlab_report/charts_phases.py: the persistent megakernel's phase clocks turned into
     milliseconds, beside the queue wavefront's kernels."""
 
     BASE = {"scene": "map/map-s16-x25-o0-m16", "status": "ok", "width": 64, "height": 32}
@@ -887,7 +874,7 @@ class PhasesTest(unittest.TestCase):
                 "extend": 0.5, "shadow": 0.25, "shade glass": 0.5, "shade miss": 0.25,
                 "compact": 0.25})])
             args += ["--queue", queue_arg or f"queue={q}"]
-        return run_chart("charts_phases.py", rows, "persist-phase", *args, d=d)
+        return run_chart("phase-charts", rows, "persist-phase", *args, d=d)
 
     @staticmethod
     def lines(d):
@@ -937,12 +924,11 @@ class PhasesTest(unittest.TestCase):
 
 
 class OccupancyTest(unittest.TestCase):
-    """scripts/charts_occupancy.py: the queue's stage times beside the warps their kernels keep,
+    """rtlab_report/charts_occupancy.py: the queue's stage times beside the warps their kernels keep,
     estimated from registers, local memory and group size with sm_90's limits."""
 
     def test_resident_warps_by_registers_local_memory_and_group(self):
-        sys.path.insert(0, SCRIPTS)
-        from charts_occupancy import resident_warps
+        from rtlab_report.charts_occupancy import resident_warps
         self.assertEqual(resident_warps(46, 420, 256), 40)     # registers: 5 groups of 8 warps
         self.assertEqual(resident_warps(46, 47524, 256), 32)   # local memory: 4 groups
         self.assertEqual(resident_warps(46, 47524, 128), 16)
@@ -972,7 +958,7 @@ class OccupancyTest(unittest.TestCase):
                      kernel_resources=res_b,
                      kernel_ms={"extend": 0.9, "shadow": 1.5, "shade glass": 0.6,
                                 "shade miss": 0.1})]
-        d, p = run_chart("charts_occupancy.py", rows, "queue-occupancy")
+        d, p = run_chart("occupancy-charts", rows, "queue-occupancy")
         self.assertEqual(p.returncode, 0, p.stderr)
         with open(os.path.join(d, "occupancy.md")) as f:
             lines = [x.strip() for x in f if x.startswith("| `s16")]
@@ -987,7 +973,7 @@ class OccupancyTest(unittest.TestCase):
             self.assertGreater(os.path.getsize(os.path.join(d, "occupancy.png")), 10000)
 
     def test_rows_without_registers_are_one_line(self):
-        _, p = run_chart("charts_occupancy.py", [{"scene": "spheres", "pipeline": "queue",
+        _, p = run_chart("occupancy-charts", [{"scene": "spheres", "pipeline": "queue",
                                                   "status": "ok", "device_ms": 1.0,
                                                   "kernel_ms": {"extend": 0.5}}],
                          "queue-occupancy")

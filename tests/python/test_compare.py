@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Tests of scripts/compare.py, the one tie rule and the like-with-like win count every result
+"""Tests of tools/rtlab_report/compare.py, the one tie rule and the like-with-like win count every result
 README and chart uses, with numbers from measured rows. Standard library only; CTest runs this
 with /usr/bin/python3.
 """
@@ -9,11 +9,8 @@ import sys
 import unittest
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-SCRIPTS = os.path.join(ROOT, "scripts")
-sys.path.insert(0, SCRIPTS)
-import compare  # noqa: E402
-import readme_winners  # noqa: E402
-import sweep_rows  # noqa: E402
+sys.path.insert(0, os.path.join(ROOT, "tools"))
+from rtlab_report import compare, readme_winners, sweep_rows  # noqa: E402
 
 H200_FULL = os.path.join(ROOT, "results", "nvidia-h200", "full.json")
 
@@ -121,6 +118,45 @@ class LikeWithLikeTest(unittest.TestCase):
         self.assertEqual((cornell.tally.total, cornell.tally.n), (42, 40))
         table, notes = mod.winner_table(rows)
         self.assertIn("| cornell | 40 of 42 | 12 |", table)
+
+H100_FULL = os.path.join(ROOT, "results", "nvidia-h100-80gb-hbm3", "full.json")
+
+
+class ClaimsAsTheDataSaysThemTest(unittest.TestCase):
+    """Equal errors are counted exactly, apart from errors equal only once rounded; a win is
+    only a win beyond the frame spread (issue 55's two overstated claims)."""
+
+    @staticmethod
+    def scored(scene, pipeline, rmse):
+        return {"scene": scene, "pipeline": pipeline, "width": 320, "height": 180,
+                "bounces": 4, "shadow_samples": 1, "aa": 1, "rmse": rmse}
+
+    def test_equal_errors_are_exact_and_rounded_ones_are_said_apart(self):
+        rows = [self.scored("a", "mega", 0.5), self.scored("a", "wave", 0.5),          # equal
+                self.scored("b", "mega", 0.020074181), self.scored("b", "wave", 0.0200741812),
+                self.scored("c", "mega", 0.020074181), self.scored("c", "wave", 0.020074182),
+                self.scored("d", "mega", 0.1)]                                           # alone
+        a = compare.error_agreement(rows)
+        self.assertEqual((a["settings"], a["equal"], a["rounded"], a["differ"]), (3, 1, 1, 1))
+        text = compare.agreement_text(a)
+        self.assertIn("exactly equal in 1 of the 3", text)
+        self.assertIn("rounded to 9 decimal places (not exactly) in 1 more", text)
+
+    @unittest.skipUnless(os.path.exists(H200_FULL), "the H200 full sweep is not in results/")
+    def test_the_h200_errors_are_equal_in_30_not_70(self):
+        with open(H200_FULL) as f:
+            rows = [r for r in sweep_rows.in_group(json.load(f)["rows"], "accuracy")
+                    if r.get("rmse") is not None]
+        a = compare.error_agreement(rows)
+        self.assertEqual((a["settings"], a["equal"], a["rounded"], a["differ"]), (72, 30, 40, 2))
+
+    @unittest.skipUnless(os.path.exists(H100_FULL), "the H100 full sweep is not in results/")
+    def test_the_h100_megakernel_wins_140_with_one_tie_not_141(self):
+        with open(H100_FULL) as f:
+            rows = [r for r in json.load(f)["rows"] if sweep_rows.failure(r) == ""]
+        _, t = readme_winners.sweep_tally(rows)
+        self.assertEqual((t.n, t.wins.get("mega"), t.wins.get("wave"), t.ties), (142, 140, 1, 1))
+
 
 if __name__ == "__main__":
     unittest.main()

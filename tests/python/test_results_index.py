@@ -1,69 +1,65 @@
 #!/usr/bin/python3
-"""The committed results/ against its index and its READMEs (scripts/results_index.py): every
-folder under results/ must be named in results/README.md, and every commit a README in
-results/ quotes must be recorded by its data (rows, sweep metadata, the tools' logs, or data it
-links to), so that a README cannot claim a measurement its folder does not hold.
+"""The committed results/ against its index, its archives and the READMEs that quote it
+(tools/rtlab_report/results_check.py): one folder a device kind, one page and one archive an
+experiment, every top-level entry and page in results/README.md, no patch files, and every commit
+a README quotes recorded by the data it links, so that neither the index nor a README (the
+repository's included, whatever its wording) can claim a measurement results/ does not hold.
 Standard library only; CTest runs this with /usr/bin/python3.
 """
 import json
 import os
 import sys
+import tarfile
 import tempfile
 import unittest
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 RESULTS = os.path.join(ROOT, "results")
-sys.path.insert(0, os.path.join(ROOT, "scripts"))
-import results_index  # noqa: E402
+sys.path.insert(0, os.path.join(ROOT, "tools"))
+from rtlab_report import results_check, results_index  # noqa: E402
 
-# Commits these READMEs name that no data under them records. None is a measurement's own
-# commit: each is a kernel tree run under another commit's binary (--kernel-dir or
-# RTLAB_KERNEL_DIR, which the rows do not record), or code history named for context (the fix,
-# the change measured). Listed so that any new unrecorded quote fails; an entry whose commit
-# becomes recorded fails too, and must then leave the list.
-NOT_IN_DATA = {
-    # Generated limits text: a planner bug fixed at ed93f1e, code history.
-    ("nvidia-h200/README.md", "ed93f1e"),
-    # The compiler hang's range and fix, code history.
-    ("nvidia-h200/cornell-196a299/README.md", "1cdc2f1"),
-    ("nvidia-h200/cornell-196a299/README.md", "eb664a7"),
-    ("nvidia-h200/cornell-196a299/README.md", "7751dbf"),
-    # Kernel trees run under the eb664a7 binary; the log names them only in run labels.
-    ("nvidia-h200/hang-bisect-eb664a7/README.md", "02b8077"),
-    ("nvidia-h200/hang-bisect-eb664a7/README.md", "cb985e5"),
-    ("nvidia-h200/hang-bisect-eb664a7/README.md", "1cdc2f1"),
-    ("nvidia-h200/hang-bisect-eb664a7/README.md", "7751dbf"),
-    # Kernel trees of earlier commits run under the 2f20b57 binary.
-    ("nvidia-h200/trace-peer/2f20b57/README.md", "7e39e5b"),
-    ("nvidia-h200/trace-peer/2f20b57/README.md", "1a75d90"),
-    ("nvidia-h200/trace-peer/2f20b57/README.md", "f300cec"),
-    # Traversal changes named as history, and session variants run as kernel trees.
-    ("nvidia-h200/trace-peer/65ee11e/README.md", "43d8804"),
-    ("nvidia-h200/trace-peer/65ee11e/README.md", "05190d1"),
-    ("nvidia-h200/trace-peer/65ee11e/experiments/README.md", "20a2139"),
-    ("nvidia-h200/trace-peer/65ee11e/experiments/README.md", "05190d1"),
-    # k-base is d0b4c82's kernel tree under the 65ee11e binary; 1e9d134 the kernel committed after.
-    ("nvidia-h200/wave-ab/README.md", "d0b4c82"),
-    ("nvidia-h200/wave-ab/README.md", "1e9d134"),
-    # perf-check's reports record no commit.
-    ("pocl-pthread-skylake-avx512-amd-epyc/perf-check/README.md", "9662d72"),
-    # The kernels before the change, run under the same binary.
-    ("pocl-pthread-skylake-avx512-amd-epyc/trace-peer/README.md", "c9e8912"),
-}
+NOT_IN_DATA = results_check.NOT_IN_DATA
+README_HISTORY = results_check.README_HISTORY
 
 
 class CommittedResultsTest(unittest.TestCase):
-    def test_every_result_folder_is_in_the_index(self):
-        missing = results_index.missing_from_index(RESULTS)
-        self.assertEqual(missing, [], "results/README.md leaves these folders out; run "
-                         "/usr/bin/python3 scripts/results-readme.py results")
+    def test_the_top_level_is_device_folders_experiments_and_archive(self):
+        for entry in results_check.top_entries(RESULTS):
+            path = os.path.join(RESULTS, entry)
+            self.assertTrue(os.path.isdir(path), f"results/{entry} is a loose file")
+            if entry not in ("experiments", "archive"):
+                self.assertTrue(os.path.exists(os.path.join(path, "README.md")),
+                                f"results/{entry} has no README")
+                subs = [d for d in os.listdir(path) if os.path.isdir(os.path.join(path, d))]
+                self.assertEqual(subs, [], f"results/{entry} holds folders: an experiment's "
+                                 "files go to archive/ (python3 -m rtlab_report experiment)")
 
-    def test_every_quoted_commit_is_in_the_data(self):
+    def test_each_published_set_is_at_one_commit(self):
+        several = {slug for slug, c in results_check.set_commits(RESULTS).items() if len(c) > 1}
+        self.assertEqual(sorted(several - results_check.NOT_YET_ONE_COMMIT), [],
+                         "a published set must be measured at one commit")
+        self.assertEqual(sorted(results_check.NOT_YET_ONE_COMMIT - several), [],
+                         "now at one commit: take these out of NOT_YET_ONE_COMMIT")
+
+    def test_index_names_everything_and_every_page_has_its_archive(self):
+        self.assertEqual(results_check.index_problems(RESULTS), [],
+                         "run /usr/bin/python3 tools/rtlab_report readme results")
+
+    def test_every_page_s_commits_are_in_its_archive(self):
+        self.assertEqual(results_check.page_problems(RESULTS), [])
+
+    def test_every_commit_a_results_readme_quotes_is_in_its_data(self):
         found = set(results_index.readme_problems(RESULTS))
         self.assertEqual(sorted(found - NOT_IN_DATA), [],
                          "these READMEs quote commits no data under them records")
         self.assertEqual(sorted(NOT_IN_DATA - found), [],
                          "now recorded by the data: take these out of NOT_IN_DATA")
+
+    def test_every_commit_the_readme_quotes_is_in_the_data_it_links(self):
+        found = results_check.readme_quote_problems(os.path.join(ROOT, "README.md"), RESULTS)
+        self.assertEqual([(c, where) for c, where in found if c not in README_HISTORY], [],
+                         "README.md quotes these commits beside links into results/ whose "
+                         "data does not record them")
 
 
 class CheckerTest(unittest.TestCase):
@@ -99,6 +95,64 @@ class CheckerTest(unittest.TestCase):
             with open(os.path.join(tmp, "README.md"), "w") as f:
                 f.write("- [`dev`](dev/README.md)\n- [`dev/set-a`](dev/set-a/README.md)\n")
             self.assertEqual(results_index.missing_from_index(tmp), ["dev/set-a/run-1"])
+
+
+class LayoutCheckerTest(unittest.TestCase):
+    """The index and README checks on a made-up results/: each catches what it is for."""
+
+    def make(self, tmp, index, readme, page_commit="8380cd2"):
+        results = os.path.join(tmp, "results")
+        for d in ("dev", "experiments", "archive"):
+            os.makedirs(os.path.join(results, d))
+        with open(os.path.join(results, "dev", "README.md"), "w") as f:
+            f.write("# Dev\n")
+        with open(os.path.join(results, "dev", "full.json"), "w") as f:
+            json.dump({"meta": {"commit": "5af2c8e0"}, "rows": []}, f)
+        rows = os.path.join(tmp, "rows.jsonl")
+        with open(rows, "w") as f:
+            f.write(json.dumps({"commit": "8380cd2fad99"}) + "\n")
+        with tarfile.open(os.path.join(results, "archive", "exp.tar.xz"), "w:xz") as tar:
+            tar.add(rows, "dev/exp/rows.jsonl")
+        with open(os.path.join(results, "experiments", "exp.md"), "w") as f:
+            f.write(f"# Exp\n\n- **Commits in the data**: `{page_commit}`.\n"
+                    "- **Raw data**: [`archive/exp.tar.xz`](../archive/exp.tar.xz).\n")
+        with open(os.path.join(results, "README.md"), "w") as f:
+            f.write(index)
+        with open(os.path.join(tmp, "README.md"), "w") as f:
+            f.write(readme)
+        return results
+
+    FULL_INDEX = "[`dev`](dev/README.md) [`experiments/`](experiments/) [`archive/`](archive/) " \
+                 "[Exp](experiments/exp.md)\n"
+
+    def test_a_complete_index_passes_and_a_missing_entry_is_named(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            results = self.make(tmp, self.FULL_INDEX, "")
+            self.assertEqual(results_check.index_problems(results), [])
+            self.assertEqual(results_check.page_problems(results), [])
+            results = self.make(os.path.join(tmp, "b"), "[`dev`](dev/README.md)\n", "",
+                                page_commit="b05cbeb")
+            self.assertEqual(len(results_check.index_problems(results)), 3)
+            self.assertEqual(results_check.page_problems(results),
+                             ["experiments/exp.md lists b05cbeb, not in its archive's data"])
+
+    def test_a_patch_file_fails_anywhere(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            results = self.make(tmp, self.FULL_INDEX, "")
+            open(os.path.join(results, "dev", "kernels.patch"), "w").close()
+            self.assertEqual(results_check.index_problems(results),
+                             ["patch file dev/kernels.patch"])
+
+    def test_readme_quotes_are_held_to_the_data_their_block_links(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            readme = ("The verdict at `5af2c8e` ([set](results/dev/README.md)).\n\n"
+                      "- The map at commit 8380cd2 ([page](results/experiments/exp.md#x)).\n"
+                      "- Also at `b05cbeb` ([set](results/dev/full.json)).\n\n"
+                      "The fix came at `8380cd2`, no link here.\n\n"
+                      "A block without links quoting `abc1234` fails.\n")
+            results = self.make(tmp, self.FULL_INDEX, readme)
+            found = results_check.readme_quote_problems(os.path.join(tmp, "README.md"), results)
+            self.assertEqual([c for c, _ in found], ["b05cbeb", "abc1234"])
 
 
 if __name__ == "__main__":

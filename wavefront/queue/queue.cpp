@@ -735,7 +735,7 @@ Image QueuePipeline::renderFrame(const Scene& scene, const RenderOptions& o) {
     stats_.addBuffer("image", buf_.imageBytes);
     stats_.extras["pool_rays"] = queue_.poolRays;  // its bytes: buffers["pool"]
     // What each extended ray moves through global memory at the least, for the memory floor of
-    // the result READMEs (scripts/readme_floor.py): its ray record and its hit record.
+    // the result READMEs (tools/rtlab_report/readme_floor.py): its ray record and its hit record.
     stats_.extras["ray_record_bytes"] = kRayRecordBytes;
     stats_.extras["hit_record_bytes"] = sizeof(dev::Node);
     stats_.extras["bounces_run"] = queue_.iterations;
