@@ -32,10 +32,10 @@ std::optional<double> intersectSpherePlain(const Ray& ray, dvec3 center, double 
     if (disc < 0) return std::nullopt;
     const double s = std::sqrt(disc);
     const double t0 = (-b - s) / 2, t1 = (-b + s) / 2;
-    const double dt =
-        conservative ? gamma(12) * (b * b + 4 * (glm::dot(oc, oc) + radius * radius)) / s : 0;
-    if (t0 > dt) return t0;
-    if (t1 > dt) return t1;
+    // t > dt / s, as the device compares it (t s > dt); |oc|^2 + r^2 = c + 2 r^2.
+    const double dt = conservative ? gamma(13) * (b * b + 4 * (c + 2 * radius * radius)) : 0;
+    if (t0 * s > dt || (!conservative && t0 > 0)) return t0;
+    if (t1 * s > dt || (!conservative && t1 > 0)) return t1;
     return std::nullopt;
 }
 
@@ -53,10 +53,11 @@ std::optional<double> intersectSphereRobust(const Ray& ray, dvec3 center, double
     const double disc = radius * radius - glm::dot(f, f);
     if (disc < 0) return std::nullopt;
     const double q = bp + (bp >= 0 ? 1.0 : -1.0) * std::sqrt(disc);
+    // c / q > gamma(8) (|oc|^2 + r^2) / |q|, as the device compares it (without the division).
     const double tc = c / q, tq = q;
-    const double dc =
-        conservative ? gamma(7) * (glm::dot(oc, oc) + radius * radius) / std::abs(q) : 0;
-    const bool okc = tc > dc, okq = tq > 0;
+    const bool okc =
+        conservative ? (q > 0 ? c : -c) > gamma(8) * (c + 2 * radius * radius) : tc > 0;
+    const bool okq = tq > 0;
     if (okc && okq) return std::min(tc, tq);
     if (okc) return tc;
     if (okq) return tq;

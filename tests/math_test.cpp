@@ -92,8 +92,10 @@ TEST(SpherePrecision, RobustHandlesTinyDistantSphereThatPlainGetsWrong) {
     // Passes 2 r from the centre: a clear miss.
     const Ray beside{{2e-4, 0, -1e6}, {0, 0, 1}};
     EXPECT_FALSE(ref::intersectSphereRobust(beside, center, r));
-    const auto plain = ref::intersectSpherePlain(beside, center, r);
+    const auto plain = ref::intersectSpherePlain(beside, center, /*radius=*/r, false);
     EXPECT_TRUE(plain) << "plain quadratic no longer loses the r^2 term; pick a smaller sphere";
+    // Its conservative t > 0 (core/SHADING.md section 3) sees a root it cannot trust: no hit.
+    EXPECT_FALSE(ref::intersectSpherePlain(beside, center, r));
 }
 
 // --- triangles -------------------------------------------------------------------------------

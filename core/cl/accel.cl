@@ -63,7 +63,7 @@ inline bool Hit_Sphere(const SceneData* sc, int i, Ray ray, Hit* hit) {
 // Triangle i with the given vertices (its own, or the copy a cwbvh leaf holds).
 inline bool Hit_TriangleWith(float3 v0, float3 v1, float3 v2, int i, Ray ray, Hit* hit) {
     float2 uv;
-    float t = Triangle_Intersect(ray, v0, v1, v2, &uv);
+    float t = Triangle_Intersect(ray, v0, v1, v2, hit->t, &uv);
     if (!(t > 0.0f && t < hit->t)) return false;
     hit->t = t;
     hit->kind = RT_KIND_TRIANGLE;

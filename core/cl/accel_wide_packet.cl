@@ -243,6 +243,8 @@ inline intP Packet_Triangle(global const Triangle* tri, const RayPacket* r, floa
     miss |= (det == 0.0f) | ((det < 0.0f) & (T >= 0.0f)) | ((det > 0.0f) & (T <= 0.0f));
     floatP rcp = 1.0f / det;
     floatP t = T * rcp;
+    miss |= !(t < hitT);
+    if (!Packet_Any(~miss)) return miss & 0;  // no lane hits: the bound is not needed
     miss |= t <= Packet_WatertightDeltaT(ax, ay, r->sz * Ak, bx, by, r->sz * Bk, cx, cy, r->sz * Ck,
                                          U, V, W, rcp);
     *tOut = t;

@@ -26,8 +26,10 @@ inline float Sphere_Intersect(Ray ray, float3 center, float radius) {
     // c / q is the root that can be near 0 (a ray leaving the sphere): c carries an absolute
     // error of gamma(6) (|oc|^2 + r^2), so c / q is trusted only past that over |q|. q has no
     // cancellation: its sign is exact.
+    // (c / q > bound / |q| without the division.)
     float tc = c / q, tq = q;
-    bool okc = tc > Float_Gamma(7) * (dot(oc, oc) + radius * radius) / fabs(q), okq = tq > 0.0f;
+    bool okc = (q > 0.0f ? c : -c) > Float_Gamma(8) * (c + 2.0f * radius * radius);
+    bool okq = tq > 0.0f;
     if (okc && okq) return fmin(tc, tq);
     return okc ? tc : (okq ? tq : RT_MISS);
 #else
@@ -36,9 +38,10 @@ inline float Sphere_Intersect(Ray ray, float3 center, float radius) {
     if (disc < 0.0f) return RT_MISS;
     float s = sqrt(disc);
     float t0 = (-b - s) / 2.0f, t1 = (-b + s) / 2.0f;
-    // One of -b -/+ s cancels; its error is that of s, the discriminant's over 2 s.
-    float dt = Float_Gamma(12) * (b * b + 4.0f * (dot(oc, oc) + radius * radius)) / s;
-    return t0 > dt ? t0 : (t1 > dt ? t1 : RT_MISS);
+    // One of -b -/+ s cancels; its error is that of s, the discriminant's over 2 s: a root t
+    // needs t > dt / s (compared as t s > dt, without the division).
+    float dt = Float_Gamma(13) * (b * b + 4.0f * (c + 2.0f * radius * radius));
+    return t0 * s > dt ? t0 : (t1 * s > dt ? t1 : RT_MISS);
 #endif
 }
 
@@ -72,7 +75,7 @@ inline float Triangle_MollerTrumboreDeltaT(float3 s, float3 e1, float3 e2, float
 }
 
 // Report Algorithm 3 (Moller-Trumbore) with a = edge1.h and the u + v > 1 test.
-inline float Triangle_Intersect(Ray ray, float3 v0, float3 v1, float3 v2, float2* uv) {
+inline float Triangle_Intersect(Ray ray, float3 v0, float3 v1, float3 v2, float tMax, float2* uv) {
     float3 e1 = v1 - v0, e2 = v2 - v0;
     float3 h = cross(ray.dir, e2);
     float a = dot(e1, h);
@@ -85,7 +88,8 @@ inline float Triangle_Intersect(Ray ray, float3 v0, float3 v1, float3 v2, float2
     float v = f * dot(ray.dir, q);
     if (v < 0.0f || u + v > 1.0f) return RT_MISS;
     float t = f * dot(e2, q);
-    if (t <= Triangle_MollerTrumboreDeltaT(s, e1, e2, f)) return RT_MISS;
+    // The bound only for a hit that would count: nearer than the caller's tMax.
+    if (!(t < tMax) || t <= Triangle_MollerTrumboreDeltaT(s, e1, e2, f)) return RT_MISS;
     *uv = (float2)(u, v);
     return t;
 }
@@ -108,7 +112,7 @@ RT_DEFINE_WATERTIGHT_DELTA_T(Triangle_WatertightDeltaT, float)
 
 // Woop, Benthin, Wald 2013: shear into ray space, exact edge-function signs. A ray through a
 // shared edge cannot slip between the two triangles (no double-precision fallback here).
-inline float Triangle_Intersect(Ray ray, float3 v0, float3 v1, float3 v2, float2* uv) {
+inline float Triangle_Intersect(Ray ray, float3 v0, float3 v1, float3 v2, float tMax, float2* uv) {
     float3 ad = fabs(ray.dir);
     int kz = ad.x >= ad.y ? (ad.x >= ad.z ? 0 : 2) : (ad.y >= ad.z ? 1 : 2);
     int kx = kz == 2 ? 0 : kz + 1;
@@ -135,6 +139,8 @@ inline float Triangle_Intersect(Ray ray, float3 v0, float3 v1, float3 v2, float2
     if ((det < 0.0f && T >= 0.0f) || (det > 0.0f && T <= 0.0f)) return RT_MISS;
     float rcp = 1.0f / det;
     float t = T * rcp;
+    // The bound only for a hit that would count: nearer than the caller's tMax.
+    if (!(t < tMax)) return RT_MISS;
     if (t <= Triangle_WatertightDeltaT(ax, ay, sz * component(A, kz), bx, by, sz * component(B, kz),
                                        cx, cy, sz * component(C, kz), U, V, W, rcp))
         return RT_MISS;

@@ -46,7 +46,7 @@ kernel void Probe_TriangleHits(global const float* rays, global const float* tri
         global const float* v = tris + k * 9;
         float2 uv;
         float t = Triangle_Intersect(ray, (float3)(v[0], v[1], v[2]), (float3)(v[3], v[4], v[5]),
-                                     (float3)(v[6], v[7], v[8]), &uv);
+                                     (float3)(v[6], v[7], v[8]), INFINITY, &uv);
         if (t > 0.0f) ++n;
     }
     hits[i] = n;
@@ -163,7 +163,7 @@ kernel void Probe_Reintersect(global const float* tris, global const float* orig
            v2 = (float3)(v[6], v[7], v[8]);
     float3 org = vload3(i, origins), d = normalize(vload3(i, targets) - org);
     float2 uv;
-    float t = Triangle_Intersect(makeRay(org, d), v0, v1, v2, &uv);
+    float t = Triangle_Intersect(makeRay(org, d), v0, v1, v2, INFINITY, &uv);
     if (!(t > 0.0f)) {
         out[i] = -1;
         return;
@@ -183,7 +183,8 @@ kernel void Probe_Reintersect(global const float* tris, global const float* orig
     for (int k = 0; k < spawn; ++k) {
         float3 w = Probe_Direction((uint)i, (uint)k);
         bool out_ = dot(w, n) >= 0.0f;
-        if (Triangle_Intersect(makeRay(out_ ? outer : inner, w), v0, v1, v2, &uv) > 0.0f) ++hits;
+        if (Triangle_Intersect(makeRay(out_ ? outer : inner, w), v0, v1, v2, INFINITY, &uv) > 0.0f)
+            ++hits;
     }
     out[i] = hits;
 }
