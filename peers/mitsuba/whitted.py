@@ -1,0 +1,439 @@
+#!/usr/bin/env python3
+"""rtlab's Whitted image (core/SHADING.md) rendered by Mitsuba 3 / Dr.Jit: the peer of issue 53.
+
+Mitsuba does the ray tracing (its scene, its BVH: OptiX on `cuda_ad_rgb`, Embree on
+`llvm_ad_rgb`); the shading is rtlab's, written here as one Dr.Jit loop over each pixel's ray tree:
+the same pinhole camera (section 1), Blinn-Phong with ambient (5), hard shadows from point lights
+and rtlab's jittered disk samples for lights of non-zero radius (4), mirror reflection and
+refraction with Fresnel and total internal reflection (6, 7), the same bounce limit B and the
+same children, combined as section 8 says, and the sky gradient (9).
+
+The ray tree is walked depth first with the *weighted* formulation of section 8: a node adds
+w (1 - F) o base to the pixel and hands w F to its reflection child and w (1 - F)(1 - o) to its
+refraction child; the lane continues with one child and pushes the other onto a per-lane stack of
+B entries (dr.alloc_local). The very same code runs in both of Dr.Jit's modes:
+
+  symbolic   (default flags): the loop, the shape calls and the traces compile into ONE kernel
+             per frame: a megakernel.
+  evaluated  (JitFlag.SymbolicLoops and SymbolicCalls off): every loop iteration is launched
+             separately and its state goes through device memory: a wavefront, one bounce (one
+             tree node per lane) per step. `evaluated-compact` also sets JitFlag.CompressLoops,
+             which drops finished lanes after every step (rtlab's queue pipeline does the same).
+
+Scene conversion (rtlab_scene.py reads the JSON): triangles merged into one mi.Mesh per material
+(per-corner vertices, so rtlab's per-corner normals carry over); all spheres as ONE `ellipsoids`
+shape (Mitsuba's analytic ellipsoid primitive, scales r, r, r, extent 1; per-sphere material by
+primitive index), or with --spheres shapes one `sphere` shape each (the naive conversion the issue
+measured); planes as `rectangle` shapes of half-size 1e4 x the scene's radius. Secondary rays
+start where Mitsuba's own SurfaceInteraction3f.spawn_ray / spawn_ray_to put them (an offset of
+about 1e-4 (1 + max|p|) along the geometric normal), not at rtlab's error-bound offset.
+
+Usage:
+  whitted.py SCENE.json [--size WxH] [--bounces B] [--variant llvm_ad_rgb|cuda_ad_rgb]
+             [--mode symbolic|evaluated|evaluated-compact] [-o out.exr|out.png|out.npy] [--stats]
+"""
+import argparse
+import dataclasses
+import math
+import os
+import sys
+import time
+
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from rtlab_scene import NotConverted, Scene  # noqa: E402
+
+MODES = ("symbolic", "evaluated", "evaluated-compact")
+GOLDEN = 2.399963229728653
+TWO_PI = 6.283185307179586
+PER_PRIM = 0xFFFFFFFF  # shape table entry: the material comes from the primitive (spheres)
+
+mi = dr = None
+
+
+def setup(variant):
+    """Imports Mitsuba with `variant`. LLVM variants need libLLVM 15 or newer, which Dr.Jit
+    finds by itself where the system has it (Debian: libllvm15, a dependency of PoCL), or
+    DRJIT_LIBLLVM_PATH names it."""
+    global mi, dr
+    import drjit as _dr
+    import mitsuba as _mi
+    _mi.set_variant(variant)
+    mi, dr = _mi, _dr
+    return mi, dr
+
+
+def set_mode(mode):
+    """Dr.Jit's flags for one of MODES (global: they decide how the loop below compiles)."""
+    if mode not in MODES:
+        raise ValueError(f"mode must be one of {', '.join(MODES)}, got {mode}")
+    sym = mode == "symbolic"
+    dr.set_flag(dr.JitFlag.SymbolicLoops, sym)
+    dr.set_flag(dr.JitFlag.SymbolicCalls, sym)
+    dr.set_flag(dr.JitFlag.CompressLoops, mode == "evaluated-compact")
+
+
+# ---- scene conversion ------------------------------------------------------------------------
+
+def _mesh(name, P, N):
+    """One mi.Mesh from triangles P (T,3,3) and corner normals N (T,3,3): 3 vertices a triangle."""
+    T = len(P)
+    m = mi.Mesh(name, 3 * T, T, has_vertex_normals=True)
+    params = mi.traverse(m)
+    params["vertex_positions"] = mi.Float(P.astype(np.float32).ravel())
+    params["vertex_normals"] = mi.Float(N.astype(np.float32).ravel())
+    params["faces"] = mi.UInt32(np.arange(3 * T, dtype=np.uint32))
+    params.update()
+    return m
+
+
+def _frame_to(n):
+    """A rotation (3x3) taking +z to unit vector n."""
+    z = np.asarray(n, dtype=np.float64)
+    a = np.array([1.0, 0, 0]) if abs(z[0]) < 0.9 else np.array([0, 1.0, 0])
+    x = np.cross(a, z)
+    x /= np.linalg.norm(x)
+    y = np.cross(z, x)
+    return np.stack([x, y, z], axis=1)
+
+
+class Converted:
+    """The Mitsuba scene of an rtlab scene, and the tables the integrator reads."""
+
+    def __init__(self, sc, spheres="ellipsoids"):
+        self.sc = sc
+        t0 = time.perf_counter()
+        d = {"type": "scene"}
+        owner = {}  # dict key -> material index (or PER_PRIM)
+        for m, (P, N) in sorted(sc.triangles.items()):
+            d[f"mesh{m}"] = _mesh(f"mesh{m}", P, N)
+            owner[f"mesh{m}"] = m
+        ns = len(sc.sphere_radius)
+        # Mitsuba's `ellipsoids` culls back faces (it is made for volumetric primitives): a ray
+        # that starts inside one never hits it. Rays start inside a sphere only when it refracts,
+        # so the opaque spheres go into one `ellipsoids` shape and the transparent ones get a
+        # `sphere` shape each (Mitsuba's analytic sphere, hit from both sides).
+        transparent = np.array([sc.materials[m]["opacity"] < 1 for m in sc.sphere_material],
+                               dtype=bool)
+        together = ~transparent if spheres == "ellipsoids" else np.zeros(ns, dtype=bool)
+        if together.any():
+            inside = np.linalg.norm(sc.sphere_center[together] - sc.position, axis=1) \
+                < sc.sphere_radius[together]
+            if inside.any():
+                raise NotConverted(f"{sc.path}: the camera is inside an opaque sphere, which "
+                                   f"Mitsuba's ellipsoids (back faces culled) would not show")
+            r = sc.sphere_radius[together].astype(np.float32)
+            k = len(r)
+            d["spheres"] = {"type": "ellipsoids", "extent": 1.0,
+                            "centers": mi.TensorXf(sc.sphere_center[together].astype(np.float32)),
+                            "scales": mi.TensorXf(np.stack([r, r, r], axis=1)),
+                            "quaternions": mi.TensorXf(np.tile(np.float32([0, 0, 0, 1]), (k, 1)))}
+            owner["spheres"] = PER_PRIM
+        for i in np.nonzero(~together)[0]:
+            d[f"sphere{i}"] = {"type": "sphere", "center": sc.sphere_center[i].tolist(),
+                               "radius": float(sc.sphere_radius[i])}
+            owner[f"sphere{i}"] = int(sc.sphere_material[i])
+        self.sphere_shapes = int((~together).sum())
+        _, radius = sc.bounds()
+        half = 1e4 * radius
+        for i, (n, off, m) in enumerate(sc.planes):
+            M = np.eye(4)
+            M[:3, :3] = _frame_to(n) * half
+            M[:3, 3] = n * off
+            d[f"plane{i}"] = {"type": "rectangle", "to_world": mi.ScalarTransform4f(M.tolist())}
+            owner[f"plane{i}"] = m
+        self.scene = mi.load_dict(d)
+        # Shape registry id -> material (reinterpreting a ShapePtr gives its id).
+        ids = {}
+        for s in self.scene.shapes():
+            ids[s.id()] = int(dr.reinterpret_array(mi.UInt32, mi.ShapePtr(s))[0])
+        table = np.full(max(ids.values(), default=0) + 1, PER_PRIM, dtype=np.uint32)
+        for key, m in owner.items():
+            table[ids[key]] = m
+        self.shape_material = mi.UInt32(table)
+        self.sphere_material = mi.UInt32(sc.sphere_material[together] if together.any()
+                                         else np.zeros(1, np.uint32))
+        mats = sc.materials or [{"ambient": [0] * 3, "diffuse": [0] * 3, "specular": [0] * 3,
+                                 "exponent": 1.0, "reflectance": 0.0, "opacity": 1.0, "ior": 1.0}]
+        col = lambda k: mi.Color3f(np.array([m[k] for m in mats], dtype=np.float32).T)
+        flt = lambda k: mi.Float(np.array([m[k] for m in mats], dtype=np.float32))
+        self.ambient, self.diffuse, self.specular = col("ambient"), col("diffuse"), col("specular")
+        self.exponent, self.reflectance = flt("exponent"), flt("reflectance")
+        self.opacity, self.ior = flt("opacity"), flt("ior")
+        self.convert_s = time.perf_counter() - t0
+        self.representation = {
+            "spheres": (f"{int(together.sum())} in one ellipsoids shape, {self.sphere_shapes} "
+                        f"sphere shapes") if ns else "none", "planes": f"rectangle half-size {half:g}",
+            "meshes": f"{len(sc.triangles)} merged per material",
+        }
+
+
+# ---- the integrator --------------------------------------------------------------------------
+
+def _hash(v):
+    """core/sampling.h Sampling_Hash (PCG, Jarzynski and Olano 2020) on UInt32 lanes."""
+    state = v * 747796405 + 2891336453
+    word = ((state >> ((state >> 28) + 4)) ^ state) * 277803737
+    return (word >> 22) ^ word
+
+
+def _hash_const(v):
+    v = np.uint32(v)
+    with np.errstate(over="ignore"):
+        state = v * np.uint32(747796405) + np.uint32(2891336453)
+        word = ((state >> ((state >> np.uint32(28)) + np.uint32(4))) ^ state) * np.uint32(277803737)
+    return int((word >> np.uint32(22)) ^ word)
+
+
+def _unit(key, j, k, dim):
+    """Sampling_Unit: a number in [0, 1) for dimension dim of shadow sample k toward light j."""
+    h = _hash(key ^ _hash_const((j * 256 + k) * 2 + dim))
+    return mi.Float(h >> 8) * (1.0 / 16777216.0)
+
+
+def _sky(sc, d):
+    z, h, g = (mi.Color3f(*[float(c) for c in sc.sky[k]]) for k in ("zenith", "horizon", "ground"))
+    y = d.y
+    return dr.select(y >= 0, h + (z - h) * y, h + (g - h) * (-y))
+
+
+def _max0(x):
+    """max(x, 0) as a select: LLVM 15 (Debian's libllvm15, which Dr.Jit's LLVM backend loads)
+    cannot compile the llvm.maximum intrinsic that dr.maximum emits on x86 ("Cannot select
+    fmaximum"); NaN gives 0 here as OpenCL's fmax(x, 0) does."""
+    return dr.select(x > 0, x, 0.0)
+
+
+def _fresnel(cos_i, n1, n2):
+    sin_t = n1 / n2 * dr.sqrt(_max0(1.0 - cos_i * cos_i))
+    cos_t = dr.sqrt(_max0(1.0 - sin_t * sin_t))
+    rs = (n2 * cos_i - n1 * cos_t) / (n2 * cos_i + n1 * cos_t)
+    rp = (n1 * cos_i - n2 * cos_t) / (n1 * cos_i + n2 * cos_t)
+    return dr.select(sin_t >= 1.0, 1.0, (rs * rs + rp * rp) / 2.0)
+
+
+def _entry_type():
+    """A pending child of the ray tree (a stack entry): a dataclass PyTree of the variant's types."""
+    global Entry
+
+    @dataclasses.dataclass
+    class Entry:
+        o: mi.Point3f
+        d: mi.Vector3f
+        w: mi.Color3f
+        depth: mi.UInt32
+
+    return Entry
+
+
+Entry = None
+
+
+def render(cv, width, height, bounces, shadow_samples=None, shadow_strength=None,
+           count_rays=False):
+    """The frame as Dr.Jit arrays (Color3f of width*height lanes, row 0 on top) and, with
+    count_rays, the number of rays traced (primary, secondary and shadow). Nothing is evaluated
+    here: the caller's dr.eval launches the kernel(s)."""
+    sc = cv.sc
+    S = int(shadow_samples if shadow_samples is not None else sc.render["shadow_samples"])
+    strength = float(shadow_strength if shadow_strength is not None
+                     else sc.render["shadow_strength"])
+    B = int(bounces)
+    scene = cv.scene
+    W, H = int(width), int(height)
+
+    # Section 1: primary rays, in float as core/cl/camera.cl computes them.
+    idx = dr.arange(mi.UInt32, W * H)
+    py = idx // W
+    px = idx - py * W
+    Wf, Hf = np.float32(W), np.float32(H)
+    D = float(np.float32(1.0) / np.float32(math.tan(np.float32(sc.fov) * np.float32(0.5))))
+    ncx = (2.0 * (mi.Float(px) + 0.5) / float(Wf) - 1.0) * float(Wf / Hf)
+    ncy = 1.0 - 2.0 * (mi.Float(py) + 0.5) / float(Hf)
+    ca, sa = float(np.cos(np.float32(sc.pitch))), float(np.sin(np.float32(sc.pitch)))
+    cb, sb = float(np.cos(np.float32(sc.yaw))), float(np.sin(np.float32(sc.yaw)))
+    ox, oy, oz = ncx, ncy * ca + D * sa, D * ca - ncy * sa
+    d = dr.normalize(mi.Vector3f(ox * cb + oz * sb, oy, oz * cb - ox * sb))
+    o = mi.Point3f(*[float(c) for c in sc.position])
+    o = dr.zeros(mi.Point3f, W * H) + o
+
+    lights = [(mi.Point3f(*map(float, p)), mi.Color3f(*map(float, c)), float(r))
+              for p, c, r in sc.lights]
+    key_xy = [px, py]
+
+    w = dr.full(mi.Color3f, 1.0, W * H)
+    depth = dr.zeros(mi.UInt32, W * H)
+    sp = dr.zeros(mi.UInt32, W * H)
+    L = dr.zeros(mi.Color3f, W * H)
+    nrays = dr.zeros(mi.UInt32, W * H)
+    active = dr.full(mi.Bool, True, W * H)
+    stack = dr.alloc_local(_entry_type(), max(B, 1))
+
+    def body(o, d, w, depth, sp, L, nrays, active, stack):
+        ray = mi.Ray3f(o, d)
+        si = scene.ray_intersect(ray, mi.RayFlags.Minimal | mi.RayFlags.ShadingFrame, False,
+                                 active)
+        if count_rays:
+            nrays += dr.select(active, 1, 0)
+        hit = active & si.is_valid()
+        miss = active & ~si.is_valid()
+        L += dr.select(miss, w * _sky(sc, d), 0.0)
+
+        m = dr.gather(mi.UInt32, cv.shape_material, dr.reinterpret_array(mi.UInt32, si.shape), hit)
+        m = dr.select(m == PER_PRIM,
+                      dr.gather(mi.UInt32, cv.sphere_material, si.prim_index, hit & (m == PER_PRIM)),
+                      m)
+        amb = dr.gather(mi.Color3f, cv.ambient, m, hit)
+        dif = dr.gather(mi.Color3f, cv.diffuse, m, hit)
+        spc = dr.gather(mi.Color3f, cv.specular, m, hit)
+        expo = dr.gather(mi.Float, cv.exponent, m, hit)
+        refl = dr.gather(mi.Float, cv.reflectance, m, hit)
+        opac = dr.gather(mi.Float, cv.opacity, m, hit)
+        ior = dr.gather(mi.Float, cv.ior, m, hit)
+
+        inside = dr.dot(si.n, d) > 0
+        N = mi.Vector3f(dr.select(inside, -si.sh_frame.n, si.sh_frame.n))
+        p = si.p
+
+        # Section 4 and 5: shadows and Blinn-Phong.
+        base = mi.Color3f(amb)
+        key = _hash(_hash(_hash(_hash(depth) ^ 0) ^ key_xy[1]) ^ key_xy[0])
+        for j, (lp, lc, lr) in enumerate(lights):
+            l = dr.normalize(lp - p)
+            ndl = dr.dot(N, l)
+            lit = hit & (ndl > 0)
+            occluded = mi.Float(0.0)
+            if lr == 0.0:
+                blocked = scene.ray_test(si.spawn_ray_to(lp), lit)
+                occluded = dr.select(blocked, 1.0, 0.0)
+                if count_rays:
+                    nrays += dr.select(lit, 1, 0)
+            else:
+                sign = dr.select(l.z >= 0, 1.0, -1.0)
+                a = -1.0 / (sign + l.z)
+                b = l.x * l.y * a
+                tt = mi.Vector3f(1.0 + sign * l.x * l.x * a, sign * b, -sign * l.x)
+                bt = mi.Vector3f(b, sign + l.y * l.y * a, -l.y)
+                turn = _unit(key, j, 0, 0)
+                for k in range(S):
+                    area = (k + _unit(key, j, k, 1)) / S
+                    rho = lr * dr.sqrt(area)
+                    phi = GOLDEN * k + TWO_PI * turn
+                    q = lp + rho * (dr.cos(phi) * tt + dr.sin(phi) * bt)
+                    blocked = scene.ray_test(si.spawn_ray_to(q), lit)
+                    occluded += dr.select(blocked, 1.0, 0.0)
+                if count_rays:
+                    nrays += dr.select(lit, S, 0)
+                occluded = occluded / S
+            vis = 1.0 - strength * occluded
+            h = dr.normalize(l - d)
+            ndh = _max0(dr.dot(N, h))
+            spec = dr.select(expo == 0, 1.0, dr.power(ndh, expo))
+            base += dr.select(lit, vis * lc * (dif * ndl + spc * spec), 0.0)
+
+        # Sections 6 to 8: children and their weights.
+        transparent = opac < 1.0
+        branch = hit & (depth < B)
+        has_refl = branch & ((refl > 0) | transparent)
+        eta = dr.select(inside, ior, 1.0 / ior)  # n1 / n2
+        c = -dr.dot(N, d)
+        s2 = eta * eta * (1.0 - c * c)
+        has_refr = branch & transparent & (s2 <= 1.0)
+        rdir = dr.normalize(d - 2.0 * N * dr.dot(d, N))
+        tdir = dr.normalize(eta * d + (eta * c - dr.sqrt(_max0(1.0 - s2))) * N)
+        n1 = dr.select(inside, ior, 1.0)
+        n2 = dr.select(inside, 1.0, ior)
+        F = dr.select(transparent, _fresnel(c, n1, n2), refl)
+        F = dr.select(has_refl, F, 0.0)
+        op = dr.select(has_refr, opac, 1.0)
+        L += dr.select(hit, w * ((1.0 - F) * op) * base, 0.0)
+        o_refl = si.spawn_ray(rdir).o
+        o_refr = si.spawn_ray(tdir).o
+        w_refl = w * F
+        w_refr = w * ((1.0 - F) * (1.0 - op))
+
+        both = has_refl & has_refr
+        stack.write(Entry(o_refr, tdir, w_refr, depth + 1), sp, both)
+        sp = dr.select(both, sp + 1, sp)
+        go = has_refl | has_refr
+        pop = active & ~go & (sp > 0)
+        e = stack.read(sp - 1, pop)
+        po, pd, pw, pdepth = e.o, e.d, e.w, e.depth
+        sp = dr.select(pop, sp - 1, sp)
+        o = dr.select(has_refl, o_refl, dr.select(has_refr, o_refr, po))
+        d = dr.select(has_refl, rdir, dr.select(has_refr, tdir, pd))
+        w = dr.select(has_refl, w_refl, dr.select(has_refr, w_refr, pw))
+        depth = dr.select(go, depth + 1, pdepth)
+        active = go | pop
+        return o, d, w, depth, sp, L, nrays, active, stack
+
+    state = dr.while_loop(
+        state=(o, d, w, depth, sp, L, nrays, active, stack),
+        cond=lambda o, d, w, depth, sp, L, nrays, active, stack: active,
+        body=body,
+        labels=("o", "d", "w", "depth", "sp", "L", "nrays", "active", "stack"),
+        label="rtlab_whitted")
+    L, nrays = state[5], state[6]
+    return L, (dr.sum(mi.UInt64(nrays)) if count_rays else None)
+
+
+def to_numpy(L, width, height):
+    return np.stack([np.asarray(L.x), np.asarray(L.y), np.asarray(L.z)], axis=-1) \
+        .reshape(height, width, 3).astype(np.float32)
+
+
+def write_image(img, path):
+    ext = os.path.splitext(path)[1].lower()
+    if ext == ".npy":
+        np.save(path, img)
+    elif ext == ".exr":
+        mi.Bitmap(img).write(path)
+    elif ext == ".png":
+        c = np.clip(img, 0, 1)
+        srgb = np.where(c <= 0.0031308, 12.92 * c, 1.055 * np.power(c, 1 / 2.4) - 0.055)
+        mi.Bitmap((srgb * 255 + 0.5).astype(np.uint8), pixel_format=mi.Bitmap.PixelFormat.RGB) \
+            .write(path)
+    else:
+        raise SystemExit(f"{path}: output must be .exr, .png or .npy")
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("scene")
+    ap.add_argument("--size", help="WxH [scene default]")
+    ap.add_argument("--bounces", type=int, help="bounce limit B [scene default]")
+    ap.add_argument("--variant", default="llvm_ad_rgb")
+    ap.add_argument("--mode", default="symbolic", choices=MODES)
+    ap.add_argument("--spheres", default="ellipsoids", choices=("ellipsoids", "shapes"))
+    ap.add_argument("-o", "--output", default="peer.exr")
+    ap.add_argument("--stats", action="store_true", help="print rays and kernel times")
+    a = ap.parse_args(argv)
+    try:
+        sc = Scene(a.scene)
+        w = h = None
+        if a.size:
+            w, h = (int(v) for v in a.size.lower().split("x"))
+        st = sc.settings(w, h, a.bounces)
+    except NotConverted as e:
+        print(f"whitted.py: not converted: {e}", file=sys.stderr)
+        return 2
+    setup(a.variant)
+    set_mode(a.mode)
+    cv = Converted(sc, a.spheres)
+    dr.set_flag(dr.JitFlag.KernelHistory, True)
+    L, rays = render(cv, st["width"], st["height"], st["bounces"], count_rays=a.stats)
+    dr.eval(L, rays)
+    dr.sync_thread()
+    hist = dr.kernel_history()
+    img = to_numpy(L, st["width"], st["height"])
+    write_image(img, a.output)
+    if a.stats:
+        ms = sum(k.get("execution_time", 0.0) for k in hist)
+        print(f"{sc.name}: {st['width']}x{st['height']} B={st['bounces']} {a.variant} {a.mode}: "
+              f"{len(hist)} kernels, {ms:.2f} ms (with compile), rays {int(rays[0])}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
