@@ -233,7 +233,7 @@ Entry = None
 def render(cv, width, height, bounces, shadow_samples=None, shadow_strength=None,
            count_rays=False):
     """The frame as Dr.Jit arrays (Color3f of width*height lanes, row 0 on top) and, with
-    count_rays, the number of rays traced (primary, secondary and shadow). Nothing is evaluated
+    count_rays, the rays cast: [traced (primary and secondary), shadow], UInt64 arrays of 1. Nothing is evaluated
     here: the caller's dr.eval launches the kernel(s)."""
     sc = cv.sc
     S = int(shadow_samples if shadow_samples is not None else sc.render["shadow_samples"])
@@ -266,11 +266,12 @@ def render(cv, width, height, bounces, shadow_samples=None, shadow_strength=None
     depth = dr.zeros(mi.UInt32, W * H)
     sp = dr.zeros(mi.UInt32, W * H)
     L = dr.zeros(mi.Color3f, W * H)
-    nrays = dr.zeros(mi.UInt32, W * H)
+    nrays = dr.zeros(mi.UInt32, W * H)   # rays traced (primary and secondary)
+    nshadow = dr.zeros(mi.UInt32, W * H)  # shadow rays
     active = dr.full(mi.Bool, True, W * H)
     stack = dr.alloc_local(_entry_type(), max(B, 1))
 
-    def body(o, d, w, depth, sp, L, nrays, active, stack):
+    def body(o, d, w, depth, sp, L, nrays, nshadow, active, stack):
         ray = mi.Ray3f(o, d)
         si = scene.ray_intersect(ray, mi.RayFlags.Minimal | mi.RayFlags.ShadingFrame, False,
                                  active)
@@ -308,7 +309,7 @@ def render(cv, width, height, bounces, shadow_samples=None, shadow_strength=None
                 blocked = scene.ray_test(si.spawn_ray_to(lp), lit)
                 occluded = dr.select(blocked, 1.0, 0.0)
                 if count_rays:
-                    nrays += dr.select(lit, 1, 0)
+                    nshadow += dr.select(lit, 1, 0)
             else:
                 sign = dr.select(l.z >= 0, 1.0, -1.0)
                 a = -1.0 / (sign + l.z)
@@ -324,7 +325,7 @@ def render(cv, width, height, bounces, shadow_samples=None, shadow_strength=None
                     blocked = scene.ray_test(si.spawn_ray_to(q), lit)
                     occluded += dr.select(blocked, 1.0, 0.0)
                 if count_rays:
-                    nrays += dr.select(lit, S, 0)
+                    nshadow += dr.select(lit, S, 0)
                 occluded = occluded / S
             vis = 1.0 - strength * occluded
             h = dr.normalize(l - d)
@@ -366,16 +367,18 @@ def render(cv, width, height, bounces, shadow_samples=None, shadow_strength=None
         w = dr.select(has_refl, w_refl, dr.select(has_refr, w_refr, pw))
         depth = dr.select(go, depth + 1, pdepth)
         active = go | pop
-        return o, d, w, depth, sp, L, nrays, active, stack
+        return o, d, w, depth, sp, L, nrays, nshadow, active, stack
 
     state = dr.while_loop(
-        state=(o, d, w, depth, sp, L, nrays, active, stack),
-        cond=lambda o, d, w, depth, sp, L, nrays, active, stack: active,
+        state=(o, d, w, depth, sp, L, nrays, nshadow, active, stack),
+        cond=lambda o, d, w, depth, sp, L, nrays, nshadow, active, stack: active,
         body=body,
-        labels=("o", "d", "w", "depth", "sp", "L", "nrays", "active", "stack"),
+        labels=("o", "d", "w", "depth", "sp", "L", "nrays", "nshadow", "active", "stack"),
         label="rtlab_whitted")
-    L, nrays = state[5], state[6]
-    return L, (dr.sum(mi.UInt64(nrays)) if count_rays else None)
+    L, nrays, nshadow = state[5], state[6], state[7]
+    if not count_rays:
+        return L, None
+    return L, [dr.sum(mi.UInt64(nrays)), dr.sum(mi.UInt64(nshadow))]
 
 
 def to_numpy(L, width, height):
@@ -431,7 +434,8 @@ def main(argv=None):
     if a.stats:
         ms = sum(k.get("execution_time", 0.0) for k in hist)
         print(f"{sc.name}: {st['width']}x{st['height']} B={st['bounces']} {a.variant} {a.mode}: "
-              f"{len(hist)} kernels, {ms:.2f} ms (with compile), rays {int(rays[0])}")
+              f"{len(hist)} kernels, {ms:.2f} ms (with compile), rays traced {int(rays[0][0])}, "
+              f"shadow {int(rays[1][0])}")
     return 0
 
 
