@@ -89,7 +89,7 @@ def main(argv=None):
     ap.add_argument("--bounces", type=int)
     ap.add_argument("--modes", default="symbolic")
     ap.add_argument("--variant", default="llvm_ad_rgb")
-    ap.add_argument("--spheres", default="ellipsoids", choices=("ellipsoids", "shapes"))
+    ap.add_argument("--spheres", default="ellipsoids", choices=whitted.SPHERES)
     ap.add_argument("--rtlab")
     ap.add_argument("--pipeline", default="cpu")
     ap.add_argument("--out", help="folder for the images [a temporary one]")

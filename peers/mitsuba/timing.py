@@ -171,7 +171,7 @@ def main(argv=None):
     ap.add_argument("--modes", default="symbolic,evaluated")
     ap.add_argument("--warmup", type=int, default=2, help="untimed frames, the first included")
     ap.add_argument("--repeats", type=int, default=5)
-    ap.add_argument("--spheres", default="ellipsoids", choices=("ellipsoids", "shapes"))
+    ap.add_argument("--spheres", default="ellipsoids", choices=whitted.SPHERES)
     ap.add_argument("--out", help="append the rows here (one JSON object a line)")
     ap.add_argument("--images", help="folder for the last frame of each scene and mode (PNG)")
     a = ap.parse_args(argv)

@@ -48,6 +48,8 @@ MODES = ("symbolic", "evaluated", "evaluated-compact")
 GOLDEN = 2.399963229728653
 TWO_PI = 6.283185307179586
 PER_PRIM = 0xFFFFFFFF  # shape table entry: the material comes from the primitive (spheres)
+NONE = 0xFFFFFFFF  # a ray inside no sphere
+SPHERES = ("ellipsoids", "hybrid", "shapes")
 
 mi = dr = None
 
@@ -111,18 +113,23 @@ class Converted:
             owner[f"mesh{m}"] = m
         ns = len(sc.sphere_radius)
         # Mitsuba's `ellipsoids` culls back faces (it is made for volumetric primitives): a ray
-        # that starts inside one never hits it. Rays start inside a sphere only when it refracts,
-        # so the opaque spheres go into one `ellipsoids` shape and the transparent ones get a
-        # `sphere` shape each (Mitsuba's analytic sphere, hit from both sides).
+        # that starts inside one never hits it, and rays start inside a sphere when it refracts.
+        #   ellipsoids: every sphere in one `ellipsoids` shape; the integrator tracks the sphere a
+        #               ray is inside and intersects it analytically (its exit), beside the trace.
+        #   hybrid:     opaque spheres in one `ellipsoids` shape, transparent ones one `sphere`
+        #               shape each (Mitsuba's analytic sphere, hit from both sides).
+        #   shapes:     one `sphere` shape per sphere (the naive conversion of the issue).
+        if spheres not in SPHERES:
+            raise ValueError(f"spheres must be one of {', '.join(SPHERES)}, got {spheres}")
         transparent = np.array([sc.materials[m]["opacity"] < 1 for m in sc.sphere_material],
                                dtype=bool)
-        together = ~transparent if spheres == "ellipsoids" else np.zeros(ns, dtype=bool)
+        together = {"ellipsoids": np.ones(ns, dtype=bool), "hybrid": ~transparent,
+                    "shapes": np.zeros(ns, dtype=bool)}[spheres]
+        if ns and (np.linalg.norm(sc.sphere_center - sc.position, axis=1)
+                   < sc.sphere_radius).any():
+            raise NotConverted(f"{sc.path}: the camera is inside a sphere (Mitsuba's ellipsoids "
+                               f"cull back faces, and the peer starts every ray outside)")
         if together.any():
-            inside = np.linalg.norm(sc.sphere_center[together] - sc.position, axis=1) \
-                < sc.sphere_radius[together]
-            if inside.any():
-                raise NotConverted(f"{sc.path}: the camera is inside an opaque sphere, which "
-                                   f"Mitsuba's ellipsoids (back faces culled) would not show")
             r = sc.sphere_radius[together].astype(np.float32)
             k = len(r)
             d["spheres"] = {"type": "ellipsoids", "extent": 1.0,
@@ -135,6 +142,12 @@ class Converted:
                                "radius": float(sc.sphere_radius[i])}
             owner[f"sphere{i}"] = int(sc.sphere_material[i])
         self.sphere_shapes = int((~together).sum())
+        # The integrator's own test of the sphere a ray is inside (ellipsoids with glass only).
+        self.track_inside = bool(spheres == "ellipsoids" and transparent.any())
+        if self.track_inside:
+            self.sphere_center = mi.Point3f(sc.sphere_center.astype(np.float32).T)
+            self.sphere_radius = mi.Float(sc.sphere_radius.astype(np.float32))
+            self.sphere_transparent = mi.Bool(transparent)
         _, radius = sc.bounds()
         half = 1e4 * radius
         for i, (n, off, m) in enumerate(sc.planes):
@@ -164,7 +177,8 @@ class Converted:
         self.convert_s = time.perf_counter() - t0
         self.representation = {
             "spheres": (f"{int(together.sum())} in one ellipsoids shape, {self.sphere_shapes} "
-                        f"sphere shapes") if ns else "none", "planes": f"rectangle half-size {half:g}",
+                        f"sphere shapes" + (", the sphere a ray is inside tested analytically"
+                                            if self.track_inside else "")) if ns else "none", "planes": f"rectangle half-size {half:g}",
             "meshes": f"{len(sc.triangles)} merged per material",
         }
 
@@ -223,6 +237,7 @@ def _entry_type():
         d: mi.Vector3f
         w: mi.Color3f
         depth: mi.UInt32
+        inside: mi.UInt32  # the sphere the ray starts inside, or NONE
 
     return Entry
 
@@ -264,27 +279,57 @@ def render(cv, width, height, bounces, shadow_samples=None, shadow_strength=None
 
     w = dr.full(mi.Color3f, 1.0, W * H)
     depth = dr.zeros(mi.UInt32, W * H)
+    inside_sphere = dr.full(mi.UInt32, NONE, W * H)
     sp = dr.zeros(mi.UInt32, W * H)
     L = dr.zeros(mi.Color3f, W * H)
     nrays = dr.zeros(mi.UInt32, W * H)   # rays traced (primary and secondary)
     nshadow = dr.zeros(mi.UInt32, W * H)  # shadow rays
     active = dr.full(mi.Bool, True, W * H)
     stack = dr.alloc_local(_entry_type(), max(B, 1))
+    track = cv.track_inside
 
-    def body(o, d, w, depth, sp, L, nrays, nshadow, active, stack):
+    def exit_t(o, d, k, mask):
+        """Where a ray from o (inside sphere k) along unit d leaves it: the far root of the
+        robust test of core/SHADING.md section 2; inf where masked off or missed."""
+        c = dr.gather(mi.Point3f, cv.sphere_center, k, mask)
+        r = dr.gather(mi.Float, cv.sphere_radius, k, mask)
+        oc = o - c
+        bp = -dr.dot(oc, d)
+        f = oc + bp * d
+        disc = r * r - dr.dot(f, f)
+        q = bp + dr.mulsign(dr.sqrt(_max0(disc)), bp)
+        t0 = (dr.dot(oc, oc) - r * r) / q
+        t = dr.select(t0 > q, t0, q)
+        return dr.select(mask & (disc >= 0) & (t > 0), t, dr.inf), c
+
+    def body(o, d, w, depth, inside_sphere, sp, L, nrays, nshadow, active, stack):
         ray = mi.Ray3f(o, d)
         si = scene.ray_intersect(ray, mi.RayFlags.Minimal | mi.RayFlags.ShadingFrame, False,
                                  active)
         if count_rays:
             nrays += dr.select(active, 1, 0)
+        m = dr.gather(mi.UInt32, cv.shape_material, dr.reinterpret_array(mi.UInt32, si.shape),
+                      active & si.is_valid())
+        per_prim = active & si.is_valid() & (m == PER_PRIM)
+        m = dr.select(per_prim, dr.gather(mi.UInt32, cv.sphere_material, si.prim_index, per_prim),
+                      m)
+        hit_sphere = dr.select(per_prim, si.prim_index, NONE)
+        if track:  # the exit from the sphere the ray is inside, which `ellipsoids` never reports
+            in_mask = active & (inside_sphere != NONE)
+            te, c = exit_t(o, d, inside_sphere, in_mask)
+            use = in_mask & (te < si.t)
+            pe = o + te * d
+            ne = dr.normalize(pe - c)
+            si.t = dr.select(use, te, si.t)
+            si.p = dr.select(use, pe, si.p)
+            si.n = dr.select(use, ne, si.n)
+            si.sh_frame.n = dr.select(use, ne, si.sh_frame.n)
+            m = dr.select(use, dr.gather(mi.UInt32, cv.sphere_material, inside_sphere, use), m)
+            hit_sphere = dr.select(use, inside_sphere, hit_sphere)
         hit = active & si.is_valid()
         miss = active & ~si.is_valid()
         L += dr.select(miss, w * _sky(sc, d), 0.0)
 
-        m = dr.gather(mi.UInt32, cv.shape_material, dr.reinterpret_array(mi.UInt32, si.shape), hit)
-        m = dr.select(m == PER_PRIM,
-                      dr.gather(mi.UInt32, cv.sphere_material, si.prim_index, hit & (m == PER_PRIM)),
-                      m)
         amb = dr.gather(mi.Color3f, cv.ambient, m, hit)
         dif = dr.gather(mi.Color3f, cv.diffuse, m, hit)
         spc = dr.gather(mi.Color3f, cv.specular, m, hit)
@@ -297,6 +342,16 @@ def render(cv, width, height, bounces, shadow_samples=None, shadow_strength=None
         N = mi.Vector3f(dr.select(inside, -si.sh_frame.n, si.sh_frame.n))
         p = si.p
 
+        def occluded_by(ray_s, lit):
+            """A shadow ray's hit: Mitsuba's ray_test, and the sphere its origin is inside."""
+            blocked = scene.ray_test(ray_s, lit)
+            if track:
+                in_mask = lit & (inside_sphere != NONE)
+                length = dr.norm(ray_s.d)
+                te, _ = exit_t(ray_s.o, ray_s.d / length, inside_sphere, in_mask)
+                blocked |= in_mask & (te < length * ray_s.maxt)
+            return blocked
+
         # Section 4 and 5: shadows and Blinn-Phong.
         base = mi.Color3f(amb)
         key = _hash(_hash(_hash(_hash(depth) ^ 0) ^ key_xy[1]) ^ key_xy[0])
@@ -306,8 +361,7 @@ def render(cv, width, height, bounces, shadow_samples=None, shadow_strength=None
             lit = hit & (ndl > 0)
             occluded = mi.Float(0.0)
             if lr == 0.0:
-                blocked = scene.ray_test(si.spawn_ray_to(lp), lit)
-                occluded = dr.select(blocked, 1.0, 0.0)
+                occluded = dr.select(occluded_by(si.spawn_ray_to(lp), lit), 1.0, 0.0)
                 if count_rays:
                     nshadow += dr.select(lit, 1, 0)
             else:
@@ -322,8 +376,7 @@ def render(cv, width, height, bounces, shadow_samples=None, shadow_strength=None
                     rho = lr * dr.sqrt(area)
                     phi = GOLDEN * k + TWO_PI * turn
                     q = lp + rho * (dr.cos(phi) * tt + dr.sin(phi) * bt)
-                    blocked = scene.ray_test(si.spawn_ray_to(q), lit)
-                    occluded += dr.select(blocked, 1.0, 0.0)
+                    occluded += dr.select(occluded_by(si.spawn_ray_to(q), lit), 1.0, 0.0)
                 if count_rays:
                     nshadow += dr.select(lit, S, 0)
                 occluded = occluded / S
@@ -353,29 +406,39 @@ def render(cv, width, height, bounces, shadow_samples=None, shadow_strength=None
         o_refr = si.spawn_ray(tdir).o
         w_refl = w * F
         w_refr = w * ((1.0 - F) * (1.0 - op))
+        # The sphere each child starts inside: reflections stay where the ray was; a refraction
+        # leaves the sphere it hit from inside, or enters the sphere it hit from outside.
+        in_refl = inside_sphere
+        in_refr = inside_sphere
+        if track:
+            in_refr = dr.select(inside & (hit_sphere == inside_sphere), NONE,
+                                dr.select(~inside & (hit_sphere != NONE), hit_sphere,
+                                          inside_sphere))
 
         both = has_refl & has_refr
-        stack.write(Entry(o_refr, tdir, w_refr, depth + 1), sp, both)
+        stack.write(Entry(o_refr, tdir, w_refr, depth + 1, in_refr), sp, both)
         sp = dr.select(both, sp + 1, sp)
         go = has_refl | has_refr
         pop = active & ~go & (sp > 0)
         e = stack.read(sp - 1, pop)
-        po, pd, pw, pdepth = e.o, e.d, e.w, e.depth
         sp = dr.select(pop, sp - 1, sp)
-        o = dr.select(has_refl, o_refl, dr.select(has_refr, o_refr, po))
-        d = dr.select(has_refl, rdir, dr.select(has_refr, tdir, pd))
-        w = dr.select(has_refl, w_refl, dr.select(has_refr, w_refr, pw))
-        depth = dr.select(go, depth + 1, pdepth)
+        o = dr.select(has_refl, o_refl, dr.select(has_refr, o_refr, e.o))
+        d = dr.select(has_refl, rdir, dr.select(has_refr, tdir, e.d))
+        w = dr.select(has_refl, w_refl, dr.select(has_refr, w_refr, e.w))
+        depth = dr.select(go, depth + 1, e.depth)
+        inside_sphere = dr.select(has_refl, in_refl, dr.select(has_refr, in_refr, e.inside))
         active = go | pop
-        return o, d, w, depth, sp, L, nrays, nshadow, active, stack
+        return o, d, w, depth, inside_sphere, sp, L, nrays, nshadow, active, stack
 
+    names = ("o", "d", "w", "depth", "inside_sphere", "sp", "L", "nrays", "nshadow", "active",
+             "stack")
     state = dr.while_loop(
-        state=(o, d, w, depth, sp, L, nrays, nshadow, active, stack),
-        cond=lambda o, d, w, depth, sp, L, nrays, nshadow, active, stack: active,
+        state=(o, d, w, depth, inside_sphere, sp, L, nrays, nshadow, active, stack),
+        cond=lambda *st: st[9],
         body=body,
-        labels=("o", "d", "w", "depth", "sp", "L", "nrays", "nshadow", "active", "stack"),
+        labels=names,
         label="rtlab_whitted")
-    L, nrays, nshadow = state[5], state[6], state[7]
+    L, nrays, nshadow = state[6], state[7], state[8]
     if not count_rays:
         return L, None
     return L, [dr.sum(mi.UInt64(nrays)), dr.sum(mi.UInt64(nshadow))]
@@ -408,7 +471,7 @@ def main(argv=None):
     ap.add_argument("--bounces", type=int, help="bounce limit B [scene default]")
     ap.add_argument("--variant", default="llvm_ad_rgb")
     ap.add_argument("--mode", default="symbolic", choices=MODES)
-    ap.add_argument("--spheres", default="ellipsoids", choices=("ellipsoids", "shapes"))
+    ap.add_argument("--spheres", default="ellipsoids", choices=SPHERES)
     ap.add_argument("-o", "--output", default="peer.exr")
     ap.add_argument("--stats", action="store_true", help="print rays and kernel times")
     a = ap.parse_args(argv)
