@@ -165,6 +165,17 @@ class Converted:
         for key, m in owner.items():
             table[ids[key]] = m
         self.shape_material = mi.UInt32(table)
+        # Shape id -> plane index: the integrator puts plane hits back on the plane (the hit
+        # point Mitsuba interpolates over a rectangle 1e4 x the scene wide is off by ~ulp(1e4 r)).
+        ptable = np.full(len(table), NONE, dtype=np.uint32)
+        for i in range(len(sc.planes)):
+            ptable[ids[f"plane{i}"]] = i
+        self.shape_plane = mi.UInt32(ptable)
+        self.has_planes = bool(sc.planes)
+        if self.has_planes:
+            self.plane_normal = mi.Vector3f(np.array([n for n, _, _ in sc.planes],
+                                                     dtype=np.float32).T)
+            self.plane_offset = mi.Float(np.array([o for _, o, _ in sc.planes], dtype=np.float32))
         self.sphere_material = mi.UInt32(sc.sphere_material[together] if together.any()
                                          else np.zeros(1, np.uint32))
         mats = sc.materials or [{"ambient": [0] * 3, "diffuse": [0] * 3, "specular": [0] * 3,
@@ -308,8 +319,15 @@ def render(cv, width, height, bounces, shadow_samples=None, shadow_strength=None
                                  active)
         if count_rays:
             nrays += dr.select(active, 1, 0)
-        m = dr.gather(mi.UInt32, cv.shape_material, dr.reinterpret_array(mi.UInt32, si.shape),
-                      active & si.is_valid())
+        sid = dr.reinterpret_array(mi.UInt32, si.shape)
+        m = dr.gather(mi.UInt32, cv.shape_material, sid, active & si.is_valid())
+        if cv.has_planes:  # a plane hit: o + t d, projected onto the plane (SHADING.md 2, bound)
+            pl = dr.gather(mi.UInt32, cv.shape_plane, sid, active & si.is_valid())
+            on_plane = active & si.is_valid() & (pl != NONE)
+            pn = dr.gather(mi.Vector3f, cv.plane_normal, pl, on_plane)
+            po = dr.gather(mi.Float, cv.plane_offset, pl, on_plane)
+            pp = o + si.t * d
+            si.p = dr.select(on_plane, pp + (po - dr.dot(pn, pp)) * pn, si.p)
         per_prim = active & si.is_valid() & (m == PER_PRIM)
         m = dr.select(per_prim, dr.gather(mi.UInt32, cv.sphere_material, si.prim_index, per_prim),
                       m)
