@@ -108,9 +108,12 @@ class Converted:
         t0 = time.perf_counter()
         d = {"type": "scene"}
         owner = {}  # dict key -> material index (or PER_PRIM)
+        tri_abs, tri_base = [], {}
         for m, (P, N) in sorted(sc.triangles.items()):
             d[f"mesh{m}"] = _mesh(f"mesh{m}", P, N)
             owner[f"mesh{m}"] = m
+            tri_base[f"mesh{m}"] = sum(len(x) for x in tri_abs)
+            tri_abs.append(np.abs(P.astype(np.float32)).sum(axis=1))  # |v0| + |v1| + |v2|
         ns = len(sc.sphere_radius)
         # Mitsuba's `ellipsoids` culls back faces (it is made for volumetric primitives): a ray
         # that starts inside one never hits it, and rays start inside a sphere when it refracts.
@@ -144,10 +147,13 @@ class Converted:
         self.sphere_shapes = int((~together).sum())
         # The integrator's own test of the sphere a ray is inside (ellipsoids with glass only).
         self.track_inside = bool(spheres == "ellipsoids" and transparent.any())
-        if self.track_inside:
-            self.sphere_center = mi.Point3f(sc.sphere_center.astype(np.float32).T)
-            self.sphere_radius = mi.Float(sc.sphere_radius.astype(np.float32))
-            self.sphere_transparent = mi.Bool(transparent)
+        # The integrator recomputes the hit point and normal of an `ellipsoids` hit from the
+        # sphere (core/SHADING.md section 2, robust): Mitsuba solves the quadratic in the unit
+        # sphere's frame, where a small sphere far from the origin loses most of its digits.
+        self.refine_spheres = bool(together.any())
+        if self.refine_spheres:
+            self.sphere_center = mi.Point3f(sc.sphere_center[together].astype(np.float32).T)
+            self.sphere_radius = mi.Float(sc.sphere_radius[together].astype(np.float32))
         _, radius = sc.bounds()
         half = 1e4 * radius
         for i, (n, off, m) in enumerate(sc.planes):
@@ -171,6 +177,14 @@ class Converted:
         for i in range(len(sc.planes)):
             ptable[ids[f"plane{i}"]] = i
         self.shape_plane = mi.UInt32(ptable)
+        # Shape id -> its first triangle in tri_abs (the bound offset of triangle hits).
+        ttable = np.full(len(table), NONE, dtype=np.uint32)
+        for key, base in tri_base.items():
+            ttable[ids[key]] = base
+        self.shape_triangle = mi.UInt32(ttable)
+        self.has_triangles = bool(tri_abs)
+        if self.has_triangles:
+            self.tri_abs = mi.Vector3f(np.concatenate(tri_abs).T)
         self.has_planes = bool(sc.planes)
         if self.has_planes:
             self.plane_normal = mi.Vector3f(np.array([n for n, _, _ in sc.planes],
@@ -228,6 +242,32 @@ def _max0(x):
     cannot compile the llvm.maximum intrinsic that dr.maximum emits on x86 ("Cannot select
     fmaximum"); NaN gives 0 here as OpenCL's fmax(x, 0) does."""
     return dr.select(x > 0, x, 0.0)
+
+
+U = 2.0 ** -24
+
+
+def _gamma(n):
+    return n * U / (1 - n * U)
+
+
+def _next_float(x, up):
+    """nextafter(x, +inf) where `up`, else nextafter(x, -inf), on the float's bits."""
+    bits = dr.reinterpret_array(mi.UInt32, x)
+    grow = (x > 0) == up  # the magnitude grows
+    bits = dr.select(grow, bits + 1, bits - 1)
+    bits = dr.select(x == 0, dr.select(up, mi.UInt32(1), mi.UInt32(0x80000001)), bits)
+    return dr.reinterpret_array(mi.Float, bits)
+
+
+def _spawn(p, ng, err, side):
+    """core/cl/shade.cl Shade_SpawnOrigin (SHADING.md section 3, bound): from p, whose
+    components are off by at most err, along side * ng by dot(|ng|, err), then each component one
+    float further, so that the addition cannot round the offset away."""
+    w = side * ng
+    o = p + dr.dot(dr.abs(ng), err) * w
+    return mi.Point3f(*[dr.select(wc != 0, _next_float(oc, wc > 0), oc)
+                        for oc, wc in zip((o.x, o.y, o.z), (w.x, w.y, w.z))])
 
 
 def _fresnel(cos_i, n1, n2):
@@ -299,9 +339,10 @@ def render(cv, width, height, bounces, shadow_samples=None, shadow_strength=None
     stack = dr.alloc_local(_entry_type(), max(B, 1))
     track = cv.track_inside
 
-    def exit_t(o, d, k, mask):
-        """Where a ray from o (inside sphere k) along unit d leaves it: the far root of the
-        robust test of core/SHADING.md section 2; inf where masked off or missed."""
+    def on_sphere(o, d, k, mask, far):
+        """Ray (o, unit d) against sphere k, as core/SHADING.md section 2's robust test: the
+        far (or near) root t, inf where it misses or lies behind, and the point put back on the
+        sphere with its outward normal."""
         c = dr.gather(mi.Point3f, cv.sphere_center, k, mask)
         r = dr.gather(mi.Float, cv.sphere_radius, k, mask)
         oc = o - c
@@ -310,8 +351,11 @@ def render(cv, width, height, bounces, shadow_samples=None, shadow_strength=None
         disc = r * r - dr.dot(f, f)
         q = bp + dr.mulsign(dr.sqrt(_max0(disc)), bp)
         t0 = (dr.dot(oc, oc) - r * r) / q
-        t = dr.select(t0 > q, t0, q)
-        return dr.select(mask & (disc >= 0) & (t > 0), t, dr.inf), c
+        t = dr.select(far == (t0 > q), t0, q)  # far: the larger root; near: the smaller
+        f = f - dr.dot(f, d) * d
+        h = dr.sqrt(_max0(r * r - dr.dot(f, f)))
+        n = dr.normalize(dr.select(far, f + h * d, f - h * d))
+        return dr.select(mask & (disc >= 0) & (t > 0), t, dr.inf), c + r * n, n
 
     def body(o, d, w, depth, inside_sphere, sp, L, nrays, nshadow, active, stack):
         ray = mi.Ray3f(o, d)
@@ -332,12 +376,15 @@ def render(cv, width, height, bounces, shadow_samples=None, shadow_strength=None
         m = dr.select(per_prim, dr.gather(mi.UInt32, cv.sphere_material, si.prim_index, per_prim),
                       m)
         hit_sphere = dr.select(per_prim, si.prim_index, NONE)
+        if cv.refine_spheres:  # the front hit `ellipsoids` reported, recomputed
+            _, pf, nf = on_sphere(o, d, si.prim_index, per_prim, False)
+            si.p = dr.select(per_prim, pf, si.p)
+            si.n = dr.select(per_prim, nf, si.n)
+            si.sh_frame.n = dr.select(per_prim, nf, si.sh_frame.n)
         if track:  # the exit from the sphere the ray is inside, which `ellipsoids` never reports
             in_mask = active & (inside_sphere != NONE)
-            te, c = exit_t(o, d, inside_sphere, in_mask)
+            te, pe, ne = on_sphere(o, d, inside_sphere, in_mask, True)
             use = in_mask & (te < si.t)
-            pe = o + te * d
-            ne = dr.normalize(pe - c)
             si.t = dr.select(use, te, si.t)
             si.p = dr.select(use, pe, si.p)
             si.n = dr.select(use, ne, si.n)
@@ -358,16 +405,41 @@ def render(cv, width, height, bounces, shadow_samples=None, shadow_strength=None
 
         inside = dr.dot(si.n, d) > 0
         N = mi.Vector3f(dr.select(inside, -si.sh_frame.n, si.sh_frame.n))
-        p = si.p
+        Ng = mi.Vector3f(dr.select(inside, -si.n, si.n))
+        p = mi.Point3f(si.p)
+        # The bound on p's rounding error (SHADING.md section 3): spheres gamma(5)(|c| + r|N|),
+        # planes gamma(6)(|p| + |offset|), triangles gamma(7)(|v0| + |v1| + |v2|); anything else
+        # (Mitsuba's own sphere shapes, --spheres hybrid or shapes) gamma(7)(|p.x|+|p.y|+|p.z|)
+        # along the normal, as rtlab's Shade_Offset.
+        ap = dr.abs(p)
+        l1 = dr.abs(Ng.x) + dr.abs(Ng.y) + dr.abs(Ng.z)
+        err = dr.full(mi.Vector3f, _gamma(7), W * H) * (ap.x + ap.y + ap.z) \
+            / dr.select(l1 > 0, l1, 1.0)
+        if cv.has_triangles:
+            tb = dr.gather(mi.UInt32, cv.shape_triangle, sid, hit)
+            on_tri = hit & (tb != NONE)
+            err = dr.select(on_tri, _gamma(7) * dr.gather(mi.Vector3f, cv.tri_abs,
+                                                           tb + si.prim_index, on_tri), err)
+        if cv.has_planes:
+            err = dr.select(on_plane, _gamma(6) * (ap + dr.abs(po)), err)
+        if cv.refine_spheres:
+            on_sph = hit & (hit_sphere != NONE)
+            sc_ = dr.gather(mi.Point3f, cv.sphere_center, hit_sphere, on_sph)
+            sr_ = dr.gather(mi.Float, cv.sphere_radius, hit_sphere, on_sph)
+            err = dr.select(on_sph, _gamma(5) * (dr.abs(sc_) + sr_ * dr.abs(N)), err)
+        o_out = _spawn(p, Ng, err, 1.0)  # reflection and shadow rays
 
-        def occluded_by(ray_s, lit):
-            """A shadow ray's hit: Mitsuba's ray_test, and the sphere its origin is inside."""
-            blocked = scene.ray_test(ray_s, lit)
+        def occluded_by(q, lit):
+            """Whether the shadow ray from o_out toward q is blocked before q (0 < t < |q - o|):
+            Mitsuba's ray_test, and the sphere its origin is inside."""
+            v = q - o_out
+            length = dr.norm(v)
+            dir_ = v / length
+            blocked = scene.ray_test(mi.Ray3f(o_out, dir_, length, 0.0, mi.Color0f()), lit)
             if track:
                 in_mask = lit & (inside_sphere != NONE)
-                length = dr.norm(ray_s.d)
-                te, _ = exit_t(ray_s.o, ray_s.d / length, inside_sphere, in_mask)
-                blocked |= in_mask & (te < length * ray_s.maxt)
+                te, _, _ = on_sphere(o_out, dir_, inside_sphere, in_mask, True)
+                blocked |= in_mask & (te < length)
             return blocked
 
         # Section 4 and 5: shadows and Blinn-Phong.
@@ -379,7 +451,7 @@ def render(cv, width, height, bounces, shadow_samples=None, shadow_strength=None
             lit = hit & (ndl > 0)
             occluded = mi.Float(0.0)
             if lr == 0.0:
-                occluded = dr.select(occluded_by(si.spawn_ray_to(lp), lit), 1.0, 0.0)
+                occluded = dr.select(occluded_by(lp, lit), 1.0, 0.0)
                 if count_rays:
                     nshadow += dr.select(lit, 1, 0)
             else:
@@ -394,7 +466,7 @@ def render(cv, width, height, bounces, shadow_samples=None, shadow_strength=None
                     rho = lr * dr.sqrt(area)
                     phi = GOLDEN * k + TWO_PI * turn
                     q = lp + rho * (dr.cos(phi) * tt + dr.sin(phi) * bt)
-                    occluded += dr.select(occluded_by(si.spawn_ray_to(q), lit), 1.0, 0.0)
+                    occluded += dr.select(occluded_by(q, lit), 1.0, 0.0)
                 if count_rays:
                     nshadow += dr.select(lit, S, 0)
                 occluded = occluded / S
@@ -420,8 +492,8 @@ def render(cv, width, height, bounces, shadow_samples=None, shadow_strength=None
         F = dr.select(has_refl, F, 0.0)
         op = dr.select(has_refr, opac, 1.0)
         L += dr.select(hit, w * ((1.0 - F) * op) * base, 0.0)
-        o_refl = si.spawn_ray(rdir).o
-        o_refr = si.spawn_ray(tdir).o
+        o_refl = o_out
+        o_refr = _spawn(p, Ng, err, -1.0)
         w_refl = w * F
         w_refr = w * ((1.0 - F) * (1.0 - op))
         # The sphere each child starts inside: reflections stay where the ray was; a refraction
