@@ -233,6 +233,17 @@ class Scene:
                 r[k] = int(v)
         return r
 
+    def scale(self, k):
+        """Scales the scene's geometry, camera and lights by k in place. The image does not
+        change (rtlab's shading is scale-free: lights do not fall off, offsets are error bounds);
+        with k a power of two no coordinate even rounds differently."""
+        self.position = (self.position * np.float32(k)).astype(np.float32)
+        self.sphere_center = (self.sphere_center * np.float32(k)).astype(np.float32)
+        self.sphere_radius = (self.sphere_radius * np.float32(k)).astype(np.float32)
+        self.planes = [(n, off * k, m) for n, off, m in self.planes]
+        self.triangles = {m: (P * k, N) for m, (P, N) in self.triangles.items()}
+        self.lights = [(p * np.float32(k), c, r * k) for p, c, r in self.lights]
+
     def counts(self):
         tris = sum(len(p) for p, _ in self.triangles.values())
         return {"spheres": int(len(self.sphere_radius)), "planes": len(self.planes),

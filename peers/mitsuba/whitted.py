@@ -33,6 +33,7 @@ Usage:
              [--mode symbolic|evaluated|evaluated-compact] [-o out.exr|out.png|out.npy] [--stats]
 """
 import argparse
+import copy
 import dataclasses
 import math
 import os
@@ -104,8 +105,20 @@ class Converted:
     """The Mitsuba scene of an rtlab scene, and the tables the integrator reads."""
 
     def __init__(self, sc, spheres="ellipsoids"):
-        self.sc = sc
         t0 = time.perf_counter()
+        # Mitsuba 3.9's ellipsoid test starts its quadratic from the point at t = dot(c - o, d)
+        # / r instead of / r^2 (ellipsoids.cpp, ray_ellipsoid_intersection: `plane_t = dot(-o, d)
+        # / norm(d)` in the unit sphere's frame): exact for radius 1, and for a sphere of radius
+        # 0.05 ten units away it reports hits out to 1.5 r. The peer therefore renders the scene
+        # scaled by the power of two that brings the median sphere radius nearest to 1 (the
+        # image is the same: see Scene.scale).
+        self.scale = 1.0
+        if len(sc.sphere_radius) and spheres != "shapes":
+            self.scale = float(2.0 ** -np.round(np.log2(np.median(sc.sphere_radius))))
+            if self.scale != 1.0:
+                sc = copy.deepcopy(sc)
+                sc.scale(self.scale)
+        self.sc = sc
         d = {"type": "scene"}
         owner = {}  # dict key -> material index (or PER_PRIM)
         tri_abs, tri_base = [], {}
@@ -138,7 +151,7 @@ class Converted:
             d["spheres"] = {"type": "ellipsoids", "extent": 1.0,
                             "centers": mi.TensorXf(sc.sphere_center[together].astype(np.float32)),
                             "scales": mi.TensorXf(np.stack([r, r, r], axis=1)),
-                            "quaternions": mi.TensorXf(np.tile(np.float32([0, 0, 0, 1]), (k, 1)))}
+                            "quaternions": mi.TensorXf(np.tile(np.float32([1, 0, 0, 0]), (k, 1)))}
             owner["spheres"] = PER_PRIM
         for i in np.nonzero(~together)[0]:
             d[f"sphere{i}"] = {"type": "sphere", "center": sc.sphere_center[i].tolist(),
@@ -205,6 +218,7 @@ class Converted:
                         f"sphere shapes" + (", the sphere a ray is inside tested analytically"
                                             if self.track_inside else "")) if ns else "none", "planes": f"rectangle half-size {half:g}",
             "meshes": f"{len(sc.triangles)} merged per material",
+            "scale": self.scale,
         }
 
 
