@@ -124,6 +124,9 @@ def time_scene(path, a, base, out):
             row["first_frame_ms"] = round(kernel_ms(first), 4)
             row["compile_ms"] = round(compile_ms(first), 3)
             row["first_wall_ms"] = round(wall_first * 1e3, 3)
+            row["first_kernels"] = {"launches": len(first),
+                                    "cache_hits": sum(1 for k in first if k.get("cache_hit")),
+                                    "from_disk": sum(1 for k in first if k.get("cache_disk"))}
             for _ in range(max(0, a.warmup - 1)):
                 frame(cv, st)
             times, walls, launches, recompiled = [], [], [], 0
