@@ -17,8 +17,11 @@ B entries (dr.alloc_local). The very same code runs in both of Dr.Jit's modes:
              per frame: a megakernel.
   evaluated  (JitFlag.SymbolicLoops and SymbolicCalls off): every loop iteration is launched
              separately and its state goes through device memory: a wavefront, one bounce (one
-             tree node per lane) per step. `evaluated-compact` also sets JitFlag.CompressLoops,
-             which drops finished lanes after every step (rtlab's queue pipeline does the same).
+             tree node per lane) per step, finished lanes kept and masked (Dr.Jit's default).
+             JitFlag.CompressLoops, which would drop them as rtlab's queue pipeline does, is not
+             offered: in Dr.Jit 1.5 it fails on a loop with local memory (the LLVM backend's IR
+             does not parse: "use of undefined value") and needs every per-lane array the body
+             reads in the loop state.
 
 Scene conversion (rtlab_scene.py reads the JSON): triangles merged into one mi.Mesh per material
 (per-corner vertices, so rtlab's per-corner normals carry over); all spheres as ONE `ellipsoids`
@@ -30,7 +33,7 @@ about 1e-4 (1 + max|p|) along the geometric normal), not at rtlab's error-bound 
 
 Usage:
   whitted.py SCENE.json [--size WxH] [--bounces B] [--variant llvm_ad_rgb|cuda_ad_rgb]
-             [--mode symbolic|evaluated|evaluated-compact] [-o out.exr|out.png|out.npy] [--stats]
+             [--mode symbolic|evaluated] [-o out.exr|out.png|out.npy] [--stats]
 """
 import argparse
 import copy
@@ -45,7 +48,7 @@ import numpy as np
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from rtlab_scene import NotConverted, Scene  # noqa: E402
 
-MODES = ("symbolic", "evaluated", "evaluated-compact")
+MODES = ("symbolic", "evaluated")
 GOLDEN = 2.399963229728653
 TWO_PI = 6.283185307179586
 PER_PRIM = 0xFFFFFFFF  # shape table entry: the material comes from the primitive (spheres)
@@ -74,7 +77,7 @@ def set_mode(mode):
     sym = mode == "symbolic"
     dr.set_flag(dr.JitFlag.SymbolicLoops, sym)
     dr.set_flag(dr.JitFlag.SymbolicCalls, sym)
-    dr.set_flag(dr.JitFlag.CompressLoops, mode == "evaluated-compact")
+    dr.set_flag(dr.JitFlag.CompressLoops, False)
 
 
 # ---- scene conversion ------------------------------------------------------------------------
