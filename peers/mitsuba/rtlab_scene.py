@@ -3,8 +3,8 @@ Mitsuba 3 peer (peers/mitsuba/whitted.py): camera, materials, spheres, planes, l
 OBJ meshes with their transforms, lights, sky and render defaults.
 
 Only what the peer renders the same way as rtlab is accepted. Everything else raises
-NotConverted with one line naming the feature and where it is (procedural patterns, cubemaps,
-glTF/PLY models, bare models, anti-aliasing, adaptive AA): the peer refuses rather than guesses.
+NotConverted with one line naming the feature and where it is (cubemaps, glTF/PLY models, bare
+models, anti-aliasing, adaptive AA): the peer refuses rather than guesses.
 The loader's own validation (ranges, unknown keys) is rtlab's job; this reader assumes a scene
 that `rtlab render` accepts.
 
@@ -24,7 +24,10 @@ class NotConverted(Exception):
 
 SKY = {"zenith": [0.35, 0.55, 0.95], "horizon": [0.85, 0.9, 1.0], "ground": [0.3, 0.27, 0.25]}
 MATERIAL_DEFAULTS = {"ambient": [0, 0, 0], "diffuse": [0.8, 0.8, 0.8], "specular": [0, 0, 0],
-                     "exponent": 32.0, "reflectance": 0.0, "opacity": 1.0, "ior": 1.0}
+                     "exponent": 32.0, "reflectance": 0.0, "opacity": 1.0, "ior": 1.0,
+                     "pattern": "none", "octaves": 4, "scale": 1.0, "diffuse2": [0.1, 0.1, 0.1],
+                     "bump": 0.5}
+PATTERNS = ("none", "checker", "marble", "wood", "granite", "bump")
 RENDER_DEFAULTS = {"width": 320, "height": 240, "bounces": 3, "shadow_samples": 1, "aa": 1,
                    "shadow_strength": 1.0, "adaptive_aa": False}
 DEG = math.pi / 180.0
@@ -157,10 +160,6 @@ class Scene:
         self.material_names = list(mats)  # json keeps file order
         self.materials = []
         for name, m in mats.items():
-            pattern = m.get("pattern", "none")
-            if pattern != "none":
-                raise NotConverted(f"{self.path}: /materials/{name}/pattern: procedural pattern "
-                                   f"'{pattern}' is not converted (core/SHADING.md section 5)")
             self.materials.append({k: m.get(k, v) for k, v in MATERIAL_DEFAULTS.items()})
         self.index = {n: i for i, n in enumerate(self.material_names)}
 

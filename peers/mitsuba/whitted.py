@@ -215,6 +215,16 @@ class Converted:
         self.ambient, self.diffuse, self.specular = col("ambient"), col("diffuse"), col("specular")
         self.exponent, self.reflectance = flt("exponent"), flt("reflectance")
         self.opacity, self.ior = flt("opacity"), flt("ior")
+        # Procedural materials: slot 0 is no pattern; material i with one gets its own callable
+        # for dr.switch (a symbolic call in the megakernel, one launch per pattern evaluated).
+        self.pattern_targets = [_plain_target]
+        slots = np.zeros(max(len(mats), 1), dtype=np.uint32)
+        for i, m in enumerate(sc.materials):
+            if m.get("pattern", "none") != "none":
+                slots[i] = len(self.pattern_targets)
+                self.pattern_targets.append(_pattern_target(m, self.scale))
+        self.pattern_slot = mi.UInt32(slots)
+        self.has_patterns = len(self.pattern_targets) > 1
         self.convert_s = time.perf_counter() - t0
         self.representation = {
             "spheres": (f"{int(together.sum())} in one ellipsoids shape, {self.sphere_shapes} "
@@ -293,6 +303,98 @@ def _fresnel(cos_i, n1, n2):
     rs = (n2 * cos_i - n1 * cos_t) / (n2 * cos_i + n1 * cos_t)
     rp = (n1 * cos_i - n2 * cos_t) / (n1 * cos_i + n2 * cos_t)
     return dr.select(sin_t >= 1.0, 1.0, (rs * rs + rp * rp) / 2.0)
+
+
+# ---- procedural materials (core/SHADING.md section 5, core/cl/procedural.cl) -----------------
+
+def _phash(x, y, z):
+    """Procedural_Hash of lattice point (x, y, z) (Int32 lanes)."""
+    h = (mi.UInt32(x) * 0x8da6b343) ^ (mi.UInt32(y) * 0xd8163841) ^ (mi.UInt32(z) * 0xcb1ab31f)
+    h ^= h >> 16
+    h *= 0x7feb352d
+    h ^= h >> 15
+    h *= 0x846ca68b
+    h ^= h >> 16
+    return h
+
+
+def _grad(h, x, y, z):
+    h = h & 15
+    u = dr.select(h < 8, x, y)
+    v = dr.select(h < 4, y, dr.select((h == 12) | (h == 14), x, z))
+    return dr.select((h & 1) != 0, -u, u) + dr.select((h & 2) != 0, -v, v)
+
+
+def _fade(t):
+    return t * t * t * (t * (t * 6.0 - 15.0) + 10.0)
+
+
+def _noise(p):
+    f = dr.floor(p)
+    x, y, z = mi.Int32(f.x), mi.Int32(f.y), mi.Int32(f.z)
+    dx, dy, dz = p.x - f.x, p.y - f.y, p.z - f.z
+    u, v, w = _fade(dx), _fade(dy), _fade(dz)
+    n000 = _grad(_phash(x, y, z), dx, dy, dz)
+    n100 = _grad(_phash(x + 1, y, z), dx - 1.0, dy, dz)
+    n010 = _grad(_phash(x, y + 1, z), dx, dy - 1.0, dz)
+    n110 = _grad(_phash(x + 1, y + 1, z), dx - 1.0, dy - 1.0, dz)
+    n001 = _grad(_phash(x, y, z + 1), dx, dy, dz - 1.0)
+    n101 = _grad(_phash(x + 1, y, z + 1), dx - 1.0, dy, dz - 1.0)
+    n011 = _grad(_phash(x, y + 1, z + 1), dx, dy - 1.0, dz - 1.0)
+    n111 = _grad(_phash(x + 1, y + 1, z + 1), dx - 1.0, dy - 1.0, dz - 1.0)
+    x00, x10 = n000 + u * (n100 - n000), n010 + u * (n110 - n010)
+    x01, x11 = n001 + u * (n101 - n001), n011 + u * (n111 - n011)
+    y0, y1 = x00 + v * (x10 - x00), x01 + v * (x11 - x01)
+    return y0 + w * (y1 - y0)
+
+
+def _fbm(p, octaves, turbulence):
+    """Procedural_Fbm, its octave loop unrolled (octaves is the material's constant)."""
+    total, amp = mi.Float(0.0), 1.0
+    for _ in range(octaves):
+        n = _noise(p)
+        total += amp * (dr.abs(n) if turbulence else n)
+        p = p * 2.0
+        p = p - 65536.0 * dr.round(p / 65536.0)
+        amp *= 0.5
+    return total
+
+
+def _pattern_target(m, world_scale):
+    """The dr.switch target of a procedural material: (p, N, diffuse) -> (diffuse', N'), every
+    parameter a constant of the callable, as rtlab's pattern kernels bake the pattern in."""
+    kind, octaves, bump = m["pattern"], int(m["octaves"]), float(m["bump"])
+    scale = float(np.float32(m["scale"])) / world_scale  # the peer renders the scene scaled
+    d2 = [float(c) for c in m["diffuse2"]]
+
+    def target(p, n, diffuse):
+        q = mi.Vector3f(p) * scale
+        if kind == "bump":
+            h = 0.015625
+            f0 = _fbm(q, octaves, False)
+            g = mi.Vector3f(_fbm(q + mi.Vector3f(h, 0, 0), octaves, False) - f0,
+                            _fbm(q + mi.Vector3f(0, h, 0), octaves, False) - f0,
+                            _fbm(q + mi.Vector3f(0, 0, h), octaves, False) - f0) / h
+            g = g - dr.dot(g, n) * n
+            return diffuse, dr.normalize(n - bump * g)
+        if kind == "checker":
+            f = dr.floor(q)
+            t = dr.select(((mi.Int32(f.x) + mi.Int32(f.y) + mi.Int32(f.z)) & 1) != 0, 1.0, 0.0)
+        elif kind == "marble":
+            t = 0.5 + 0.5 * dr.sin(q.x + 5.0 * _fbm(q, octaves, True))
+        elif kind == "wood":
+            r = dr.sqrt(q.x * q.x + q.z * q.z) + 0.5 * _fbm(q, octaves, False)
+            t = 0.5 + 0.5 * dr.sin(6.2831853 * r)
+        else:  # granite
+            t = 0.5 + 1.5 * _fbm(q, octaves, False)
+            t = dr.select(t < 0.0, 0.0, dr.select(t > 1.0, 1.0, t))  # clamp (see _max0)
+        return diffuse + t * (mi.Color3f(*d2) - diffuse), n
+
+    return target
+
+
+def _plain_target(p, n, diffuse):
+    return diffuse, n
 
 
 def _entry_type():
@@ -459,13 +561,21 @@ def render(cv, width, height, bounces, shadow_samples=None, shadow_strength=None
                 blocked |= in_mask & (te < length)
             return blocked
 
+        # Section 5, procedural materials: D' or a bumped shading normal for the sum below;
+        # shadow rays and children keep N.
+        Ns = N
+        if cv.has_patterns:
+            slot = dr.gather(mi.UInt32, cv.pattern_slot, m, hit)
+            dif, Ns = dr.switch(dr.select(hit, slot, 0), cv.pattern_targets, p, N, dif)
+            Ns = mi.Vector3f(Ns)
+
         # Section 4 and 5: shadows and Blinn-Phong.
         base = mi.Color3f(amb)
         key = _hash(_hash(_hash(_hash(depth) ^ 0) ^ key_xy[1]) ^ key_xy[0])
         for j, (lp, lc, lr) in enumerate(lights):
             l = dr.normalize(lp - p)
-            ndl = dr.dot(N, l)
-            lit = hit & (ndl > 0)
+            lit = hit & (dr.dot(N, l) > 0)  # shadow rays only toward lights N faces
+            ndl = dr.dot(Ns, l)
             occluded = mi.Float(0.0)
             if lr == 0.0:
                 occluded = dr.select(occluded_by(lp, lit), 1.0, 0.0)
@@ -489,9 +599,9 @@ def render(cv, width, height, bounces, shadow_samples=None, shadow_strength=None
                 occluded = occluded / S
             vis = 1.0 - strength * occluded
             h = dr.normalize(l - d)
-            ndh = _max0(dr.dot(N, h))
+            ndh = _max0(dr.dot(Ns, h))
             spec = dr.select(expo == 0, 1.0, dr.power(ndh, expo))
-            base += dr.select(lit, vis * lc * (dif * ndl + spc * spec), 0.0)
+            base += dr.select(hit & (ndl > 0), vis * lc * (dif * ndl + spc * spec), 0.0)
 
         # Sections 6 to 8: children and their weights.
         transparent = opac < 1.0
