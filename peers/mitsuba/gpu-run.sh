@@ -20,7 +20,9 @@
 # PEER_REPEATS (5), PEER_WARMUP (2), PEER_STEP_TIMEOUT (seconds a scene may take, 150),
 # PEER_BUDGET (seconds after which no new scene starts, 420), PEER_SPHERES (ellipsoids),
 # PEER_COMPARE_SIZE (480x270), RTLAB_BIN (rtlab, for the image check; skipped without it),
-# PEER_SHARD (i/N: every N-th scene from the i-th, to split the set over several calls).
+# PEER_SHARD (i/N: every N-th scene from the i-th, to split the set over several calls),
+# PEER_SWEEP (the sweep file whose first scenes line is the set; bench/sweeps/peer-mitsuba-cpu is
+# the CPU's, at 480x270).
 set -uo pipefail
 ROOT=$(cd "$(dirname "$0")/../.." && pwd)
 cd "$ROOT"
@@ -37,7 +39,7 @@ STEP=${PEER_STEP_TIMEOUT:-150}
 BUDGET=${PEER_BUDGET:-420}
 SPHERES=${PEER_SPHERES:-ellipsoids}
 CSIZE=${PEER_COMPARE_SIZE:-480x270}
-SWEEP=bench/sweeps/peer-mitsuba
+SWEEP=${PEER_SWEEP:-bench/sweeps/peer-mitsuba}
 start=$SECONDS
 
 echo "== install (.whl: $(ls .whl/*.whl 2>/dev/null | xargs -n1 basename | tr '\n' ' '))"
