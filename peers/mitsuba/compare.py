@@ -76,7 +76,8 @@ def compare(scene_path, width, height, bounces, modes, variant, rtlab, pipeline,
         img = whitted.to_numpy(L, W, H)
         whitted.write_image(img, os.path.join(out_dir, f"{name}-peer-{mode}.exr"))
         row = {"scene": name, "mode": mode, "variant": variant, "reference": pipeline,
-               "width": W, "height": H, "bounces": B, "rays": {"traced": int(rays[0][0]), "shadow": int(rays[1][0])},
+               "width": W, "height": H, "bounces": B,
+               "rays": {"traced": int(rays[0][0]), "shadow": int(rays[1][0])},
                "spheres": cv.representation["spheres"], **errors(img, ref)}
         rows.append(row)
     return rows

@@ -153,7 +153,8 @@ def time_scene(path, a, base, out):
             row["mrays_per_s"] = round((traced + shadow) / (row["median_ms"] * 1e3), 2) \
                 if row["median_ms"] > 0 else None
         except Exception as e:  # one failing mode does not end the scene
-            row["error"] = f"{type(e).__name__}: {str(e).strip().splitlines()[0] if str(e).strip() else ''}"
+            first_line = str(e).strip().splitlines()[0] if str(e).strip() else ""
+            row["error"] = f"{type(e).__name__}: {first_line}"
             traceback.print_exc(file=sys.stderr)
         finally:
             whitted.dr.set_flag(whitted.dr.JitFlag.KernelHistory, False)

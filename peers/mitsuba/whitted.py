@@ -3,10 +3,11 @@
 
 Mitsuba does the ray tracing (its scene, its BVH: OptiX on `cuda_ad_rgb`, Embree on
 `llvm_ad_rgb`); the shading is rtlab's, written here as one Dr.Jit loop over each pixel's ray tree:
-the same pinhole camera (section 1), Blinn-Phong with ambient (5), hard shadows from point lights
-and rtlab's jittered disk samples for lights of non-zero radius (4), mirror reflection and
-refraction with Fresnel and total internal reflection (6, 7), the same bounce limit B and the
-same children, combined as section 8 says, and the sky gradient (9).
+the same pinhole camera (section 1), procedural materials (5, through dr.switch), Blinn-Phong with
+ambient (5), hard shadows from point lights and rtlab's jittered disk samples for lights of
+non-zero radius (4), mirror reflection and refraction with Fresnel and total internal reflection
+(6, 7), the same bounce limit B and the same children, combined as section 8 says, and the sky
+gradient (9). Secondary rays start where section 3 (bound) puts them.
 
 The ray tree is walked depth first with the *weighted* formulation of section 8: a node adds
 w (1 - F) o base to the pixel and hands w F to its reflection child and w (1 - F)(1 - o) to its
@@ -27,9 +28,9 @@ Scene conversion (rtlab_scene.py reads the JSON): triangles merged into one mi.M
 (per-corner vertices, so rtlab's per-corner normals carry over); all spheres as ONE `ellipsoids`
 shape (Mitsuba's analytic ellipsoid primitive, scales r, r, r, extent 1; per-sphere material by
 primitive index), or with --spheres shapes one `sphere` shape each (the naive conversion the issue
-measured); planes as `rectangle` shapes of half-size 1e4 x the scene's radius. Secondary rays
-start where Mitsuba's own SurfaceInteraction3f.spawn_ray / spawn_ray_to put them (an offset of
-about 1e-4 (1 + max|p|) along the geometric normal), not at rtlab's error-bound offset.
+measured); planes as `rectangle` shapes of half-size 1e4 x the scene's radius. Where the peer
+departs from plain Mitsuba to compute rtlab's image (the ellipsoid's back faces and precision,
+the offsets, the hit points) is said where it happens and in README.md.
 
 Usage:
   whitted.py SCENE.json [--size WxH] [--bounces B] [--variant llvm_ad_rgb|cuda_ad_rgb]
@@ -226,11 +227,17 @@ class Converted:
         self.pattern_slot = mi.UInt32(slots)
         self.has_patterns = len(self.pattern_targets) > 1
         self.convert_s = time.perf_counter() - t0
+        spheres_said = "none"
+        if ns:
+            spheres_said = (f"{int(together.sum())} in one ellipsoids shape, "
+                            f"{self.sphere_shapes} sphere shapes")
+            if self.track_inside:
+                spheres_said += ", the sphere a ray is inside tested analytically"
         self.representation = {
-            "spheres": (f"{int(together.sum())} in one ellipsoids shape, {self.sphere_shapes} "
-                        f"sphere shapes" + (", the sphere a ray is inside tested analytically"
-                                            if self.track_inside else "")) if ns else "none", "planes": f"rectangle half-size {half:g}",
+            "spheres": spheres_said,
+            "planes": f"rectangle half-size {half:g}",
             "meshes": f"{len(sc.triangles)} merged per material",
+            "patterns": len(self.pattern_targets) - 1,
             "scale": self.scale,
         }
 
@@ -398,7 +405,8 @@ def _plain_target(p, n, diffuse):
 
 
 def _entry_type():
-    """A pending child of the ray tree (a stack entry): a dataclass PyTree of the variant's types."""
+    """A pending child of the ray tree (a stack entry): a dataclass PyTree of the variant's
+    types."""
     global Entry
 
     @dataclasses.dataclass
@@ -418,8 +426,8 @@ Entry = None
 def render(cv, width, height, bounces, shadow_samples=None, shadow_strength=None,
            count_rays=False):
     """The frame as Dr.Jit arrays (Color3f of width*height lanes, row 0 on top) and, with
-    count_rays, the rays cast: [traced (primary and secondary), shadow], UInt64 arrays of 1. Nothing is evaluated
-    here: the caller's dr.eval launches the kernel(s)."""
+    count_rays, the rays cast: [traced (primary and secondary), shadow], UInt64 arrays of 1.
+    Nothing is evaluated here: the caller's dr.eval launches the kernel(s)."""
     sc = cv.sc
     S = int(shadow_samples if shadow_samples is not None else sc.render["shadow_samples"])
     strength = float(shadow_strength if shadow_strength is not None

@@ -32,7 +32,8 @@ def peer_python():
         if not cand:
             continue
         try:
-            if subprocess.run([cand, "-c", PROBE], capture_output=True, timeout=120).returncode == 0:
+            probe = subprocess.run([cand, "-c", PROBE], capture_output=True, timeout=120)
+            if probe.returncode == 0:
                 return cand
         except (OSError, subprocess.SubprocessError):
             pass
@@ -70,7 +71,8 @@ def peer_rows():
         return None, "no rtlab binary (RTLAB_BIN)"
     py = peer_python()
     if py is None:
-        return None, "mitsuba 3.9.1 / drjit 1.5.0 not importable (peers/mitsuba/setup installs them)"
+        return None, ("mitsuba 3.9.1 / drjit 1.5.0 not importable "
+                      "(peers/mitsuba/setup installs them)")
     with tempfile.TemporaryDirectory() as tmp:
         run = subprocess.run(
             [py, os.path.join(PEER, "compare.py"), os.path.join(ROOT, "scenes", "cornell.json"),
