@@ -14,12 +14,14 @@
 #
 # Usage (the device command; carry .whl):
 #   bash peers/mitsuba/gpu-run.sh                 # the scene set of bench/sweeps/peer-mitsuba
-#   bash peers/mitsuba/gpu-run.sh scenes/cornell.json scenes/map/map-s16-x50-o0-m1.json
+#   bash peers/mitsuba/gpu-run.sh scenes/cornell.json scenes/divergence.json   # named scenes (walls
+#                                                 # must exist: scripts/make-map.py)
 # Environment: PEER_VARIANT (cuda_ad_rgb; llvm_ad_rgb times the host's CPU, which needs libLLVM
 # >= 15), PEER_SIZE (1920x1080), PEER_BOUNCES (4), PEER_MODES (symbolic,evaluated),
 # PEER_REPEATS (5), PEER_WARMUP (2), PEER_STEP_TIMEOUT (seconds a scene may take, 150),
 # PEER_BUDGET (seconds after which no new scene starts, 420), PEER_SPHERES (ellipsoids),
 # PEER_COMPARE_SIZE (480x270), RTLAB_BIN (rtlab, for the image check; skipped without it),
+# RTLAB_COMMIT (the commit the rows name, where the copy has no .git),
 # PEER_SHARD (i/N: every N-th scene from the i-th, to split the set over several calls),
 # PEER_SWEEP (the sweep file whose first scenes line is the set; bench/sweeps/peer-mitsuba-cpu is
 # the CPU's, at 480x270).
@@ -47,15 +49,20 @@ ls .whl/*.whl >/dev/null 2>&1 || { echo "gpu-run.sh: no wheels in .whl/ (carry .
 timeout 300 python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade \
     --target /tmp/site .whl/*.whl || { echo "gpu-run.sh: pip install failed"; exit 1; }
 export PYTHONPATH=/tmp/site${PYTHONPATH:+:$PYTHONPATH}
+# The commit the rows name: $RTLAB_COMMIT if the caller gives it (a copy without .git), else git's.
+if [ -z "${RTLAB_COMMIT:-}" ]; then
+    RTLAB_COMMIT=$(git rev-parse --short=12 HEAD 2>/dev/null || echo unknown)
+    [ -n "$(git status --porcelain -- peers 2>/dev/null)" ] && RTLAB_COMMIT+=-dirty
+fi
+export RTLAB_COMMIT
 {
-    echo "commit: $(git rev-parse HEAD 2>/dev/null || echo unknown)"
+    echo "commit: ${RTLAB_COMMIT:-$(git rev-parse HEAD 2>/dev/null || echo unknown)}"
     python3 --version
     python3 -c "import numpy, drjit, mitsuba; print('numpy', numpy.__version__, 'drjit', drjit.__version__, 'mitsuba', mitsuba.__version__)"
     nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv,noheader 2>&1
     nproc
 } > "$OUT/env.txt" 2>&1
 cat "$OUT/env.txt"
-export RTLAB_COMMIT=$(git rev-parse --short=12 HEAD 2>/dev/null || echo unknown)
 
 if [ $# -gt 0 ]; then
     all=("$@")

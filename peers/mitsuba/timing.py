@@ -36,6 +36,9 @@ from rtlab_scene import NotConverted, Scene  # noqa: E402
 
 
 def commit():
+    """$RTLAB_COMMIT where the caller names it (a device copy may have no .git), else git's."""
+    if os.environ.get("RTLAB_COMMIT"):
+        return os.environ["RTLAB_COMMIT"]
     try:
         c = subprocess.run(["git", "-C", HERE, "rev-parse", "--short=12", "HEAD"],
                            capture_output=True, text=True, timeout=10).stdout.strip()
