@@ -89,7 +89,8 @@ def join(peer_rows, rtlab_rows):
         if "peer_symbolic_ms" in row and "peer_evaluated_ms" in row:
             row["peer_megakernel_wins"] = row["peer_symbolic_ms"] < row["peer_evaluated_ms"]
         if row.get("peer_rays") and row.get("rtlab_rays"):
-            row["rays_diff_pct"] = 100.0 * (row["peer_rays"] - row["rtlab_rays"]) / row["rtlab_rays"]
+            diff = row["peer_rays"] - row["rtlab_rays"]
+            row["rays_diff_pct"] = 100.0 * diff / row["rtlab_rays"]
         out.append(row)
     return out
 
