@@ -12,6 +12,8 @@ reason. Exit status 1 when a row misses --min-within (the tests' gate), else 0.
   compare.py scenes/cornell.json scenes/spheres.json --size 160x120 [--bounces B]
              [--modes symbolic,evaluated] [--variant llvm_ad_rgb] [--rtlab PATH]
              [--pipeline cpu] [--out DIR] [--min-within 0.99]
+  compare.py SCENES --variant cuda_ad_rgb --no-reference --out DIR   (a GPU host without rtlab:
+             the peer's EXRs only), then here: compare.py SCENES --peer-images DIR
 """
 import argparse
 import json
@@ -52,7 +54,10 @@ def errors(a, b):
 
 
 def compare(scene_path, width, height, bounces, modes, variant, rtlab, pipeline, out_dir,
-            spheres="ellipsoids"):
+            spheres="ellipsoids", peer_images=None):
+    """Rows for one scene. rtlab None: only the peer's images are written (no reference);
+    peer_images: a folder of <scene>-peer-<mode>.exr rendered elsewhere (say on the GPU) to
+    compare instead of rendering here."""
     rows = []
     name = os.path.splitext(os.path.basename(scene_path))[0]
     try:
@@ -61,24 +66,40 @@ def compare(scene_path, width, height, bounces, modes, variant, rtlab, pipeline,
     except NotConverted as e:
         return [{"scene": name, "not_converted": str(e)}]
     W, H, B = st["width"], st["height"], st["bounces"]
-    ref_path = os.path.join(out_dir, f"{name}-rtlab-{pipeline}.exr")
-    run = subprocess.run([rtlab, "render", scene_path, "--pipeline", pipeline, "--size",
-                          f"{W}x{H}", "--bounces", str(B), "-o", ref_path],
-                         capture_output=True, text=True)
-    if run.returncode != 0:
-        return [{"scene": name, "error": "rtlab: " + (run.stderr.strip().splitlines() or [""])[-1]}]
-    ref = read_exr(ref_path)
-    cv = whitted.Converted(sc, spheres)
+    ref = None
+    if rtlab:
+        ref_path = os.path.join(out_dir, f"{name}-rtlab-{pipeline}.exr")
+        run = subprocess.run([rtlab, "render", scene_path, "--pipeline", pipeline, "--size",
+                              f"{W}x{H}", "--bounces", str(B), "-o", ref_path],
+                             capture_output=True, text=True)
+        if run.returncode != 0:
+            last = (run.stderr.strip().splitlines() or [""])[-1]
+            return [{"scene": name, "error": "rtlab: " + last}]
+        ref = read_exr(ref_path)
+    cv = None
+    half = rtlab is None and not peer_images  # images to carry home: 16-bit EXR is enough
     for mode in modes:
-        whitted.set_mode(mode)
-        L, rays = whitted.render(cv, W, H, B, count_rays=True)
-        whitted.dr.eval(L, rays)
-        img = whitted.to_numpy(L, W, H)
-        whitted.write_image(img, os.path.join(out_dir, f"{name}-peer-{mode}.exr"))
         row = {"scene": name, "mode": mode, "variant": variant, "reference": pipeline,
-               "width": W, "height": H, "bounces": B,
-               "rays": {"traced": int(rays[0][0]), "shadow": int(rays[1][0])},
-               "spheres": cv.representation["spheres"], **errors(img, ref)}
+               "width": W, "height": H, "bounces": B}
+        if peer_images:
+            path = os.path.join(peer_images, f"{name}-peer-{mode}.exr")
+            if not os.path.exists(path):
+                rows.append(dict(row, error=f"{path}: no such image"))
+                continue
+            img = read_exr(path)
+            row["variant"] = f"images from {peer_images}"
+        else:
+            if cv is None:
+                cv = whitted.Converted(sc, spheres)
+            whitted.set_mode(mode)
+            L, rays = whitted.render(cv, W, H, B, count_rays=True)
+            whitted.dr.eval(L, rays)
+            img = whitted.to_numpy(L, W, H)
+            whitted.write_image(img, os.path.join(out_dir, f"{name}-peer-{mode}.exr"), half)
+            row.update(rays={"traced": int(rays[0][0]), "shadow": int(rays[1][0])},
+                       spheres=cv.representation["spheres"])
+        if ref is not None:
+            row.update(errors(img, ref))
         rows.append(row)
     return rows
 
@@ -95,11 +116,15 @@ def main(argv=None):
     ap.add_argument("--pipeline", default="cpu")
     ap.add_argument("--out", help="folder for the images [a temporary one]")
     ap.add_argument("--json", help="write the rows here too (one JSON object a line)")
+    ap.add_argument("--no-reference", action="store_true",
+                    help="only write the peer's images into --out (a host without rtlab)")
+    ap.add_argument("--peer-images", help="compare these <scene>-peer-<mode>.exr (rendered "
+                    "elsewhere) instead of rendering")
     ap.add_argument("--min-within", type=float, default=0.0,
                     help="fail when a row's share within 2/255 is below this")
     a = ap.parse_args(argv)
-    rtlab = find_rtlab(a.rtlab)
-    whitted.setup(a.variant)
+    rtlab = None if a.no_reference else find_rtlab(a.rtlab)
+    whitted.setup("scalar_rgb" if a.peer_images else a.variant)
     W = H = None
     if a.size:
         W, H = (int(v) for v in a.size.lower().split("x"))
@@ -109,7 +134,7 @@ def main(argv=None):
     lines = []
     for s in a.scenes:
         for row in compare(s, W, H, a.bounces, a.modes.split(","), a.variant, rtlab,
-                           a.pipeline, out, a.spheres):
+                           a.pipeline, out, a.spheres, a.peer_images):
             line = json.dumps(row)
             print(line, flush=True)
             lines.append(line)

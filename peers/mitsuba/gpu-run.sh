@@ -7,10 +7,12 @@
 #   2. writes the map walls the scene list names (scripts/make-map.py --sweep, standard library);
 #   3. times the peer (timing.py) on each scene in Dr.Jit's symbolic (megakernel) and evaluated
 #      (wavefront) modes, each scene under `timeout`, and stops starting scenes past a budget;
-#   4. with RTLAB_BIN (an rtlab binary the lead built), checks the peer's cuda_ad_rgb images
-#      against rtlab's cpu reference at a small size (compare.py);
-#   5. leaves in $OUT at most 8 files: peer-rows.jsonl (timing rows), peer-compare.jsonl,
-#      peer-images.tar.gz (the last frame of every scene and mode, PNG), log.txt, env.txt.
+#   4. with RTLAB_BIN (an rtlab binary that writes EXR), checks the peer's cuda_ad_rgb images
+#      against rtlab's cpu reference at a small size (compare.py); without it, renders those
+#      images as EXR (peer-check.tar.gz) for `compare.py SCENES --peer-images DIR` at home;
+#   5. leaves in $OUT at most 8 files: peer-rows.jsonl (timing rows), peer-compare.jsonl or
+#      peer-check.jsonl and peer-check.tar.gz, peer-images.tar.gz (the last frame of every
+#      scene and mode, PNG), log.txt, env.txt.
 #
 # Usage (the device command; carry .whl):
 #   bash peers/mitsuba/gpu-run.sh                 # the scene set of bench/sweeps/peer-mitsuba
@@ -108,13 +110,14 @@ for line in open(sys.argv[1]):
           f"  {r.get('error', r.get('not_converted', r.get('skipped', '')))}")
 EOF
 
+cmp=()
+for s in scenes/cornell.json scenes/spheres.json scenes/shadows.json scenes/mesh.json \
+         scenes/divergence.json scenes/map/map-s16-x50-o8-m16.json \
+         scenes/map/map-s64-x100-o8-m16.json scenes/map/map-s16-t80-x50-o8-m16.json; do
+    [ -f "$s" ] && cmp+=("$s")
+done
 if [ -n "${RTLAB_BIN:-}" ] && [ -x "${RTLAB_BIN:-}" ]; then
     echo "== images against rtlab's cpu reference at $CSIZE ($((SECONDS - start))s)"
-    cmp=()
-    for s in scenes/cornell.json scenes/spheres.json scenes/shadows.json scenes/mesh.json \
-             scenes/map/map-s16-x50-o0-m1.json scenes/map/map-s64-x100-o0-m1.json; do
-        [ -f "$s" ] && cmp+=("$s")
-    done
     timeout -k 10 240 python3 peers/mitsuba/compare.py "${cmp[@]}" --variant "$VARIANT" \
         --size "$CSIZE" --bounces "$BOUNCES" --modes "$MODES" --rtlab "$RTLAB_BIN" \
         --out /tmp/peer-compare --json "$OUT/peer-compare.jsonl" >/dev/null \
@@ -130,7 +133,14 @@ for line in open(sys.argv[1]):
         print(f"{r.get('scene', '?'):26} {r.get('not_converted', r.get('error', ''))}")
 EOF
 else
-    echo "== no RTLAB_BIN: image check skipped"
+    # No rtlab here: the peer's images of the check scenes as EXR, compared at home with
+    # compare.py SCENES --size $CSIZE --peer-images DIR (the folder in peer-check.tar.gz).
+    echo "== no RTLAB_BIN: the check scenes' images at $CSIZE for compare.py --peer-images"
+    timeout -k 10 240 python3 peers/mitsuba/compare.py "${cmp[@]}" --variant "$VARIANT" \
+        --size "$CSIZE" --bounces "$BOUNCES" --modes "$MODES" --no-reference \
+        --out "$OUT/check" --json "$OUT/peer-check.jsonl" >/dev/null \
+        || echo "gpu-run.sh: compare.py --no-reference: exit status $?"
+    [ -d "$OUT/check" ] && tar -C "$OUT" -czf "$OUT/peer-check.tar.gz" check && rm -rf "$OUT/check"
 fi
 
 if [ -d "$OUT/images" ]; then

@@ -674,12 +674,13 @@ def to_numpy(L, width, height):
         .reshape(height, width, 3).astype(np.float32)
 
 
-def write_image(img, path):
+def write_image(img, path, half=False):
+    """.npy, .exr (32-bit float, or 16-bit with half) or .png (clamped, sRGB, 8-bit)."""
     ext = os.path.splitext(path)[1].lower()
     if ext == ".npy":
         np.save(path, img)
     elif ext == ".exr":
-        mi.Bitmap(img).write(path)
+        mi.Bitmap(img.astype(np.float16) if half else img).write(path)
     elif ext == ".png":
         c = np.clip(img, 0, 1)
         srgb = np.where(c <= 0.0031308, 12.92 * c, 1.055 * np.power(c, 1 / 2.4) - 0.055)
