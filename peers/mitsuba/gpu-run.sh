@@ -112,7 +112,7 @@ EOF
 
 cmp=()
 for s in scenes/cornell.json scenes/spheres.json scenes/shadows.json scenes/mesh.json \
-         scenes/divergence.json scenes/map/map-s16-x50-o8-m16.json \
+         scenes/divergence.json scenes/envmap.json scenes/map/map-s16-x50-o8-m16.json \
          scenes/map/map-s64-x100-o8-m16.json scenes/map/map-s16-t80-x50-o8-m16.json; do
     [ -f "$s" ] && cmp+=("$s")
 done

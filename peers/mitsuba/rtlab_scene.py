@@ -3,8 +3,8 @@ Mitsuba 3 peer (peers/mitsuba/whitted.py): camera, materials, spheres, planes, l
 OBJ meshes with their transforms, lights, sky and render defaults.
 
 Only what the peer renders the same way as rtlab is accepted. Everything else raises
-NotConverted with one line naming the feature and where it is (cubemaps, glTF/PLY models, bare
-models, anti-aliasing, adaptive AA): the peer refuses rather than guesses.
+NotConverted with one line naming the feature and where it is (glTF/PLY models, bare models,
+anti-aliasing, adaptive AA): the peer refuses rather than guesses.
 The loader's own validation (ranges, unknown keys) is rtlab's job; this reader assumes a scene
 that `rtlab render` accepts.
 
@@ -137,9 +137,10 @@ class Scene:
         self._objects(j)
         self._lights(j.get("lights", []))
         env = j.get("environment", {"sky": {}})
+        self.cubemap = None  # six face paths (+x, -x, +y, -y, +z, -z); the peer reads them
         if "cubemap" in env:
-            raise NotConverted(f"{path}: /environment/cubemap: cubemap environments are not "
-                               f"converted (the sky gradient is)")
+            self.cubemap = [os.path.join(self.dir, f) for f in env["cubemap"]]
+            env = {"sky": {}}
         self.sky = {k: np.array(env["sky"].get(k, v), dtype=np.float32) for k, v in SKY.items()}
         self.render = dict(RENDER_DEFAULTS, **j.get("render", {}))
         self.render.pop("accel", None)

@@ -7,7 +7,7 @@ the same pinhole camera (section 1), procedural materials (5, through dr.switch)
 ambient (5), hard shadows from point lights and rtlab's jittered disk samples for lights of
 non-zero radius (4), mirror reflection and refraction with Fresnel and total internal reflection
 (6, 7), the same bounce limit B and the same children, combined as section 8 says, and the sky
-gradient (9). Secondary rays start where section 3 (bound) puts them.
+gradient or cubemap (9). Secondary rays start where section 3 (bound) puts them.
 
 The ray tree is walked depth first with the *weighted* formulation of section 8: a node adds
 w (1 - F) o base to the pixel and hands w F to its reflection child and w (1 - F)(1 - o) to its
@@ -226,6 +226,17 @@ class Converted:
                 self.pattern_targets.append(_pattern_target(m, self.scale))
         self.pattern_slot = mi.UInt32(slots)
         self.has_patterns = len(self.pattern_targets) > 1
+        # Cubemap (section 9): the six faces as linear floats, read as rtlab's readImage does
+        # (8-bit images are sRGB-decoded in double, float images taken as they are).
+        self.cubemap_size = 0
+        if sc.cubemap:
+            faces = [_read_linear(f) for f in sc.cubemap]
+            n = faces[0].shape[0]
+            if any(f.shape[:2] != (n, n) for f in faces):
+                raise NotConverted(f"{sc.path}: /environment/cubemap: faces must be square and of "
+                                   f"one size")
+            self.cubemap_size = n
+            self.cubemap = mi.Float(np.concatenate([f.ravel() for f in faces]))
         self.convert_s = time.perf_counter() - t0
         spheres_said = "none"
         if ns:
@@ -240,6 +251,20 @@ class Converted:
             "patterns": len(self.pattern_targets) - 1,
             "scale": self.scale,
         }
+
+
+def _read_linear(path):
+    """An image as linear RGB float32 (H, W, 3), as rtlab's image/image_io.cpp readImage: 8- and
+    16-bit images sRGB-decoded (in double), float images as stored; gray replicated."""
+    bmp = mi.Bitmap(path)
+    a = np.array(bmp)
+    if a.ndim == 2:
+        a = a[..., None]
+    a = np.repeat(a[..., :1], 3, axis=2) if a.shape[2] < 3 else a[..., :3]
+    if np.issubdtype(a.dtype, np.integer):
+        s = a.astype(np.float64) / np.iinfo(a.dtype).max
+        a = np.where(s <= 0.04045, s / 12.92, np.power((s + 0.055) / 1.055, 2.4))
+    return a.astype(np.float32)
 
 
 # ---- the integrator --------------------------------------------------------------------------
@@ -269,6 +294,39 @@ def _sky(sc, d):
     z, h, g = (mi.Color3f(*[float(c) for c in sc.sky[k]]) for k in ("zenith", "horizon", "ground"))
     y = d.y
     return dr.select(y >= 0, h + (z - h) * y, h + (g - h) * (-y))
+
+
+def _cubemap(cv, d, active):
+    """core/cl/shade.cl Cubemap_Lookup: the major axis picks the face (ties: x, then y), then
+    bilinear between texel centres, clamped to the face's edge."""
+    a = dr.abs(d)
+    on_x = (a.x >= a.y) & (a.x >= a.z)
+    on_y = ~on_x & (a.y >= a.z)
+    face = dr.select(on_x, dr.select(d.x >= 0, 0, 1),
+                     dr.select(on_y, dr.select(d.y >= 0, 2, 3), dr.select(d.z >= 0, 4, 5)))
+    s_ = dr.select(on_x, dr.select(d.x >= 0, -d.z, d.z),
+                   dr.select(on_y, d.x, dr.select(d.z >= 0, d.x, -d.x)))
+    t_ = dr.select(on_x, -d.y, dr.select(on_y, dr.select(d.y >= 0, d.z, -d.z), -d.y))
+    ma = dr.select(on_x, a.x, dr.select(on_y, a.y, a.z))
+    n = cv.cubemap_size
+    fx = (s_ / ma + 1.0) * 0.5 * n - 0.5
+    fy = (t_ / ma + 1.0) * 0.5 * n - 0.5
+    x0, y0 = dr.floor(fx), dr.floor(fy)
+    tx, ty = fx - x0, fy - y0
+    ix, iy = mi.Int32(x0), mi.Int32(y0)
+    face = mi.Int32(face)
+
+    def texel(x, y):
+        x = dr.select(x < 0, 0, dr.select(x > n - 1, n - 1, x))
+        y = dr.select(y < 0, 0, dr.select(y > n - 1, n - 1, y))
+        i = mi.UInt32(((face * n + y) * n + x) * 3)
+        return mi.Color3f(dr.gather(mi.Float, cv.cubemap, i, active),
+                          dr.gather(mi.Float, cv.cubemap, i + 1, active),
+                          dr.gather(mi.Float, cv.cubemap, i + 2, active))
+
+    top = texel(ix, iy) * (1.0 - tx) + texel(ix + 1, iy) * tx
+    bot = texel(ix, iy + 1) * (1.0 - tx) + texel(ix + 1, iy + 1) * tx
+    return top * (1.0 - ty) + bot * ty
 
 
 def _max0(x):
@@ -520,7 +578,8 @@ def render(cv, width, height, bounces, shadow_samples=None, shadow_strength=None
             hit_sphere = dr.select(use, inside_sphere, hit_sphere)
         hit = active & si.is_valid()
         miss = active & ~si.is_valid()
-        L += dr.select(miss, w * _sky(sc, d), 0.0)
+        env = _cubemap(cv, d, miss) if cv.cubemap_size else _sky(sc, d)
+        L += dr.select(miss, w * env, 0.0)
 
         amb = dr.gather(mi.Color3f, cv.ambient, m, hit)
         dif = dr.gather(mi.Color3f, cv.diffuse, m, hit)
