@@ -22,6 +22,7 @@
 # >= 15), PEER_SIZE (1920x1080), PEER_BOUNCES (4), PEER_MODES (symbolic,evaluated),
 # PEER_REPEATS (5), PEER_WARMUP (2), PEER_STEP_TIMEOUT (seconds a scene may take, 150),
 # PEER_BUDGET (seconds after which no new scene starts, 420), PEER_SPHERES (ellipsoids),
+# PEER_STACK (local: the ray-tree stack in Dr.Jit local memory; registers: in loop variables),
 # PEER_COMPARE_SIZE (480x270), RTLAB_BIN (rtlab, for the image check; skipped without it),
 # RTLAB_COMMIT (the commit the rows name, where the copy has no .git),
 # PEER_SHARD (i/N: every N-th scene from the i-th, to split the set over several calls),
@@ -42,6 +43,7 @@ WARMUP=${PEER_WARMUP:-2}
 STEP=${PEER_STEP_TIMEOUT:-150}
 BUDGET=${PEER_BUDGET:-420}
 SPHERES=${PEER_SPHERES:-ellipsoids}
+STACK=${PEER_STACK:-local}
 CSIZE=${PEER_COMPARE_SIZE:-480x270}
 SWEEP=${PEER_SWEEP:-bench/sweeps/peer-mitsuba}
 start=$SECONDS
@@ -95,7 +97,7 @@ for s in "${scenes[@]}"; do
     echo "== $s ($((SECONDS - start))s)"
     timeout -k 10 "$STEP" python3 peers/mitsuba/timing.py "$s" --variant "$VARIANT" \
         --size "$SIZE" --bounces "$BOUNCES" --modes "$MODES" --repeats "$REPEATS" \
-        --warmup "$WARMUP" --spheres "$SPHERES" --out "$OUT/peer-rows.jsonl" \
+        --warmup "$WARMUP" --spheres "$SPHERES" --stack "$STACK" --out "$OUT/peer-rows.jsonl" \
         --images "$OUT/images" >/dev/null
     rc=$?
     [ $rc -eq 0 ] || { echo "gpu-run.sh: $s: exit status $rc (124: past ${STEP}s)";

@@ -17,7 +17,7 @@ row with "not_converted"; a mode that fails gives a row with "error" and the nex
 
   timing.py scenes/cornell.json ... --variant cuda_ad_rgb --size 1920x1080 --bounces 4
             [--modes symbolic,evaluated] [--warmup 2] [--repeats 5] [--out rows.jsonl]
-            [--images DIR] [--spheres ellipsoids|shapes]
+            [--images DIR] [--spheres ellipsoids|hybrid|shapes] [--stack local|registers]
 """
 import argparse
 import json
@@ -74,13 +74,16 @@ def device_info(variant):
     return info
 
 
+STACK = "local"
+
+
 def frame(cv, st, count_rays=False):
     """One frame; returns (kernel history entries, wall seconds, image arrays, rays)."""
     dr = whitted.dr
     dr.kernel_history()  # clears
     t0 = time.perf_counter()
     L, rays = whitted.render(cv, st["width"], st["height"], st["bounces"],
-                             count_rays=count_rays)
+                             count_rays=count_rays, stack=STACK)
     dr.eval(L, rays)
     dr.sync_thread()
     wall = time.perf_counter() - t0
@@ -179,15 +182,19 @@ def main(argv=None):
     ap.add_argument("--warmup", type=int, default=2, help="untimed frames, the first included")
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--spheres", default="ellipsoids", choices=whitted.SPHERES)
+    ap.add_argument("--stack", default="local", choices=whitted.STACKS,
+                    help="the per-lane stack: local memory or loop variables [local]")
     ap.add_argument("--out", help="append the rows here (one JSON object a line)")
     ap.add_argument("--images", help="folder for the last frame of each scene and mode (PNG)")
     a = ap.parse_args(argv)
+    global STACK
+    STACK = a.stack
     whitted.setup(a.variant)
     if a.images:
         os.makedirs(a.images, exist_ok=True)
     base = {"peer": "mitsuba", "variant": a.variant, "commit": commit(),
             **device_info(a.variant), "warmup": a.warmup, "repeats": a.repeats,
-            "spheres": a.spheres}
+            "spheres": a.spheres, "stack": a.stack}
     for s in a.scenes:
         r = time_scene(s, a, base, a.out)
         if len(r) == 1 and "not_converted" in r[0]:

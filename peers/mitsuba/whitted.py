@@ -481,8 +481,35 @@ def _entry_type():
 Entry = None
 
 
+STACKS = ("local", "registers")
+
+
+def _select_entry(mask, a, b):
+    return Entry(*[dr.select(mask, getattr(a, f.name), getattr(b, f.name))
+                   for f in dataclasses.fields(Entry)])
+
+
+class _RegisterStack:
+    """The per-lane stack as B loop variables (a list of Entry PyTrees), written and read
+    through selects: no local memory, O(B) selects per push and pop. The fallback where
+    dr.alloc_local is unavailable, and a comparison of the two (--stack registers)."""
+
+    def __init__(self, slots):
+        self.slots = list(slots)
+
+    def write(self, value, index, active):
+        for i in range(len(self.slots)):
+            self.slots[i] = _select_entry(active & (index == i), value, self.slots[i])
+
+    def read(self, index, active):
+        out = self.slots[0]
+        for i in range(1, len(self.slots)):
+            out = _select_entry(index == i, self.slots[i], out)
+        return out
+
+
 def render(cv, width, height, bounces, shadow_samples=None, shadow_strength=None,
-           count_rays=False):
+           count_rays=False, stack="local"):
     """The frame as Dr.Jit arrays (Color3f of width*height lanes, row 0 on top) and, with
     count_rays, the rays cast: [traced (primary and secondary), shadow], UInt64 arrays of 1.
     Nothing is evaluated here: the caller's dr.eval launches the kernel(s)."""
@@ -521,7 +548,12 @@ def render(cv, width, height, bounces, shadow_samples=None, shadow_strength=None
     nrays = dr.zeros(mi.UInt32, W * H)   # rays traced (primary and secondary)
     nshadow = dr.zeros(mi.UInt32, W * H)  # shadow rays
     active = dr.full(mi.Bool, True, W * H)
-    stack = dr.alloc_local(_entry_type(), max(B, 1))
+    if stack not in STACKS:
+        raise ValueError(f"stack must be one of {', '.join(STACKS)}, got {stack}")
+    local = stack == "local"
+    entry = _entry_type()
+    stack = (dr.alloc_local(entry, max(B, 1)) if local
+             else [dr.zeros(entry, W * H) for _ in range(max(B, 1))])
     track = cv.track_inside
 
     def on_sphere(o, d, k, mask, far):
@@ -543,6 +575,7 @@ def render(cv, width, height, bounces, shadow_samples=None, shadow_strength=None
         return dr.select(mask & (disc >= 0) & (t > 0), t, dr.inf), c + r * n, n
 
     def body(o, d, w, depth, inside_sphere, sp, L, nrays, nshadow, active, stack):
+        st = stack if local else _RegisterStack(stack)
         ray = mi.Ray3f(o, d)
         si = scene.ray_intersect(ray, mi.RayFlags.Minimal | mi.RayFlags.ShadingFrame, False,
                                  active)
@@ -700,11 +733,11 @@ def render(cv, width, height, bounces, shadow_samples=None, shadow_strength=None
                                           inside_sphere))
 
         both = has_refl & has_refr
-        stack.write(Entry(o_refr, tdir, w_refr, depth + 1, in_refr), sp, both)
+        st.write(Entry(o_refr, tdir, w_refr, depth + 1, in_refr), sp, both)
         sp = dr.select(both, sp + 1, sp)
         go = has_refl | has_refr
         pop = active & ~go & (sp > 0)
-        e = stack.read(sp - 1, pop)
+        e = st.read(sp - 1, pop)
         sp = dr.select(pop, sp - 1, sp)
         o = dr.select(has_refl, o_refl, dr.select(has_refr, o_refr, e.o))
         d = dr.select(has_refl, rdir, dr.select(has_refr, tdir, e.d))
@@ -712,7 +745,8 @@ def render(cv, width, height, bounces, shadow_samples=None, shadow_strength=None
         depth = dr.select(go, depth + 1, e.depth)
         inside_sphere = dr.select(has_refl, in_refl, dr.select(has_refr, in_refr, e.inside))
         active = go | pop
-        return o, d, w, depth, inside_sphere, sp, L, nrays, nshadow, active, stack
+        return (o, d, w, depth, inside_sphere, sp, L, nrays, nshadow, active,
+                stack if local else st.slots)
 
     names = ("o", "d", "w", "depth", "inside_sphere", "sp", "L", "nrays", "nshadow", "active",
              "stack")
@@ -757,6 +791,8 @@ def main(argv=None):
     ap.add_argument("--variant", default="llvm_ad_rgb")
     ap.add_argument("--mode", default="symbolic", choices=MODES)
     ap.add_argument("--spheres", default="ellipsoids", choices=SPHERES)
+    ap.add_argument("--stack", default="local", choices=STACKS,
+                    help="the per-lane stack: local memory or loop variables [local]")
     ap.add_argument("-o", "--output", default="peer.exr")
     ap.add_argument("--stats", action="store_true", help="print rays and kernel times")
     a = ap.parse_args(argv)
@@ -773,7 +809,8 @@ def main(argv=None):
     set_mode(a.mode)
     cv = Converted(sc, a.spheres)
     dr.set_flag(dr.JitFlag.KernelHistory, True)
-    L, rays = render(cv, st["width"], st["height"], st["bounces"], count_rays=a.stats)
+    L, rays = render(cv, st["width"], st["height"], st["bounces"], count_rays=a.stats,
+                     stack=a.stack)
     dr.eval(L, rays)
     dr.sync_thread()
     hist = dr.kernel_history()
