@@ -413,7 +413,12 @@ class Parser {
         const glm::dmat3 mtx = swap * q;
         auto f3 = [&](const glm::dvec3& p) {
             const glm::dvec3 r = mtx * p;
-            return dev::Float3{float(r.x), float(r.y), float(r.z)};
+            const dev::Float3 f{float(r.x), float(r.y), float(r.z)};
+            if (!std::isfinite(f.x) || !std::isfinite(f.y) || !std::isfinite(f.z))
+                throw Error(file_.string() +
+                            ": a coordinate near the 32-bit float limit "
+                            "overflows once 'up' is turned to rtlab's +y");
+            return f;
         };
         auto unit3 = [&](const glm::dvec3& p) { return f3(glm::normalize(p)); };
         for (dev::Sphere& s : scene_.spheres) s.center = f3({s.center.x, s.center.y, s.center.z});
