@@ -50,7 +50,10 @@ void addCompare(CLI::App& app) {
         "Render one scene with the independent oracle, the CPU reference "
         "and every pipeline (" +
             pipelineRegistry().joinedNames(true) + "); print time and error side by side");
-    compareCmd->add_option("scene", a.scene, "Scene file (.json) or OBJ model")->required();
+    compareCmd
+        ->add_option("scene", a.scene,
+                     "Scene file (.json or .nff) or model (.obj, .gltf, .glb, .ply)")
+        ->required();
     compareCmd->add_option("-o,--output-prefix", a.outputPrefix,
                            "Also write PREFIX-<pipeline>.png for each pipeline and the reference");
     compareCmd->add_option("--repeats", a.repeats, "Timed frames per pipeline (median is shown)")

@@ -49,6 +49,8 @@ int runScenes() {
                 dir.string().c_str(), dir.string().c_str(), dir.string().c_str());
     for (const fs::path& p : sorted(dir, ".json"))
         std::printf("  %-14s %s\n", p.stem().string().c_str(), description(p).c_str());
+    for (const fs::path& p : sorted(dir, ".nff"))
+        std::printf("  %-14s (NFF)\n", p.filename().string().c_str());
     std::error_code ec;
     std::vector<fs::path> folders;
     for (const auto& e : fs::directory_iterator(dir, ec))
@@ -57,6 +59,14 @@ int runScenes() {
     for (const fs::path& folder : folders) {
         std::vector<fs::path> inside = sorted(folder, ".json");
         std::vector<fs::path> models = sorted(folder, ".obj");
+        // NFF scenes (Haines' SPD in spd/): every one by name, there are few.
+        if (std::vector<fs::path> nff = sorted(folder, ".nff"); !nff.empty()) {
+            std::string names;
+            for (const fs::path& p : nff) names += " " + p.filename().string();
+            std::printf("  %s/: %zu NFF scene(s) (%s/README.md):%s\n",
+                        folder.filename().string().c_str(), nff.size(),
+                        folder.filename().string().c_str(), names.c_str());
+        }
         if (inside.empty() && models.empty()) continue;
         std::printf(
             "  %s/: %zu scene(s)%s, e.g. %s\n", folder.filename().string().c_str(), inside.size(),

@@ -40,7 +40,7 @@ void addPredict(CLI::App& app) {
         "of warps (16x2 pixels) on the CPU, without shading, and counts how many of a warp's 32\n"
         "lanes would be busy a step in a megakernel that gives each work-item a whole tree; also\n"
         "names the schedule --persistent-schedule auto would take (persist: regrouped or nested)");
-    predictCmd->add_option("scenes", a.scenes, "Scene files (.json) or models")->required();
+    predictCmd->add_option("scenes", a.scenes, "Scene files (.json or .nff) or models")->required();
     predictCmd->add_option("--size", a.size, "Image size WxH (default: the scene's)");
     predictCmd->add_option("--bounces", a.bounces, "Bounce limit B (default: the scene's)")
         ->check(CLI::Range(0, 64));

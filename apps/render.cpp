@@ -341,9 +341,11 @@ int runRender() {
 
 void addRender(CLI::App& app) {
     RenderArgs& a = renderArgs;
-    renderCmd =
-        app.add_subcommand("render", "Render a scene (.json) or a bare model (.obj) to an image");
-    renderCmd->add_option("scene", a.scene, "Scene file (.json, see scenes/README.md) or OBJ model")
+    renderCmd = app.add_subcommand(
+        "render", "Render a scene (.json or .nff) or a bare model (.obj, ...) to an image");
+    renderCmd
+        ->add_option("scene", a.scene,
+                     "Scene file (.json, see scenes/README.md; .nff, see docs/NFF.md) or model")
         ->required();
     renderCmd->add_option("-o,--output", a.output,
                           "Output image: .png (8-bit sRGB, clamped) or .exr (linear float) "

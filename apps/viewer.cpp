@@ -211,7 +211,9 @@ int main(int argc, char** argv) {
     app.set_version_flag("--version", std::string("rtlab-view ") + RTLAB_COMMIT,
                          "Print the commit this binary was built from and exit");
     Args a;
-    app.add_option("scene", a.scene, "Scene file (.json) or OBJ model")->required();
+    app.add_option("scene", a.scene,
+                   "Scene file (.json or .nff) or model (.obj, .gltf, .glb, .ply)")
+        ->required();
     const PipelineRegistry& registry = pipelineRegistry();
     const std::vector<std::string> names = registry.names(true);
     a.pipeline = names.at(0);

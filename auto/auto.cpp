@@ -160,12 +160,14 @@ struct AutoPipeline::Impl {
         c.gpuRule = rule == AutoRule::Gpu || (rule == AutoRule::Device && dev.isGpu());
         c.adaptive = o.adaptiveAa && o.aa > 1;
         const int C = scene.branching();
-        c.treeFits = treePrivateBytes(C, o.bounces) <= kPrivateTreeLimit;
+        c.treeFits = treePrivateBytes(C, o.bounces, dev::nodeBytes(scene.lights.size())) <=
+                     kPrivateTreeLimit;
         size_t budget = dev.maxAlloc;
         if (o.memoryBudget && o.memoryBudget < budget) budget = o.memoryBudget;
         try {
-            c.waveFits = WavefrontPipeline::tileRows(o.width, o.height, C, o.bounces, budget, "") >=
-                         o.height;
+            c.waveFits =
+                WavefrontPipeline::tileRows(o.width, o.height, C, o.bounces, budget, "",
+                                            dev::nodeBytes(scene.lights.size())) >= o.height;
         } catch (const Error&) {
             c.waveFits = false;  // not even one row fits
         }

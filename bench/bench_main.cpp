@@ -53,7 +53,7 @@ const char* kDescription =
   Sweep mode, --sweep=SWEEP --out=DIR: a sweep file's cells, rows to DIR/rows.jsonl and kept
       frames to DIR/images (what `rtlab sweep --import` reads; no Google Benchmark)
   Smoke check, --smoke: one frame of every scene x size x pipeline (both megakernel layouts) x
-      structure, a PASS or FAIL line each (scripts/gpu-smoke runs it on a GPU host before any
+      structure (the SPD scenes: the first size and the BVH), a PASS or FAIL line each (scripts/gpu-smoke runs it on a GPU host before any
       GPU result is called done))";
 
 const char* kExitStatus = R"(
@@ -320,7 +320,10 @@ int smokeCommand(const Flags& f) {
     for (const char* only : {"--sweep", "--cells", "--bounces", "--resume", "--devices"})
         if (f.given.count(only)) throw Error(std::string(only) + ": not with --smoke");
     SmokeOptions o = defaultSmokeOptions();
-    if (f.given.count("--scenes")) o.scenes = f.scenes;
+    if (f.given.count("--scenes")) {
+        o.scenes = f.scenes;
+        o.spotScenes.clear();  // the scenes asked for, no others
+    }
     if (f.given.count("--sizes")) o.sizes = f.sizes;
     if (f.given.count("--pipelines")) o.pipelines = f.pipelines;
     if (f.given.count("--accels")) o.accels = f.accels;

@@ -39,6 +39,8 @@ struct Frame {
 SmokeOptions defaultSmokeOptions() {
     SmokeOptions o;
     o.scenes = {"empty", "spheres", "shadows", "cornell", "mesh", "envmap", "divergence"};
+    for (const char* spd : {"balls", "gears", "mount", "rings", "teapot", "tetra", "tree"})
+        o.spotScenes.push_back(std::string("spd/") + spd + ".nff");
     o.sizes = {"160x90", "1920x1080"};
     o.pipelines = pipelineRegistry().names(true);
     o.accels = {"none", "bv", "grid", "bvh", "wide", "cwbvh"};
@@ -51,6 +53,7 @@ SmokeSummary runSmoke(const SmokeOptions& options, std::FILE* out) {
         std::string scene;
         RenderOptions::Accel accel;
         bool accelApplies;
+        bool spot = false;  // the first size only (SmokeOptions::spotScenes)
     };
     std::map<std::string, std::shared_ptr<const Scene>> scenes;
     std::vector<Unit> units;
@@ -64,6 +67,12 @@ SmokeSummary runSmoke(const SmokeOptions& options, std::FILE* out) {
             continue;
         }
         for (const std::string& a : options.accels) units.push_back({name, parseAccel(a), true});
+    }
+    for (const std::string& name : options.spotScenes) {
+        auto scene = std::make_shared<const Scene>(
+            loadScene(scenePath(name, options.sceneDir), options.readImage));
+        scenes[name] = scene;
+        units.push_back({name, RenderOptions::Accel::Bvh, true, true});
     }
     std::vector<std::pair<int, int>> sizes;
     for (const std::string& s : options.sizes) {
@@ -84,8 +93,8 @@ SmokeSummary runSmoke(const SmokeOptions& options, std::FILE* out) {
 
     auto cl = std::make_shared<ClContext>(selectDevice(options.device), options.sources);
     std::fprintf(out, "smoke: %zu scene(s) x %zu size(s) x %zu variant(s) on %s, commit %s%s\n",
-                 options.scenes.size(), sizes.size(), variants.size(), cl->device().label().c_str(),
-                 RTLAB_COMMIT,
+                 options.scenes.size() + options.spotScenes.size(), sizes.size(), variants.size(),
+                 cl->device().label().c_str(), RTLAB_COMMIT,
                  options.shard.whole() ? "" : (", shard " + options.shard.str()).c_str());
     std::fflush(out);
     SmokeSummary summary;
@@ -126,6 +135,7 @@ SmokeSummary runSmoke(const SmokeOptions& options, std::FILE* out) {
         const Unit& unit = units[u];
         const std::shared_ptr<const Scene>& scene = scenes.at(unit.scene);
         for (auto [w, h] : sizes) {
+            if (unit.spot && std::make_pair(w, h) != sizes.front()) continue;
             RenderOptions base = scene->defaults;
             base.width = w;
             base.height = h;

@@ -86,16 +86,17 @@ void checkOptions(const Scene& scene, const RenderOptions& o) {
                     FailureKind::InvalidOption);
 }
 
-size_t treePrivateBytes(int branching, int bounces) {
+size_t treePrivateBytes(int branching, int bounces, size_t nodeBytes) {
     // A node plus its colour (float3, 16 bytes in private memory) per tree slot.
-    return size_t(treeNodeCount(branching, bounces)) * (sizeof(dev::Node) + sizeof(cl_float3));
+    return size_t(treeNodeCount(branching, bounces)) * (nodeBytes + sizeof(cl_float3));
 }
 
-void checkPrivateTree(int branching, int bounces, const std::string& who, const std::string& hint) {
-    size_t need = treePrivateBytes(branching, bounces);
+void checkPrivateTree(int branching, int bounces, const std::string& who, const std::string& hint,
+                      size_t nodeBytes) {
+    size_t need = treePrivateBytes(branching, bounces, nodeBytes);
     if (need <= kPrivateTreeLimit) return;
     int fits = bounces;
-    while (fits > 0 && treePrivateBytes(branching, fits) > kPrivateTreeLimit) --fits;
+    while (fits > 0 && treePrivateBytes(branching, fits, nodeBytes) > kPrivateTreeLimit) --fits;
     std::string msg = "--bounces " + std::to_string(bounces) + ": the " + who + " keeps " +
                       std::to_string(treeNodeCount(branching, bounces)) + " ray-tree nodes (" +
                       std::to_string(need / 1024) +
@@ -116,6 +117,9 @@ std::vector<std::string> featureDefines(const Scene& scene, const RenderOptions&
     if (!scene.triangles.empty()) d.push_back("RT_HAS_TRIANGLES");
     if (scene.environment.cubemapSize > 0) d.push_back("RT_HAS_CUBEMAP");
     if (scene.hasProcedural()) d.push_back("RT_HAS_PROCEDURAL");
+    // Only past 4 lights: the programs of every other scene stay as they were.
+    if (const int lights = dev::nodeLights(scene.lights.size()); lights > 4)
+        d.push_back("RT_NODE_LIGHTS=" + std::to_string(lights));
     int c = scene.branching();
     d.push_back("RT_BRANCH=" + std::to_string(c));
     if (o.countRays) d.push_back("RT_COUNT_RAYS");

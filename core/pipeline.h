@@ -113,13 +113,14 @@ void checkOptions(const Scene& scene, const RenderOptions& options);
 // rtlab's own, not a limit devices report (OpenCL has no query for private memory per
 // work-item). A private array that large lives in off-chip memory anyway, where the weighted
 // layout needs none: past the cap, a clear error that names the highest B that fits.
-size_t treePrivateBytes(int branching, int bounces);
+// nodeBytes: a Node's size in the scene's programs (dev::nodeBytes of its light count).
+size_t treePrivateBytes(int branching, int bounces, size_t nodeBytes = sizeof(dev::Node));
 constexpr size_t kPrivateTreeLimit = 256 * 1024;
 // Throws when the tree of N nodes does not fit kPrivateTreeLimit, naming the bounce limit that
 // fits. `who` names the kernel that keeps the tree, as the user knows it; `hint`, appended to
 // the message, may name another way out that the kernel's own options offer.
 void checkPrivateTree(int branching, int bounces, const std::string& who,
-                      const std::string& hint = "");
+                      const std::string& hint = "", size_t nodeBytes = sizeof(dev::Node));
 
 // The scene's object arrays on the device, with the acceleration structure of one --accel mode.
 class DeviceScene {

@@ -24,6 +24,7 @@
 #include "core/accel.h"
 #include "core/error.h"
 #include "core/model_loader.h"
+#include "core/nff_loader.h"
 #include "core/obj_loader.h"
 
 namespace rt {
@@ -801,9 +802,10 @@ void rejectOtherModelFormats(const fs::path& path) {
     const std::string ext = lowerExtension(path);
     for (const char* other : kOthers)
         if (ext == other)
-            throw Error(path.string() + ": " + ext.substr(1) +
-                        " files are not supported; rtlab reads .obj, .gltf, .glb and .ply models "
-                        "and .json scenes (convert it, e.g. with assimp export or Blender)");
+            throw Error(
+                path.string() + ": " + ext.substr(1) +
+                " files are not supported; rtlab reads .obj, .gltf, .glb and .ply models "
+                "and .json and .nff scenes (convert it, e.g. with assimp export or Blender)");
 }
 
 // A file that is not JSON at all (a README, an image given by mistake) is named as such rather
@@ -826,7 +828,7 @@ void rejectNonJson(const fs::path& path) {
     if (seen == 0 || !in) return;  // empty: the loader's own message
     throw Error(path.string() +
                 ": not a scene file (a scene is a JSON object; rtlab reads .json "
-                "scenes and .obj, .gltf, .glb and .ply models)");
+                "and .nff scenes and .obj, .gltf, .glb and .ply models)");
 }
 
 }  // namespace
@@ -836,6 +838,7 @@ Scene loadScene(const std::filesystem::path& path, const ImageReader& readImage)
         rejectOtherModelFormats(path);
         if (isObj(path)) return wrapObj(path);
         if (isModelFile(path)) return wrapModel(path);
+        if (isNffFile(path)) return loadNff(path);
         rejectNonJson(path);
         return Loader(path, readImage).load();
     } catch (const std::bad_alloc&) {

@@ -1,4 +1,5 @@
-// rtlab — scene files (JSON, documented in scenes/README.md) and bare OBJ, glTF and PLY models.
+// rtlab — scene files (JSON, documented in scenes/README.md; NFF, core/nff_loader.h) and bare OBJ,
+// glTF and PLY models.
 // Every validation failure throws rt::Error with one line: "<file>: <json-pointer>: <reason>",
 // e.g. "scenes/bad.json: /spheres/2/radius: must be > 0, got -1".
 #pragma once
@@ -15,7 +16,7 @@ namespace rt {
 // rtlab_image provides readImage(). Without a reader, a scene with a cubemap is an error.
 using ImageReader = std::function<Image(const std::filesystem::path&)>;
 
-// Loads a .json scene, or wraps a bare .obj, .gltf, .glb or .ply model in the default scene
+// Loads a .json or .nff scene, or wraps a bare .obj, .gltf, .glb or .ply model in the default scene
 // (camera framing its bounds, one light, a ground plane; a glTF's own camera and lights where it
 // has them). Relative paths inside a scene resolve against the scene's directory.
 Scene loadScene(const std::filesystem::path& path, const ImageReader& readImage = {});

@@ -28,7 +28,15 @@ typedef uchar uint8_t;
 RT_DEV_BEGIN
 
 // Limits baked into the records. Scenes past them are rejected by the loader with a clear error.
-#define RT_MAX_LIGHTS 4            // Node keeps one occlusion count per light
+#define RT_MAX_LIGHTS 16  // the most lights a scene may have
+// Node keeps one occlusion count per light, RT_NODE_LIGHTS of them: a program is built with the
+// scene's light count rounded up to a multiple of 4 (core/pipeline.cpp, featureDefines), and
+// without the define, as every program of a scene of up to 4 lights is and as the host compiles
+// this file, with 4 (a 48-byte Node). Host code sizes device buffers of Nodes with
+// nodeBytes(lights) below, not sizeof.
+#ifndef RT_NODE_LIGHTS
+#define RT_NODE_LIGHTS 4
+#endif
 #define RT_MAX_SHADOW_SAMPLES 255  // ... in one byte
 #define RT_MAX_MATERIALS 65535     // Node keeps the material in 16 bits
 // The highest bounce limit B any front end, scene file or sweep accepts: a global ray tree at
@@ -200,7 +208,7 @@ typedef struct RenderSettings {
 //   material  2  material index
 //   kind      1  RT_KIND_*
 //   flags     1  RT_NODE_*
-//   occluded  4  occluded shadow samples per light (0..shadowSamples)
+//   occluded  4  occluded shadow samples per light (0..shadowSamples); RT_NODE_LIGHTS bytes
 // Children of heap slot i live at i*C + 1 + k: k = 0 reflection, k = 1 refraction.
 typedef struct Node {
     Float3 point;
@@ -210,7 +218,7 @@ typedef struct Node {
     uint16_t material;
     uint8_t kind;
     uint8_t flags;
-    uint8_t occluded[RT_MAX_LIGHTS];
+    uint8_t occluded[RT_NODE_LIGHTS];
 } Node;
 
 // BVH node. Inner node when count == 0: its children are nodes first and first + 1.
@@ -343,6 +351,18 @@ static_assert(sizeof(CwbvhPrim) == 48 && offsetof(CwbvhPrim, ref) == 12);
 static_assert(offsetof(Node, occluded) == 44);
 static_assert(offsetof(RenderSettings, camera) == 96);
 static_assert(offsetof(RenderSettings, grid) == 128);
+
+// Occlusion counts a Node keeps in the programs of a scene of `lights` lights (RT_NODE_LIGHTS),
+// and the device's sizes of the records that hold a Node there: sizeof on the host is the
+// 4-light record.
+constexpr int nodeLights(std::size_t lights) { return lights <= 4 ? 4 : int((lights + 3) / 4 * 4); }
+constexpr std::size_t nodeBytes(std::size_t lights) {
+    return sizeof(Node) - RT_NODE_LIGHTS + std::size_t(nodeLights(lights));
+}
+constexpr std::size_t bounceHitBytes(std::size_t lights) {
+    return sizeof(BounceHit) - RT_NODE_LIGHTS + std::size_t(nodeLights(lights));
+}
+static_assert(nodeBytes(4) == 48 && nodeBytes(5) == 52 && nodeBytes(RT_MAX_LIGHTS) == 60);
 }  // namespace rt::dev
 #endif
 

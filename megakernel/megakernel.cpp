@@ -34,7 +34,8 @@ std::vector<std::string> MegakernelPipeline::buildOptions(const RenderOptions& o
 }
 
 size_t MegakernelPipeline::privateBytes(const Scene& scene, const RenderOptions& o) {
-    if (megaLayout(o) == MegaLayout::Tree) return treePrivateBytes(scene.branching(), o.bounces);
+    if (megaLayout(o) == MegaLayout::Tree)
+        return treePrivateBytes(scene.branching(), o.bounces, dev::nodeBytes(scene.lights.size()));
     // Pending entries: a ray (2 x float3), a weight (float3) and a depth, 64 bytes.
     return size_t(weightedStackEntries(scene.branching(), o.bounces)) * 64;
 }
@@ -43,7 +44,7 @@ Image MegakernelPipeline::renderFrame(const Scene& scene, const RenderOptions& o
     const int branching = scene.branching();
     if (megaLayout(o) == MegaLayout::Tree)
         checkPrivateTree(branching, o.bounces, "megakernel's tree layout",
-                         " (or use --layout weighted)");
+                         " (or use --layout weighted)", dev::nodeBytes(scene.lights.size()));
     stats_.privateBytes = privateBytes(scene, o);
 
     const cl::Program program =

@@ -587,7 +587,7 @@ void PersistentPipeline::setBounceScratch(Kernel& kernel, const Scene& scene,
     const size_t rayBytes = groups * 2 * widest * sizeof(dev::BounceRay);
     const size_t termBytes = groups * size_t(batch) * size_t(treeNodeCount(branching, o.bounces)) *
                              sizeof(dev::BounceTerm);
-    const size_t hitBytes = staged ? groups * widest * sizeof(dev::BounceHit) : 0;
+    const size_t hitBytes = staged ? groups * widest * dev::bounceHitBytes(scene.lights.size()) : 0;
     const size_t orderBytes = staged ? groups * widest * sizeof(cl_int) : 0;
     const size_t total = rayBytes + termBytes + hitBytes + orderBytes;
     const DeviceInfo& dev = cl_.device();

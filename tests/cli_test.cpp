@@ -166,6 +166,33 @@ INSTANTIATE_TEST_SUITE_P(
                 "tests/data/bad_models/points.ply: no triangles"},
         BadCase{"render tests/data/bad_models/truncated.glb -o /tmp/x.png",
                 "tests/data/bad_models/truncated.glb: GLTF: Could not read the file contents"},
+        // Malformed NFF: the file, the line and the reason (core/nff_loader.cpp).
+        BadCase{"render tests/data/bad_nff/truncated_polygon.nff -o /tmp/x.png",
+                "tests/data/bad_nff/truncated_polygon.nff: line 9: truncated polygon 'p': the file "
+                "ends before its vertex 3 of 4 x"},
+        BadCase{"render tests/data/bad_nff/truncated_cone.nff -o /tmp/x.png",
+                "tests/data/bad_nff/truncated_cone.nff: line 9: truncated cone 'c': the file ends "
+                "before its apex x"},
+        BadCase{"render tests/data/bad_nff/truncated_sphere.nff -o /tmp/x.png",
+                "tests/data/bad_nff/truncated_sphere.nff: line 10: sphere 's' (of line 9): "
+                "expected its radius, got 's'"},
+        BadCase{"render tests/data/bad_nff/truncated_viewpoint.nff -o /tmp/x.png",
+                "tests/data/bad_nff/truncated_viewpoint.nff: line 1: truncated viewpoint: the file "
+                "ends before its 'angle'"},
+        BadCase{"render tests/data/bad_nff/unknown_keyword.nff -o /tmp/x.png",
+                "tests/data/bad_nff/unknown_keyword.nff: line 9: unknown keyword 'tpp'"},
+        BadCase{"render tests/data/bad_nff/polygon_two_vertices.nff -o /tmp/x.png",
+                "tests/data/bad_nff/polygon_two_vertices.nff: line 9: polygon 'p' of 2 vertices "
+                "(at least 3)"},
+        BadCase{"render tests/data/bad_nff/nan.nff -o /tmp/x.png",
+                "tests/data/bad_nff/nan.nff: line 9: sphere 's': centre y 'nan' is not a finite "
+                "32-bit float"},
+        BadCase{"render tests/data/bad_nff/from_equals_at.nff -o /tmp/x.png",
+                "tests/data/bad_nff/from_equals_at.nff: line 3: viewpoint: 'from' and 'at' are the "
+                "same point"},
+        BadCase{"render tests/data/bad_nff/too_many_lights.nff -o /tmp/x.png",
+                "tests/data/bad_nff/too_many_lights.nff: line 24: more than 16 lights (rtlab's "
+                "limit, RT_MAX_LIGHTS)"},
         BadCase{"render scenes/spheres.json -o scenes", "scenes: is a folder"},
         BadCase{"compare scenes/spheres.json -o /no/such/dir/p", "--output-prefix /no/such/dir/p"},
         BadCase{"render scenes/spheres.json --stats-json /no/such/dir/s.json -o /tmp/x.png",
@@ -394,6 +421,11 @@ TEST(Cli, ScenesAndSweepsAreListed) {
                 << scenes.out;
     EXPECT_NE(scenes.out.find("Cornell box from triangles"), std::string::npos) << scenes.out;
     EXPECT_NE(scenes.out.find("divergence/: "), std::string::npos) << scenes.out;
+    for (const char* spd : {"balls", "gears", "mount", "rings", "teapot", "tetra", "tree"})
+        EXPECT_NE(scenes.out.find(std::string(" ") + spd + ".nff"), std::string::npos)
+            << spd << "\n"
+            << scenes.out;
+    EXPECT_NE(scenes.out.find("spd/: 7 NFF scene(s)"), std::string::npos) << scenes.out;
     Result sweeps = run("sweeps");
     Result help = run("sweep --help");
     EXPECT_EQ(sweeps.status, 0) << sweeps.err;

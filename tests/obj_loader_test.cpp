@@ -201,7 +201,7 @@ TEST(ObjLoader, OtherModelFormatsAreRefusedByName) {
             const std::string msg = e.what();
             EXPECT_NE(msg.find(file), std::string::npos) << msg;
             EXPECT_NE(msg.find("files are not supported; rtlab reads .obj, .gltf, .glb and .ply "
-                               "models and .json scenes"),
+                               "models and .json and .nff scenes"),
                       std::string::npos)
                 << msg;
         }

@@ -83,7 +83,7 @@ const BadScene kBadScenes[] = {
     {"zero_scale.json", "/meshes/0/transform/scale: must be non-zero"},
     {"unknown_transform_key.json",
      "/meshes/0/transform: unknown key 'rotation' (did you mean 'rotate'?)"},
-    {"too_many_lights.json", "/lights: at most 4 lights, got 5"},
+    {"too_many_lights.json", "/lights: at most 16 lights, got 17"},
     {"negative_light_radius.json", "/lights/0/radius: must be >= 0, got -0.5"},
     {"cubemap_five_faces.json",
      "/environment/cubemap: must list 6 faces (+x, -x, +y, -y, +z, -z), got 5"},

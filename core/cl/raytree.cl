@@ -102,7 +102,7 @@ RT_SURFACE_LINKAGE Node RayTree_Surface(const SceneData* sc, Ray ray, Hit hit) {
     n.kind = (uchar)hit.kind;
     n.flags = (uchar)RT_NODE_TRACED;
     n.material = 0;
-    for (int j = 0; j < RT_MAX_LIGHTS; ++j) n.occluded[j] = 0;
+    for (int j = 0; j < RT_NODE_LIGHTS; ++j) n.occluded[j] = 0;
     n.point = F3((float3)(0.0f, 0.0f, 0.0f));
     n.normal = n.point;
     if (hit.kind == RT_KIND_MISS) return n;

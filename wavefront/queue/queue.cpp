@@ -13,6 +13,8 @@
 #include <array>
 #include <cctype>
 #include <chrono>
+#include <cstddef>
+#include <cstring>
 #include <deque>
 #include <functional>
 #include <map>
@@ -614,7 +616,11 @@ Image QueuePipeline::renderFrame(const Scene& scene, const RenderOptions& o) {
     queue_ = {};
     const int C = scene.branching();
     const DeviceInfo& dev = cl_.device();
-    size_t pool = poolSize(dev, C, o.bounces, o);
+    if (const size_t nodeBytes = dev::nodeBytes(scene.lights.size()); nodeBytes != nodeBytes_) {
+        releaseBuffers();  // the hit records are sized by it
+        nodeBytes_ = nodeBytes;
+    }
+    size_t pool = poolSize(dev, C, o.bounces, o, nodeBytes_);
     int group = groupSize(dev, o);
     if (const size_t pad = queueLocalPad(o); pad + kExtendLocalBytes > dev.localMem)
         throw Error("--queue-local-pad " + std::to_string(pad) + ": with the extend kernel's own " +
@@ -629,7 +635,8 @@ Image QueuePipeline::renderFrame(const Scene& scene, const RenderOptions& o) {
     size_t pixels = size_t(o.width) * size_t(o.height);
     auto hint = [&] {
         return "the queue pipeline's pool of " + std::to_string(pool) + " rays takes " +
-               std::to_string(pool * bytesPerRay(C) >> 20) + " MiB; lower it with --pool";
+               std::to_string(pool * bytesPerRay(C, queueShade(o), nodeBytes_) >> 20) +
+               " MiB; lower it with --pool";
     };
     const QueueShadeMode shade = queueShade(o);
     try {
@@ -737,7 +744,7 @@ Image QueuePipeline::renderFrame(const Scene& scene, const RenderOptions& o) {
     // What each extended ray moves through global memory at the least, for the memory floor of
     // the result READMEs (tools/rtlab_report/readme_floor.py): its ray record and its hit record.
     stats_.extras["ray_record_bytes"] = kRayRecordBytes;
-    stats_.extras["hit_record_bytes"] = sizeof(dev::Node);
+    stats_.extras["hit_record_bytes"] = nodeBytes_;
     stats_.extras["bounces_run"] = queue_.iterations;
     stats_.extras["restarted_paths"] = queue_.restartedPaths;
     if (o.countRays) stats_.extras["retraced_rays"] = queue_.retracedRays;  // by RT_RAY_* type
@@ -762,10 +769,15 @@ std::vector<int> QueuePipeline::sortedMaterialsForTest() {
     if (order.empty()) return {};
     q.enqueueReadBuffer(buf_.shadeQueues, CL_TRUE, RT_Q_SORTED * buf_.pool * 4, order.size() * 4,
                         order.data());
-    std::vector<dev::Node> nodes(buf_.pool);
-    q.enqueueReadBuffer(buf_.nodes, CL_TRUE, 0, nodes.size() * sizeof(dev::Node), nodes.data());
+    std::vector<unsigned char> nodes(buf_.pool * nodeBytes_);  // records of nodeBytes_ each
+    q.enqueueReadBuffer(buf_.nodes, CL_TRUE, 0, nodes.size(), nodes.data());
     std::vector<int> materials;
-    for (cl_int i : order) materials.push_back(nodes.at(size_t(i)).material);
+    for (cl_int i : order) {
+        uint16_t material;
+        std::memcpy(&material, &nodes.at(size_t(i) * nodeBytes_ + offsetof(dev::Node, material)),
+                    sizeof material);
+        materials.push_back(material);
+    }
     return materials;
 }
 

@@ -86,10 +86,12 @@ class QueuePipeline : public DevicePipeline {
     // never fewer than C^B, the most rays one path can hold at once. Throws rt::Error when
     // --pool is below that.
     static size_t poolSize(const DeviceInfo& device, int branching, int bounces,
-                           const RenderOptions& options);
+                           const RenderOptions& options, size_t nodeBytes = sizeof(dev::Node));
     // Device bytes per pool slot: ray fields, staging, node, queues (independent of B). A pool
     // takes pool * bytesPerRay + 4 + RT_Q_WORDS * 4 bytes (QueueStats::poolBytes).
-    static size_t bytesPerRay(int branching, QueueShadeMode shade = QueueShadeMode::Class);
+    // nodeBytes: a Node's size in the scene's programs (dev::nodeBytes of its light count).
+    static size_t bytesPerRay(int branching, QueueShadeMode shade = QueueShadeMode::Class,
+                              size_t nodeBytes = sizeof(dev::Node));
     // The shade queues a mode keeps, each as long as the pool: the classes', the pattern mode's
     // (the procedural one split), or sort's (misses, hits, hits sorted).
     static int shadeQueues(QueueShadeMode shade);
@@ -124,6 +126,7 @@ class QueuePipeline : public DevicePipeline {
     void releaseBuffers();
 
     QueueBuffers buf_;
+    size_t nodeBytes_ = sizeof(dev::Node);  // a hit record in the current scene's programs
     DeviceBuffer rayTally_, sortKeys_;
     QueueKernels kernels_;
     QueueStats queue_;

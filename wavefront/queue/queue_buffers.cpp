@@ -26,9 +26,9 @@ int QueuePipeline::shadeQueues(QueueShadeMode shade) {
     return RT_Q_CLASSES;
 }
 
-size_t QueuePipeline::bytesPerRay(int branching, QueueShadeMode shade) {
+size_t QueuePipeline::bytesPerRay(int branching, QueueShadeMode shade, size_t nodeBytes) {
     return kRayRecordBytes * size_t(1 + branching)  // the queue and its C staging slots
-           + sizeof(dev::Node)                      // extend's hit record, read by shade
+           + nodeBytes                              // extend's hit record, read by shade
            + 12                                     // contribution
            + 4 * 4                                  // children, offsets, block sums, retry
            + 4 * size_t(shadeQueues(shade) + 1);    // shade queues and shadow queue
@@ -56,7 +56,7 @@ int QueuePipeline::groupSize(const DeviceInfo& device, const RenderOptions& o) {
 }
 
 size_t QueuePipeline::poolSize(const DeviceInfo& device, int branching, int bounces,
-                               const RenderOptions& o) {
+                               const RenderOptions& o, size_t nodeBytes) {
     size_t widest = 1;  // C^B: a path's widest bounce (every ray spawns C children)
     for (int b = 0; b < bounces; ++b) widest *= size_t(branching);
     if (const size_t asked = queuePool(o)) {
@@ -78,7 +78,7 @@ size_t QueuePipeline::poolSize(const DeviceInfo& device, int branching, int boun
     size_t pool = device.isGpu() ? size_t(1) << 21 : size_t(1) << 16;
     size_t budget = size_t(device.globalMem / 4);
     if (o.memoryBudget) budget = std::min(budget, o.memoryBudget);
-    while (pool > 1024 && (pool * bytesPerRay(branching, queueShade(o)) > budget ||
+    while (pool > 1024 && (pool * bytesPerRay(branching, queueShade(o), nodeBytes) > budget ||
                            pool * size_t(branching) * 12 > device.maxAlloc))
         pool /= 2;
     return std::max(pool, widest);
@@ -114,7 +114,7 @@ void QueuePipeline::prepareBuffers(size_t pool, int branching, size_t pixels, in
     try {
         rays(b.rays, pool, "the queue pipeline's ray pool");
         rays(b.staging, pool * size_t(branching), "the queue pipeline's child staging area");
-        b.nodes = make(pool * sizeof(dev::Node), "the queue pipeline's hit records");
+        b.nodes = make(pool * nodeBytes_, "the queue pipeline's hit records");
         b.contrib = make(pool * 12, "the queue pipeline's contributions");
         b.children = make(pool * 4, "the queue pipeline's child counts");
         b.offsets = make(pool * 4, "the queue pipeline's prefix sums");

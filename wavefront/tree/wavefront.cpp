@@ -9,14 +9,14 @@
 
 namespace rt {
 
-size_t WavefrontPipeline::pixelBytes(int branching, int bounces) {
+size_t WavefrontPipeline::pixelBytes(int branching, int bounces, size_t nodeBytes) {
     const size_t nodes = size_t(treeNodeCount(branching, bounces));
-    return nodes * sizeof(dev::Node) + size_t(RT_TRACED_WORDS(nodes)) * sizeof(cl_uint);
+    return nodes * nodeBytes + size_t(RT_TRACED_WORDS(nodes)) * sizeof(cl_uint);
 }
 
 int WavefrontPipeline::tileRows(int width, int height, int branching, int bounces, size_t budget,
-                                const std::string& budgetName) {
-    auto rowBytes = [&](int b) { return size_t(width) * pixelBytes(branching, b); };
+                                const std::string& budgetName, size_t nodeBytes) {
+    auto rowBytes = [&](int b) { return size_t(width) * pixelBytes(branching, b, nodeBytes); };
     size_t row = rowBytes(bounces);
     if (row > budget) {
         const size_t nodes = size_t(treeNodeCount(branching, bounces));
@@ -25,7 +25,7 @@ int WavefrontPipeline::tileRows(int width, int height, int branching, int bounce
         // Named by what limits it (the budget), not by --bounces, which the user may not have set.
         std::string msg = "one row of the wavefront ray tree at bounce limit " +
                           std::to_string(bounces) + " (" + std::to_string(width) + " pixels x (" +
-                          std::to_string(nodes) + " nodes x " + std::to_string(sizeof(dev::Node)) +
+                          std::to_string(nodes) + " nodes x " + std::to_string(nodeBytes) +
                           " B + " + std::to_string(RT_TRACED_WORDS(nodes) * sizeof(cl_uint)) +
                           " B of traced flags) = " + std::to_string(row) + " B) exceeds " +
                           budgetName + " (" + std::to_string(budget) + " B); ";
@@ -60,14 +60,15 @@ Image WavefrontPipeline::renderFrame(const Scene& scene, const RenderOptions& o)
     // A row window (the viewer's pieces of a slow frame) renders rows [first, end) only, in tiles
     // of at most `rows` rows: the budget's, or the window's when it is smaller.
     const int first = o.rowBegin, end = o.lastRow();
-    const int frameRows = tileRows(o.width, o.height, C, o.bounces, budget, budgetName);
+    const size_t nodeBytes = dev::nodeBytes(scene.lights.size());
+    const int frameRows = tileRows(o.width, o.height, C, o.bounces, budget, budgetName, nodeBytes);
     const int rows = std::min(frameRows, end - first);
     // What an out-of-memory error from the driver is told about the frame (NVIDIA's, for one, can
     // fail at launch when the global tree and the kernels' private memory together do not fit).
     const int memoryTiles = tileCount(end - first, rows);
     auto memoryHint = [&] {
-        const double gib =
-            double(size_t(o.width) * rows * pixelBytes(C, o.bounces)) / double(1ull << 30);
+        const double gib = double(size_t(o.width) * rows * pixelBytes(C, o.bounces, nodeBytes)) /
+                           double(1ull << 30);
         char buf[256];
         std::snprintf(buf, sizeof buf,
                       "the frame needs a %.2f GiB ray tree (%d row tile%s); lower --bounces or "
@@ -82,12 +83,12 @@ Image WavefrontPipeline::renderFrame(const Scene& scene, const RenderOptions& o)
     // The tree holds treeRows_ rows. A whole frame sizes it to its tile exactly; a window keeps a
     // larger tree of the same frame rather than reallocating for every piece, but never one
     // larger than the whole frame's tile (the budget).
-    const size_t pixelSize = pixelBytes(C, o.bounces);
+    const size_t pixelSize = pixelBytes(C, o.bounces, nodeBytes);
     const bool keep = treeWidth_ == o.width && treePixelBytes_ == pixelSize && treeRows_ >= rows &&
                       treeRows_ <= frameRows;  // a whole frame: == rows
     const int capacityRows = keep ? treeRows_ : rows;
     const size_t pixels = size_t(o.width) * capacityRows;
-    const size_t treeBytes = pixels * size_t(treeNodes) * sizeof(dev::Node);
+    const size_t treeBytes = pixels * size_t(treeNodes) * nodeBytes;
     const size_t flagBytes = pixels * flagWords * sizeof(cl_uint);
     size_t imageBytes = size_t(o.width) * o.height * 3 * sizeof(float);
     try {
@@ -115,7 +116,7 @@ Image WavefrontPipeline::renderFrame(const Scene& scene, const RenderOptions& o)
     // The tree held, both buffers: one tile's (a window's may be an earlier piece's, larger).
     stats_.extras["tree_bytes"] = treeBytes + flagBytes;
     stats_.extras["tree_pixel_bytes"] = pixelSize;
-    stats_.extras["node_bytes"] = sizeof(dev::Node);  // a slot's payload (the memory floor)
+    stats_.extras["node_bytes"] = nodeBytes;  // a slot's payload (the memory floor)
     stats_.extras["memory_tiles"] = memoryTiles;
 
     Kernel trace(program, "Wavefront_Trace"), image(program, "Wavefront_Image"),

@@ -20,12 +20,13 @@ class WavefrontPipeline : public DevicePipeline {
 
     // Bytes of one pixel's tree: N node payloads and RT_TRACED_WORDS(N) words of traced flags.
     // Every tree size (rows per tile, budgets, messages, stats) is counted from it.
-    static size_t pixelBytes(int branching, int bounces);
+    // nodeBytes: a Node's size in the scene's programs (dev::nodeBytes of its light count).
+    static size_t pixelBytes(int branching, int bounces, size_t nodeBytes = sizeof(dev::Node));
     // Rows per tile for a frame, given the budget for the tree (payload and
     // flag buffers together, bytes). Throws rt::Error
     // naming the bounce limit that would fit when not even one row does.
     static int tileRows(int width, int height, int branching, int bounces, size_t budget,
-                        const std::string& budgetName);
+                        const std::string& budgetName, size_t nodeBytes = sizeof(dev::Node));
     // Row tiles a frame of `height` rows needs at `rows` rows per tile: the one place it is
     // counted.
     static int tileCount(int height, int rows) { return (height + rows - 1) / rows; }
