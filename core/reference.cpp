@@ -39,6 +39,7 @@ struct Source {
     int kind = RT_KIND_MISS;
     int object = -1;
     bool outward = true;  // leaves a sphere's outside (its outward normal's side)
+    glm::dvec3 away{0};   // flat primitives: the side of the plane the ray was spawned on
 };
 
 struct Surface {
@@ -71,6 +72,7 @@ class Tracer {
     // go first there to bound the traversals; an exact tie then goes to the object a loop in
     // section 2's order would have kept (better), so the hit is the same.
     Hit closestHit(const Ray& ray, const Source& from = {}) const {
+        if (intoSource(ray, from)) return backAtSource(ray, from);
         Hit best;
         if (bruteForce_) {
             for (std::size_t i = 0; i < scene_.spheres.size(); ++i) {
@@ -114,6 +116,7 @@ class Tracer {
 
     // Section 4: any hit with 0 < t < length blocks the shadow ray.
     bool occluded(const Ray& ray, double length, const Source& from = {}) const {
+        if (intoSource(ray, from)) return true;
         auto blocks = [&](const std::optional<double>& t) { return t && *t > 0 && *t < length; };
         for (std::size_t i = 0; i < scene_.planes.size(); ++i)
             if (blocks(planeT(ray, int(i), from))) return true;
@@ -187,25 +190,68 @@ class Tracer {
                                  : ref::intersectSpherePlain(ray, toD(s.center), s.radius);
     }
 
+    // The oracle's flat rule: a ray meets a plane through its own origin only at t = 0, so a flat
+    // primitive whose plane passes within 1e-12 of the coordinates' size of the origin (1e4
+    // times the double rounding of a point on it) is not offered. This covers the primitive the
+    // ray leaves, and any coplanar neighbour or overlapping twin (concave NFF polygons, fanned,
+    // overlap themselves), where skipping the source alone would meet the twin at t ~ 1e-16.
+    static bool throughOrigin(const Ray& ray, dvec3 n, double offset, double size) {
+        return std::abs(glm::dot(n, ray.origin) - offset) <= 1e-12 * glm::length(n) * size;
+    }
+
     std::optional<double> planeT(const Ray& ray, int i, const Source& from) const {
         if (leaves(from, RT_KIND_PLANE, i)) return std::nullopt;
         const dev::Plane& pl = scene_.planes[std::size_t(i)];
-        return ref::intersectPlane(ray, toD(pl.normal), double(pl.offset), !oracle_);
+        const dvec3 n = toD(pl.normal);
+        const double o = double(pl.offset);
+        if (oracle_ && throughOrigin(ray, n, o, std::max(maxAbs(ray.origin), std::abs(o))))
+            return std::nullopt;
+        return ref::intersectPlane(ray, n, o, !oracle_);
+    }
+
+    static double maxAbs(dvec3 v) {
+        return std::max({std::abs(v.x), std::abs(v.y), std::abs(v.z)});
     }
 
     std::optional<ref::TriangleHit> triangleHit(const Ray& ray, int i, const Source& from) const {
         if (leaves(from, RT_KIND_TRIANGLE, i)) return std::nullopt;
         const dev::Triangle& tr = scene_.triangles[std::size_t(i)];
-        if (oracle_)
-            return ref::intersectTriangleWatertight(ray, toD(tr.v0), toD(tr.v1), toD(tr.v2), false);
+        if (oracle_) {
+            const dvec3 v0 = toD(tr.v0), v1 = toD(tr.v1), v2 = toD(tr.v2);
+            const dvec3 n = glm::cross(v1 - v0, v2 - v0);
+            const double size = std::max({maxAbs(ray.origin), maxAbs(v0), maxAbs(v1), maxAbs(v2)});
+            if (throughOrigin(ray, n, glm::dot(n, v0), size)) return std::nullopt;
+            return ref::intersectTriangleWatertight(ray, v0, v1, v2, false);
+        }
         return opt_.watertight
                    ? ref::intersectTriangleWatertight(ray, toD(tr.v0), toD(tr.v1), toD(tr.v2))
                    : ref::intersectTriangleMT(ray, toD(tr.v0), toD(tr.v1), toD(tr.v2));
     }
 
+    // A ray spawned on one side of a flat primitive whose direction points into its other side
+    // (a shading normal bends the reflection or the light below the geometric plane): the limit
+    // of a vanishing offset meets the primitive itself at t -> 0, which the oracle returns.
+    bool intoSource(const Ray& ray, const Source& from) const {
+        return oracle_ && (from.kind == RT_KIND_TRIANGLE || from.kind == RT_KIND_PLANE) &&
+               glm::dot(ray.dir, from.away) < 0;
+    }
+
+    Hit backAtSource(const Ray& ray, const Source& from) const {
+        Hit h{0, from.kind, from.object};
+        if (from.kind == RT_KIND_TRIANGLE) {  // the origin's barycentrics, by areas
+            const dev::Triangle& tr = scene_.triangles[std::size_t(from.object)];
+            const dvec3 v0 = toD(tr.v0), e1 = toD(tr.v1) - v0, e2 = toD(tr.v2) - v0;
+            const dvec3 n = glm::cross(e1, e2), q = ray.origin - v0;
+            const double nn = glm::dot(n, n);
+            h.u = glm::dot(glm::cross(q, e2), n) / nn;
+            h.v = glm::dot(glm::cross(e1, q), n) / nn;
+        }
+        return h;
+    }
+
     // The primitive a ray spawned at s on `side` (section 3) leaves.
     static Source source(const Surface& s, double side) {
-        return Source{s.kind, s.object, (side > 0) != s.inside};
+        return Source{s.kind, s.object, (side > 0) != s.inside, side * s.ng};
     }
 
     // Section 2, normals: the shading normal faces the incoming ray; inside when flipped. Hit
