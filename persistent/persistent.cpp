@@ -442,7 +442,7 @@ Image PersistentPipeline::renderScheduled(const Scene& scene, const RenderOption
     // The bounce loop's warps meet only between bounces, and a larger group gives each of them
     // more of the batch's rays to take between meetings: it takes 512 lanes on a GPU.
     const long long lanes = laneOption().integer(o.pipelineOptions);
-    const size_t local = lanes != 0    ? size_t(lanes)
+    size_t local = lanes != 0    ? size_t(lanes)
                          : dev.isGpu() ? (bounce ? std::min<size_t>(512, dev.maxWorkGroup) : 128)
                                        : 64;
     const auto regroupBy = PersistRegroup(regroupOption().index(o.pipelineOptions));
@@ -470,44 +470,52 @@ Image PersistentPipeline::renderScheduled(const Scene& scene, const RenderOption
                             : "--persistent-regroup takes a pixel a lane at once") +
                 ")",
             FailureKind::InvalidOption);
-    // Regrouped: the work-group's local arrays are sized by its work-items.
-    std::vector<std::string> programDefines = defines;
-    if (regroup && !bounce) programDefines.push_back("RT_PERSIST_REGROUP=" + std::to_string(local));
-    if (regroup && bounce) programDefines.push_back("RT_PERSIST_BOUNCE_SORT");
-    if (shadowPass) programDefines.push_back("RT_PERSIST_BOUNCE_SHADOW_PASS");
-    if (regroupBy == PersistRegroup::Material) programDefines.push_back("RT_PERSIST_REGROUP_CLASS");
-    if (nested) programDefines.push_back("RT_PERSIST_NESTED");
-    if (lockstep) programDefines.push_back("RT_PERSIST_LOCKSTEP");
-    if (bounce) programDefines.push_back("RT_PERSIST_BOUNCE=" + std::to_string(local));
-    // The group size declared to the compiler (persistent.cl, RT_GROUP_LANES), except on NVIDIA.
-    if (!dev.nvidia()) programDefines.push_back("RT_REQD_GROUP_SIZE");
-    const std::string& tile = tileOption().choice(o.pipelineOptions);
-    const size_t by = tile.find('x');
-    programDefines.push_back("RT_PERSIST_TILE_W=" + tile.substr(0, by));
-    programDefines.push_back("RT_PERSIST_TILE_H=" + tile.substr(by + 1));
-    const long long registerCap =
-        persistentRegisterCap(dev, local, registersOption().integer(o.pipelineOptions));
-    const std::vector<std::string> buildOptions = registerCapBuildOptions(registerCap, dev);
-    // On NVIDIA the warp's lanes vote and take pixels together (inline PTX, RT_WARP_PTX).
-    const cl::Program program =
-        rayLoopProgram("persistent.cl", programDefines, buildOptions, o, {"RT_WARP_PTX"});
-    DeviceScene& deviceScene = this->deviceScene(scene, o.accel);
-    const size_t bytes = size_t(o.width) * o.height * 3 * sizeof(float);
-    try {
-        image_.ensure(cl_, bytes, "the image buffer");
-        next_.ensure(cl_, sizeof(cl_int), "the persistent megakernel's pixel counter");
-    } catch (const cl::Error& e) {
-        throwClError(e, "preparing persistent-megakernel buffers");
-    }
-    stats_.addBuffer("image", bytes);
-
-    const size_t most = workItems(dev, o, local);
-    Kernel kernel(program, bounce    ? "Persistent_RenderBounce"
-                           : regroup ? "Persistent_RenderRegrouped"
-                                     : "Persistent_Render");
-    // A build can still be too large for the group (its private memory, or a compiler that
-    // assumed smaller groups): refused here by name, not by the launch.
-    if (const size_t fits = kernel.maxGroup(dev.device); fits < local) {
+    // The program for work-groups of `local` lanes: its defines, build options and kernel.
+    std::vector<std::string> programDefines, buildOptions;
+    long long registerCap = 0;
+    const auto build = [&](size_t local) {
+        // Regrouped: the work-group's local arrays are sized by its work-items.
+        programDefines = defines;
+        if (regroup && !bounce)
+            programDefines.push_back("RT_PERSIST_REGROUP=" + std::to_string(local));
+        if (regroup && bounce) programDefines.push_back("RT_PERSIST_BOUNCE_SORT");
+        if (shadowPass) programDefines.push_back("RT_PERSIST_BOUNCE_SHADOW_PASS");
+        if (regroupBy == PersistRegroup::Material)
+            programDefines.push_back("RT_PERSIST_REGROUP_CLASS");
+        if (nested) programDefines.push_back("RT_PERSIST_NESTED");
+        if (lockstep) programDefines.push_back("RT_PERSIST_LOCKSTEP");
+        if (bounce) programDefines.push_back("RT_PERSIST_BOUNCE=" + std::to_string(local));
+        // The group size declared to the compiler (persistent.cl, RT_GROUP_LANES), except on
+        // NVIDIA.
+        if (!dev.nvidia()) programDefines.push_back("RT_REQD_GROUP_SIZE");
+        const std::string& tile = tileOption().choice(o.pipelineOptions);
+        const size_t by = tile.find('x');
+        programDefines.push_back("RT_PERSIST_TILE_W=" + tile.substr(0, by));
+        programDefines.push_back("RT_PERSIST_TILE_H=" + tile.substr(by + 1));
+        registerCap = persistentRegisterCap(dev, local, registersOption().integer(o.pipelineOptions));
+        buildOptions = registerCapBuildOptions(registerCap, dev);
+        // On NVIDIA the warp's lanes vote and take pixels together (inline PTX, RT_WARP_PTX).
+        const cl::Program program =
+            rayLoopProgram("persistent.cl", programDefines, buildOptions, o, {"RT_WARP_PTX"});
+        return Kernel(program, bounce    ? "Persistent_RenderBounce"
+                               : regroup ? "Persistent_RenderRegrouped"
+                                         : "Persistent_Render");
+    };
+    Kernel kernel = build(local);
+    // A build can still be too large for the group (its registers or private memory, or a
+    // compiler that assumed smaller groups). Where no --persistent-lanes was asked, the group
+    // shrinks to the largest power of two the build takes and the program is built again for it
+    // (NVIDIA's driver ran the bounce loop at 121 registers in groups of at most 256, below its
+    // 512-lane default); an asked group is refused here by name, not by the launch.
+    for (size_t fits = kernel.maxGroup(dev.device); fits < local;
+         fits = kernel.maxGroup(dev.device)) {
+        if (lanes == 0 && fits >= 16) {
+            size_t smaller = 16;
+            while (smaller * 2 <= fits) smaller *= 2;
+            local = smaller;
+            kernel = build(local);
+            continue;
+        }
         // The registers the build log gives (NVIDIA), which decide the group on most GPUs.
         const auto used = stats_.kernelResources.find(kernel.name() + ".registers");
         const std::string registers =
@@ -520,6 +528,17 @@ Image PersistentPipeline::renderScheduled(const Scene& scene, const RenderOption
                         std::to_string(fits) + " work-items a work-group; lower --persistent-lanes",
                     FailureKind::InvalidOption);
     }
+    stats_.extras["persist_lanes"] = local;
+    DeviceScene& deviceScene = this->deviceScene(scene, o.accel);
+    const size_t bytes = size_t(o.width) * o.height * 3 * sizeof(float);
+    try {
+        image_.ensure(cl_, bytes, "the image buffer");
+        next_.ensure(cl_, sizeof(cl_int), "the persistent megakernel's pixel counter");
+    } catch (const cl::Error& e) {
+        throwClError(e, "preparing persistent-megakernel buffers");
+    }
+    stats_.addBuffer("image", bytes);
+    const size_t most = workItems(dev, o, local);
     if (registerCap != 0) stats_.extras["persist_register_cap"] = registerCap;
     kernel.set("image", image_.get()).set("next", next_.get());
     if (bounce)

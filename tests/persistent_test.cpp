@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <tuple>
 
 #include "core/error.h"
@@ -257,6 +258,41 @@ TEST(Persistent, RefusesMoreLanesThanTheDeviceRuns) {
             EXPECT_EQ(what.rfind("--persistent-lanes 1024: ", 0), 0u) << what;
         }
     }
+}
+
+// A kernel as built may run fewer work-items a group than the device's limit (NVIDIA's driver
+// ran the bounce loop at 121 registers in groups of at most 256, below its 512-lane default).
+// No default may be one the driver refuses: every variant at its defaults still renders the
+// weighted megakernel's bits in the largest power of two the kernel takes, and a group that was
+// asked is refused by name. RTLAB_KERNEL_GROUP_LIMIT stands in for such a build.
+TEST(Persistent, DefaultLanesFitWhatTheKernelRuns) {
+    Scene scene = load("cornell");
+    RenderOptions base = weighted(scene, 3, 1);
+    MegakernelPipeline mega(test::device());
+    const Image m = mega.render(scene, base);
+    ASSERT_EQ(setenv("RTLAB_KERNEL_GROUP_LIMIT", "24", 1), 0);
+    for (const PipelineVariant& variant : pipelineInfo("persist").variants) {
+        PersistentPipeline persist(test::device());
+        RenderOptions o = base;
+        o.pipelineOptions.setAll(variant.values);
+        const Image image = persist.render(scene, o);
+        EXPECT_TRUE(sameBits(m, image)) << "variant " << variant.name;
+        const auto lanes = persist.stats().extras.find("persist_lanes");
+        ASSERT_NE(lanes, persist.stats().extras.end()) << "variant " << variant.name;
+        EXPECT_EQ(lanes->get<long long>(), 16) << "variant " << variant.name;
+    }
+    RenderOptions asked = base;
+    setOption(asked, "persistent-lanes", 32ll);
+    PersistentPipeline persist(test::device());
+    try {
+        persist.render(scene, asked);
+        ADD_FAILURE() << "32 asked lanes ran where the kernel takes 24";
+    } catch (const Error& e) {
+        EXPECT_EQ(e.kind(), FailureKind::InvalidOption);
+        EXPECT_NE(std::string(e.what()).find("runs at most 24 work-items"), std::string::npos)
+            << e.what();
+    }
+    unsetenv("RTLAB_KERNEL_GROUP_LIMIT");
 }
 
 // A work-group's lanes share the registers of one multiprocessor: 65,536 on NVIDIA's recent
