@@ -60,7 +60,7 @@ void addPredict(CLI::App& app) {
         "Also count the shading keys (a procedural pattern, or plain, mirror, glass, a miss) the\n"
         "lanes of a warp step meet, in three orders of the same rays: the megakernel's (each lane\n"
         "its own tree), the bounce loop's lists (32 consecutive rays of one bounce), and those\n"
-        "lists sorted by key (--persistent-regroup with the bounce loop); 1 is one key's code;\n"
+        "lists sorted by key (--persistent-schedule bounce-staged); 1 is one key's code;\n"
         "and the lanes of 32 that cast shadow rays in a step, inline and in a shadow pass");
 }
 
@@ -80,7 +80,7 @@ int runPredict() {
         const LaneEstimate e = estimateBusyLanes(scene, o, a.warps);
         const Prediction p = predictDesign(e, a.threshold);
         // What --pipeline persist --persistent-schedule auto would render with (its own rule).
-        const PersistSchedule persist = choosePersistentSchedule(e);
+        const PersistChoice persist = choosePersistentSchedule(e);
         const char* schedule = persist.name();
         const std::optional<ShadingEstimate> shading =
             a.shading ? std::optional(estimateShadingKeys(scene, o, a.warps)) : std::nullopt;

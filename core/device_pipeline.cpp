@@ -90,14 +90,11 @@ void DevicePipeline::finishRayCount(const RenderOptions& options) {
         stats_.extras["warp_steps"] = double(w.steps);
         stats_.extras["warp_lanes_active"] =
             w.steps ? double(w.lanesActive) / double(w.steps) : 0.0;
-        // The persistent loops' phase clocks, where they were built with them (in millions of
-        // cycles, summed over warps; RT_PHASE_* order).
-        static const char* phases[RT_PHASES] = {"bookkeeping", "trace",      "trace_wait",
-                                                "file",        "shade",      "shade_wait",
-                                                "shadow",      "shadow_wait"};
-        for (int i = 0; i < RT_PHASES; ++i)
-            if (w.phases[i] != 0)
-                stats_.extras[std::string("phase_mcycles_") + phases[i]] = w.phases[i] * 64e-6;
+        // The pipeline's phase clocks, where its kernels were built with them (in millions of
+        // cycles, summed over warps), under the names it gives them.
+        const std::vector<std::string> names = phaseNames();
+        for (size_t i = 0; i < names.size() && i < size_t(RT_PHASES); ++i)
+            if (w.phases[i] != 0) stats_.extras["phase_mcycles_" + names[i]] = w.phases[i] * 64e-6;
     }
 }
 

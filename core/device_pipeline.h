@@ -64,6 +64,9 @@ class DevicePipeline : public Pipeline {
     // rayLoopProgram counts them). Both do nothing for other frames.
     void startRayCount(const RenderOptions& options);
     void finishRayCount(const RenderOptions& options);
+    // The names of the phase clocks the pipeline's kernels may keep (core/types.h, RT_PHASES
+    // slots, in slot order), which finishRayCount gives the counts it reads; none by default.
+    virtual std::vector<std::string> phaseNames() const { return {}; }
 
     ClContext& cl_;
     std::unique_ptr<DeviceScene> scene_;

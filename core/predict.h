@@ -61,13 +61,13 @@ glm::ivec2 stripPixel(long long k, int width, int height, int tw = 4, int th = 1
 // of the same rays: the megakernel's (a warp of 16x2 pixels, each lane tracing its own tree depth
 // first), the bounce loop's (32 consecutive rays of one bounce's list, a batch of pixels in 4x16
 // strips, each ray's children appended after its list's earlier rays' children), and those lists
-// sorted by key before shading (--persistent-regroup with the bounce loop). 1 when a warp's lanes
+// sorted by key before shading (--persistent-schedule bounce-staged). 1 when a warp's lanes
 // run one key's code; more when it runs several in turn.
 //
 // And the lanes of 32 that cast shadow rays (those whose ray hit something) in a warp step that
 // casts any: the megakernel's step, the bounce loop's trace (each lane right after its own
-// trace, --persistent-shadows inline), and its shadow pass (each list's hits compacted, 32 a
-// step, --persistent-shadows pass).
+// trace, --persistent-schedule bounce), and its shadow pass (each list's hits compacted, 32 a
+// step, --persistent-schedule bounce-staged).
 struct ShadingEstimate {
     double megakernel = 0, bounce = 0, sorted = 0;                  // keys a warp step
     double shadowMegakernel = 0, shadowInline = 0, shadowPass = 0;  // lanes casting shadow rays
