@@ -21,21 +21,17 @@
 #include "bounce_state.h"
 #include "handout.cl"
 
+RAY_STATE_CODEC(BounceRay)
+
 inline BounceRay Bounce_Pack(const Pending* p, int pixel, int slot) {
     BounceRay r;
-    r.origin = F3(p->ray.origin);
-    r.dir = F3(p->ray.dir);
-    r.weight = F3(p->weight);
-    r.depthType = p->depth << 8 | p->type;
+    RayState_Pack_BounceRay(p, &r);
     r.pixel = pixel;
     r.slot = slot;
     return r;
 }
 
-inline Pending Bounce_Unpack(BounceRay r) {
-    return PathState_Make(makeRay(f3(r.origin), f3(r.dir)), f3(r.weight), r.depthType >> 8,
-                          r.depthType & 0xff);
-}
+inline Pending Bounce_Unpack(BounceRay r) { return RayState_Unpack_BounceRay(r); }
 
 // A pixel's colour from its tree of terms (slot 0 its camera ray), summed in pre-order with the
 // reflection first: the order in which the weighted megakernel's stack pops the same rays.

@@ -7,21 +7,22 @@
 // quoted #include, leaves them to the preprocessor, which skips them on the device; there the
 // kernel files include types.h first.
 #ifdef __OPENCL_C_VERSION__
+#include "ray_state.h"
 #include "types.h"
 #else
+#include <core/ray_state.h>
 #include <core/types.h>
 #endif
 
 RT_DEV_BEGIN
 
 // A work-group's rays of one bounce wait in global memory in these records: the weighted
-// megakernel's pending ray (core/cl/pathstate.cl) packed without float3 padding, the pixel
+// megakernel's pending ray (core/ray_state.h's fields) packed without float3 padding, the pixel
 // (its index among the batch the work-group holds) and the ray's slot in that pixel's tree
 // (children of slot i at i*C + 1 + k, as Node's).
 // clang-format off
 typedef struct BounceRay {
-    Float3 origin, dir, weight;
-    int32_t depthType;  // depth << 8 | RT_RAY_* type
+    RT_RAY_STATE_MEMBERS  // core/ray_state.h: origin, dir, weight, depthType (depth << 8 | type)
     int32_t pixel;
     int32_t slot;
 } BounceRay;

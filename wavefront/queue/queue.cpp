@@ -183,13 +183,13 @@ class QueueFrame {
         scene_.setArgs(k, s);
         return k;
     }
-    // The five arguments QUEUE_RAYS_PARAMS(prefix) declares (queue.cl): prefixOrigin, ...
+    // The arguments QUEUE_RAYS_PARAMS(prefix) declares (queue.cl): the per-ray state's fields
+    // by the names core/ray_state.h gives them (prefixOrigin, ...), and prefixPixel.
     static Kernel& setRays(Kernel& k, const std::string& prefix, const QueueBuffers::Rays& r) {
-        return k.set(prefix + "Origin", r.origin)
-            .set(prefix + "Dir", r.dir)
-            .set(prefix + "Weight", r.weight)
-            .set(prefix + "Pixel", r.pixel)
-            .set(prefix + "Meta", r.meta);
+#define QUEUE_RAYS_ARG(X, field, Field, ...) k.set(prefix + #Field, r.field);
+        RT_RAY_STATE(QUEUE_RAYS_ARG, QUEUE_RAYS_ARG, _)
+#undef QUEUE_RAYS_ARG
+        return k.set(prefix + "Pixel", r.pixel);
     }
     // 1D launches over work-items [0, items) (none when zero): one, or pieces in whole
     // work-groups when the stage's measured cost per item says one would run past the cap. A
@@ -343,7 +343,7 @@ class QueuePass {
             .set("shadowQueue", b_.shadowQueue)
             .set("counters", b_.counters)
             .set("rayPixel", b_.rays.pixel)
-            .set("rayMeta", b_.rays.meta)
+            .set("rayMeta", b_.rays.depthType)
             .set("rayTally", b_.rayTally);
         for (const ShadeLaunch& l : shade_) {
             if (std::string(l.kernel).rfind("Queue_Shade", 0) != 0) continue;  // the sort's
@@ -398,7 +398,7 @@ class QueuePass {
             .set("counters", b_.counters);
         f_.kernel("Queue_Accumulate")
             .set("pixels", b_.rays.pixel)
-            .set("meta", b_.rays.meta)
+            .set("meta", b_.rays.depthType)
             .set("contrib", b_.contrib)
             .set("sums", b_.sums)
             .set("counters", b_.counters)
