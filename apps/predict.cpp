@@ -1,6 +1,6 @@
 // rtlab predict: which design a scene favours on a GPU, from the busy lanes of a sample of warps
-// traced on the CPU (core/predict.h), before any pipeline runs.
-#include "core/predict.h"
+// traced on the CPU (auto/predict.h), before any pipeline runs.
+#include "auto/predict.h"
 
 #include <cstdio>
 #include <nlohmann/json.hpp>
@@ -11,10 +11,10 @@
 
 #include "apps/commands.h"
 #include "apps/options.h"
+#include "auto/persist_choice.h"
 #include "core/error.h"
 #include "core/scene_loader.h"
 #include "image/image_io.h"
-#include "persistent/persistent.h"
 
 namespace rt::cli {
 namespace {

@@ -70,8 +70,14 @@ struct FrameStats {
     void addBuffer(const std::string& name, size_t bytes);
 };
 
+struct LaneEstimate;  // the predictor's (auto/predict.h)
+
 class Pipeline {
   public:
+    // A chooser that traced the scene's warps hands its estimate (traced in `ms`) to a pipeline
+    // that chooses from one too, so that the warps are traced once; most ignore it.
+    virtual void useLaneEstimate(const Scene&, const RenderOptions&, const LaneEstimate&,
+                                 double /*ms*/) {}
     virtual ~Pipeline() = default;
     // The registered name (PipelineRegistry): "mega".
     virtual const char* name() const = 0;

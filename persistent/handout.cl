@@ -14,6 +14,7 @@
 // and samples are summed in the same order, so every schedule's image is the same to the bit.
 #ifndef RT_PERSIST_HANDOUT_CL
 #define RT_PERSIST_HANDOUT_CL
+#include "handout_order.h"
 #include "megakernel_sample.cl"
 #include "phases.h"
 
@@ -26,12 +27,9 @@ inline int2 Persistent_PixelOf(int k, int first, int count, int width) {
         const int p = first + k, y = p / width;
         return (int2)(p - y * width, y);
     }
-    const int tw = RT_PERSIST_TILE_W, th = RT_PERSIST_TILE_H;
-    const int rows = count / width, band = k / (width * th);
-    const int bandRows = min(th, rows - band * th), i = k - band * width * th;
-    const int strip = i / (tw * bandRows), j = i - strip * tw * bandRows;
-    const int stripWidth = min(tw, width - strip * tw);
-    return (int2)(strip * tw + j % stripWidth, first / width + band * th + j / stripWidth);
+    int x, y;
+    RT_STRIP_PIXEL(k, width, count / width, RT_PERSIST_TILE_W, RT_PERSIST_TILE_H, x, y);
+    return (int2)(x, first / width + y);
 }
 
 // A kernel whose work-group size is a define tells the compiler so where the host asks
@@ -178,13 +176,11 @@ inline void Persistent_EndOfTree(const SceneData* sc, global float* image, Persi
 
 // What the regrouped and the staged bounce loops sort hits by: the procedural pattern. (Keying
 // hits without a pattern by material class too was 1-3% slower everywhere; persistent/README.md.)
-// RG_MIRROR and RG_GLASS are kept so that the key count, and with it the local arrays, stay as
-// measured.
-#define RG_MIRROR (RT_PATTERN_BUMP + 1)  // no pattern, reflective
-#define RG_GLASS (RG_MIRROR + 1)         // no pattern, transparent
-#define RG_MISS (RG_GLASS + 1)           // a ray that left the scene
-#define RG_IDLE (RG_MISS + 1)            // a lane without a ray this step
-#define RG_KEYS (RG_IDLE + 1)
+// The key numbering (RT_KEY_*, with mirror and glass between the patterns and a miss) is
+// auto/handout_order.h's, which the predictor shares; the key count sizes the local arrays.
+#define RG_MISS RT_KEY_MISS  // auto/handout_order.h, shared with the predictor
+#define RG_IDLE RT_KEY_IDLE
+#define RG_KEYS RT_KEYS
 
 // The sort key of a traced ray's hit.
 inline int Regroup_KeyOf(const SceneData* sc, const Node* node) {

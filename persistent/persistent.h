@@ -6,33 +6,14 @@
 #include <optional>
 #include <string>
 
+#include "auto/persist_choice.h"
+#include "auto/predict.h"
 #include "core/device_pipeline.h"
 #include "core/launch_planner.h"
-#include "core/predict.h"
 #include "persistent/schedules.h"
 #include "wavefront/bounce/bounce.h"
 
 namespace rt {
-
-// --persistent-schedule auto: the schedule a scene's predicted warps call for (core/predict.h).
-// Where neighbouring pixels' trees disagree (fewer busy lanes than the predictor's queue
-// threshold), or where a warp's camera rays hit several objects and so shade several procedural
-// patterns, two regrouped work-groups of 256 lanes a compute unit, capped at 128 registers so that
-// both fit on NVIDIA, sort their hits by pattern each step; elsewhere the nested loop keeps a
-// work-group's lanes on neighbouring pixels. Fitted on the H200's map: the nested loop was the
-// best schedule on every scene at 29.5 predicted lanes or more and at most 1.4 objects a warp, a
-// regrouped one on every wall at 26.5 lanes or fewer and on the two coherent walls of 16 px
-// spheres (1.8 objects a warp).
-inline constexpr double kRegroupBelowLanes = kQueueBelowLanes;
-inline constexpr double kRegroupFromObjects = 1.6;
-
-struct PersistChoice {
-    bool regroup = false;  // else the nested loop
-    std::string reason;    // one sentence with the lanes or objects it rests on
-    const char* name() const { return regroup ? "regrouped" : "nested"; }
-};
-
-PersistChoice choosePersistentSchedule(const LaneEstimate& estimate);
 
 // Sets --persistent-schedule auto in `options` (what `--pipeline auto` renders the persistent
 // megakernel with).
@@ -54,8 +35,8 @@ class PersistentPipeline : public DevicePipeline {
 
     // --persistent-schedule auto: chooses from this estimate of the scene's warps (traced in
     // `ms`) instead of tracing them again, while the scene and settings stay the same.
-    void useEstimate(const Scene& scene, const RenderOptions& options, const LaneEstimate& estimate,
-                     double ms) {
+    void useLaneEstimate(const Scene& scene, const RenderOptions& options,
+                         const LaneEstimate& estimate, double ms) override {
         estimates_.put(scene, options, estimate, ms);
     }
 

@@ -388,7 +388,7 @@ TEST(Persistent, AutoScheduleUsesAnEstimateHandedIn) {
     agree.lanes = 32;
     agree.busyLanes = 32;
     agree.objectsPerWarp = 1;
-    persist.useEstimate(scene, o, agree, 123.0);
+    persist.useLaneEstimate(scene, o, agree, 123.0);
     persist.render(scene, o);
     EXPECT_EQ(persist.stats().extras.value("persist_schedule", ""), "nested");
     EXPECT_EQ(persist.stats().extras.value("persist_predict_ms", 0.0), 123.0);

@@ -270,6 +270,16 @@ void registerWavefrontTree(PipelineRegistry& registry) {
     p.family = "wavefront";
     p.description = "trace, image and reset kernels around a global ray tree of W x rows x N slots";
     p.supports = {.adaptiveAa = false, .tiling = true, .rowWindow = true};
+    p.fitsOnePiece = [](const Scene& scene, const RenderOptions& o, const DeviceInfo& dev) {
+        size_t budget = dev.maxAlloc;
+        if (o.memoryBudget && o.memoryBudget < budget) budget = o.memoryBudget;
+        try {
+            return WavefrontPipeline::tileRows(o.width, o.height, scene.branching(), o.bounces,
+                                               budget, "") >= o.height;
+        } catch (const Error&) {
+            return false;  // not even one row fits
+        }
+    };
     p.make = [](ClContext* cl) { return std::make_unique<WavefrontPipeline>(*cl); };
     registry.add(std::move(p));
 }
