@@ -43,6 +43,20 @@ cl::Program DevicePipeline::program(const std::string& file,
     return p;
 }
 
+std::string DevicePipeline::launchKey(const RenderOptions& o,
+                                      const std::vector<std::string>& defines,
+                                      const std::vector<std::string>& buildOptions,
+                                      const std::string& extra) {
+    std::string key = std::to_string(o.width) + "x" + std::to_string(o.height);
+    for (const std::string& d : defines) key += " " + d;
+    for (const std::string& b : buildOptions) key += " " + b;
+    key += " b" + std::to_string(o.bounces) + extra;
+    const int first = o.rowBegin, last = o.lastRow();
+    if (first != 0 || last != o.height)
+        key += " rows " + std::to_string(first) + "-" + std::to_string(last);
+    return key;
+}
+
 DeviceScene& DevicePipeline::deviceScene(const Scene& scene, RenderOptions::Accel accel) {
     if (!scene_ || !scene_->matches(scene, accel))
         scene_ = std::make_unique<DeviceScene>(cl_, scene, accel);

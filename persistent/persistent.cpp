@@ -235,14 +235,10 @@ Image PersistentPipeline::renderRun(const Scene& scene, const RenderOptions& o, 
     if (bounce) bounce_.bind(cl_, kernel, stats_, scene, o, most / local, local, schedule.staged);
     dev::RenderSettings settings = makeSettings(scene, o);
     deviceScene.setArgs(kernel, settings);
-    std::string key = std::to_string(o.width) + "x" + std::to_string(o.height);
-    for (const std::string& d : programDefines) key += " " + d;
-    for (const std::string& b : buildOptions) key += " " + b;
-    key += " b" + std::to_string(o.bounces) + " g" + std::to_string(most);
     const int first = o.rowBegin, last = o.lastRow();
-    if (first != 0 || last != o.height)
-        key += " rows " + std::to_string(first) + "-" + std::to_string(last);
-    planner_.begin(o.maxLaunchMs, key, o.width, 1);
+    planner_.begin(o.maxLaunchMs,
+                   launchKey(o, programDefines, buildOptions, " g" + std::to_string(most)), o.width,
+                   1);
     Image out(o.width, o.height);
     try {
         startRayCount(o);
