@@ -1,13 +1,11 @@
 // rtlab — the per-ray state every design stores between steps, defined once (as Cycles'
 // state_template.h defines its integrator state): a pending ray's fields, each listed with how it
-// is stored, and expanded wherever a design keeps rays outside registers:
-//   * the megakernel's packed stack record (PackedPending, megakernel/megakernel_sample.cl);
-//   * the queue wavefront's pool, a structure of arrays: its kernels' parameters and loads and
-//     stores (wavefront/queue/queue.cl) and the host's buffers and argument names
-//     (wavefront/queue/queue.h, queue.cpp);
-//   * the bounce loop's ray lists (BounceRay, wavefront/bounce/bounce_state.h).
-// In registers a ray is core/cl/pathstate.cl's Pending; RAY_STATE_PACK / RAY_STATE_UNPACK
-// (pathstate.cl) turn one into the other, field by field from this list.
+// is stored, and expanded wherever a design keeps rays outside registers: a record's members
+// (RT_RAY_STATE_MEMBERS) and its pack and unpack (RAY_STATE_CODEC, core/cl/pathstate.cl), a
+// structure of arrays in global memory with its kernel parameters, loads and stores
+// (RayStateArrays, pathstate.cl), and on the host the buffers and kernel argument names of such
+// arrays. Each pipeline's own storage (its stack record, pool or ray lists) is declared in its
+// folder from these. In registers a ray is core/cl/pathstate.cl's Pending.
 //
 // RT_RAY_STATE(FLOAT3, META, X) calls, in storage order,
 //   FLOAT3(X, field, Field, member)  three floats, Pending's float3 `member`;
