@@ -1,6 +1,6 @@
 // rtlab predict: which design a scene favours on a GPU, from the busy lanes of a sample of warps
-// traced on the CPU (core/predict.h), before any pipeline runs.
-#include "core/predict.h"
+// traced on the CPU (auto/predict.h), before any pipeline runs.
+#include "auto/predict.h"
 
 #include <cstdio>
 #include <nlohmann/json.hpp>
@@ -11,10 +11,10 @@
 
 #include "apps/commands.h"
 #include "apps/options.h"
+#include "auto/persist_choice.h"
 #include "core/error.h"
 #include "core/scene_loader.h"
 #include "image/image_io.h"
-#include "persistent/persistent.h"
 
 namespace rt::cli {
 namespace {
@@ -60,7 +60,7 @@ void addPredict(CLI::App& app) {
         "Also count the shading keys (a procedural pattern, or plain, mirror, glass, a miss) the\n"
         "lanes of a warp step meet, in three orders of the same rays: the megakernel's (each lane\n"
         "its own tree), the bounce loop's lists (32 consecutive rays of one bounce), and those\n"
-        "lists sorted by key (--persistent-regroup with the bounce loop); 1 is one key's code;\n"
+        "lists sorted by key (--persistent-schedule bounce-staged); 1 is one key's code;\n"
         "and the lanes of 32 that cast shadow rays in a step, inline and in a shadow pass");
 }
 
@@ -80,7 +80,7 @@ int runPredict() {
         const LaneEstimate e = estimateBusyLanes(scene, o, a.warps);
         const Prediction p = predictDesign(e, a.threshold);
         // What --pipeline persist --persistent-schedule auto would render with (its own rule).
-        const PersistSchedule persist = choosePersistentSchedule(e);
+        const PersistChoice persist = choosePersistentSchedule(e);
         const char* schedule = persist.name();
         const std::optional<ShadingEstimate> shading =
             a.shading ? std::optional(estimateShadingKeys(scene, o, a.warps)) : std::nullopt;

@@ -5,16 +5,13 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <map>
 #include <optional>
 #include <utility>
 #include <vector>
 
 #include "core/error.h"
 #include "core/pipeline_registry.h"
-#include "megakernel/megakernel.h"
-#include "persistent/persistent.h"
-#include "wavefront/queue/queue.h"
-#include "wavefront/tree/wavefront.h"
 
 namespace rt {
 
@@ -65,13 +62,11 @@ std::string format(const char* fmt, double a, double b = 0) {
 
 }  // namespace
 
-std::string AutoDesign::name() const {
-    return pipeline == "mega" ? std::string("mega-") + megaLayoutName(layout) : pipeline;
-}
+std::string AutoDesign::name() const { return pipeline == "mega" ? "mega-" + layout : pipeline; }
 
 AutoKind chooseKind(const LaneEstimate& e, const AutoContext& c) {
     const std::string lanes = format("%.1f busy lanes of %.0f", e.busyLanes, double(e.lanes));
-    const MegaLayout fitting = c.treeFits ? MegaLayout::Tree : MegaLayout::Weighted;
+    const std::string fitting = c.treeFits ? "tree" : "weighted";
     if (c.adaptive)
         return {{{"mega", fitting, ""}}, "adaptive anti-aliasing: only the megakernel has it"};
     if (!c.gpuRule)
@@ -85,35 +80,35 @@ AutoKind chooseKind(const LaneEstimate& e, const AutoContext& c) {
         AutoKind k{{},
                    lanes + format(" (within %.1f of %.1f): too close to call", kUncertainLanes,
                                   kQueueBelowLanes)};
-        if (queueSide) k.designs.push_back({"queue", MegaLayout::Weighted, ""});
-        k.designs.push_back({"mega", MegaLayout::Weighted, ""});
-        if (c.waveFits) k.designs.push_back({"wave", MegaLayout::Weighted, ""});
-        k.designs.push_back({"persist", MegaLayout::Weighted, ""});
-        if (!queueSide) k.designs.push_back({"queue", MegaLayout::Weighted, ""});
+        if (queueSide) k.designs.push_back({"queue", "weighted", ""});
+        k.designs.push_back({"mega", "weighted", ""});
+        if (c.waveFits) k.designs.push_back({"wave", "weighted", ""});
+        k.designs.push_back({"persist", "weighted", ""});
+        if (!queueSide) k.designs.push_back({"queue", "weighted", ""});
         return k;
     }
     if (e.busyLanes < kQueueBelowLanes)
-        return {{{"queue", MegaLayout::Weighted, ""}, {"persist", MegaLayout::Weighted, ""}},
+        return {{{"queue", "weighted", ""}, {"persist", "weighted", ""}},
                 lanes + format(" (below %.1f): neighbouring pixels' trees disagree, so a "
                                "design that keeps lanes busy: compacted queues or "
                                "regrouped persistent threads",
                                kQueueBelowLanes)};
-    AutoKind k{{{"mega", MegaLayout::Weighted, ""}},
+    AutoKind k{{{"mega", "weighted", ""}},
                lanes + format(" (at least %.1f): one tree a work-item", kQueueBelowLanes)};
     if (c.waveFits)
-        k.designs.push_back({"wave", MegaLayout::Weighted, ""});
+        k.designs.push_back({"wave", "weighted", ""});
     else
         k.reason += "; the tree wavefront's tree would need row tiles";
-    k.designs.push_back({"persist", MegaLayout::Weighted, ""});
+    k.designs.push_back({"persist", "weighted", ""});
     return k;
 }
 
 struct AutoPipeline::Impl {
-    explicit Impl(ClContext& cl) : cl(cl) {}
+    Impl(ClContext& cl, const PipelineRegistry& registry) : cl(cl), registry(registry) {}
 
     ClContext& cl;
-    std::unique_ptr<Pipeline> mega, wave, queue;
-    std::unique_ptr<PersistentPipeline> persist;
+    const PipelineRegistry& registry;
+    std::map<std::string, std::unique_ptr<Pipeline>> pipelines;  // made by the registry, kept
     // The predictor's estimate of the scene the choice was last made for, which the persistent
     // megakernel's own schedule choice reuses.
     std::optional<LaneEstimate> estimate;
@@ -124,32 +119,32 @@ struct AutoPipeline::Impl {
     bool decided = false;
 
     Pipeline& pipeline(const std::string& name, const Pipeline::Progress& progress) {
-        if (name == "persist") {
-            if (!persist) persist = std::make_unique<PersistentPipeline>(cl);
-            persist->setProgress(progress);
-            return *persist;
-        }
-        std::unique_ptr<Pipeline>& p = name == "mega" ? mega : name == "wave" ? wave : queue;
-        if (!p) {
-            if (name == "mega")
-                p = std::make_unique<MegakernelPipeline>(cl);
-            else if (name == "wave")
-                p = std::make_unique<WavefrontPipeline>(cl);
-            else
-                p = std::make_unique<QueuePipeline>(cl);
-        }
+        std::unique_ptr<Pipeline>& p = pipelines[name];
+        if (!p) p = registry.make(name, &cl);
         p->setProgress(progress);
         return *p;
     }
 
-    // The options a design renders with; the persistent megakernel chooses its own schedule,
-    // from the estimate auto made when it made one.
+    // Sets `pipeline`'s option `option` to `value` in `o`, as its registry entry declares it.
+    void setOption(RenderOptions& o, const std::string& pipeline, const std::string& option,
+                   const std::string& value) const {
+        for (const PipelineOption& declared : registry.get(pipeline).options)
+            if (declared.name == option) return declared.set(o.pipelineOptions, value);
+        throw Error("auto: " + pipeline + " has no option --" + option);
+    }
+
+    // The options a design renders with: the megakernel in its layout; the persistent
+    // megakernel in its variant "auto" (it chooses its own schedule), from the estimate auto made
+    // when it made one.
     RenderOptions optionsFor(const Scene& scene, const RenderOptions& o, const AutoDesign& d) {
         RenderOptions out = o;
-        if (d.pipeline == "mega") setMegaLayout(out, d.layout);
+        if (d.pipeline == "mega") setOption(out, "mega", "layout", d.layout);
         if (d.pipeline == "persist") {
-            setPersistentScheduleAuto(out);
-            if (estimate && persist) persist->useEstimate(scene, out, *estimate, estimateMs);
+            for (const PipelineVariant& v : registry.get("persist").variants)
+                if (v.name == "auto") out.pipelineOptions.setAll(v.values);
+            const auto made = pipelines.find("persist");
+            if (estimate && made != pipelines.end() && made->second)
+                made->second->useLaneEstimate(scene, out, *estimate, estimateMs);
         }
         return out;
     }
@@ -162,20 +157,14 @@ struct AutoPipeline::Impl {
         const int C = scene.branching();
         c.treeFits = treePrivateBytes(C, o.bounces, dev::nodeBytes(scene.lights.size())) <=
                      kPrivateTreeLimit;
-        size_t budget = dev.maxAlloc;
-        if (o.memoryBudget && o.memoryBudget < budget) budget = o.memoryBudget;
-        try {
-            c.waveFits =
-                WavefrontPipeline::tileRows(o.width, o.height, C, o.bounces, budget, "",
-                                            dev::nodeBytes(scene.lights.size())) >= o.height;
-        } catch (const Error&) {
-            c.waveFits = false;  // not even one row fits
-        }
+        const PipelineInfo& wave = registry.get("wave");
+        c.waveFits = !wave.fitsOnePiece || wave.fitsOnePiece(scene, o, dev);
         return c;
     }
 };
 
-AutoPipeline::AutoPipeline(ClContext& cl) : impl_(std::make_unique<Impl>(cl)) {}
+AutoPipeline::AutoPipeline(ClContext& cl, const PipelineRegistry& registry)
+    : impl_(std::make_unique<Impl>(cl, registry)) {}
 AutoPipeline::~AutoPipeline() = default;
 
 Image AutoPipeline::render(const Scene& scene, const RenderOptions& o) {
@@ -198,12 +187,12 @@ Image AutoPipeline::render(const Scene& scene, const RenderOptions& o) {
         std::string reason;
         if (choice == AutoChoice::Measure) {
             // Every design that can render the frame in one piece.
-            if (context.treeFits) candidates.push_back({"mega", MegaLayout::Tree, ""});
-            candidates.push_back({"mega", MegaLayout::Weighted, ""});
+            if (context.treeFits) candidates.push_back({"mega", "tree", ""});
+            candidates.push_back({"mega", "weighted", ""});
             if (!context.adaptive) {
-                if (context.waveFits) candidates.push_back({"wave", MegaLayout::Weighted, ""});
-                candidates.push_back({"queue", MegaLayout::Weighted, ""});
-                candidates.push_back({"persist", MegaLayout::Weighted, ""});
+                if (context.waveFits) candidates.push_back({"wave", "weighted", ""});
+                candidates.push_back({"queue", "weighted", ""});
+                candidates.push_back({"persist", "weighted", ""});
             }
         } else {
             const auto start = std::chrono::steady_clock::now();
@@ -279,7 +268,8 @@ void registerAutoPipeline(PipelineRegistry& registry) {
         "scene; --auto-choice says how, --stats and a line on stderr say which and why";
     p.supports = {.adaptiveAa = true, .tiling = false, .rowWindow = true};
     p.options = {choiceOption(), ruleOption()};
-    p.make = [](ClContext* cl) { return std::make_unique<AutoPipeline>(*cl); };
+    // The registry being filled, which lives as long as the pipelines it makes.
+    p.make = [&registry](ClContext* cl) { return std::make_unique<AutoPipeline>(*cl, registry); };
     registry.add(std::move(p));
 }
 

@@ -1,6 +1,6 @@
 // rtlab — `--pipeline auto`: renders a scene with the design that should be fastest for it, and
 // says which it chose and why (FrameStats::note and extras). It chooses once per scene and
-// settings: the predictor (core/predict.h: the busy lanes of a sample of warps, traced on the CPU
+// settings: the predictor (auto/predict.h: the busy lanes of a sample of warps, traced on the CPU
 // before any device work) names the kind of design, and trial frames, timed on the device, pick
 // among the designs of that kind (or of every kind, --auto-choice measure).
 #pragma once
@@ -9,18 +9,18 @@
 #include <string>
 #include <vector>
 
+#include "auto/predict.h"
 #include "core/pipeline.h"
-#include "core/predict.h"
-#include "megakernel/megakernel_options.h"
+#include "core/pipeline_registry.h"
 
 namespace rt {
 
 // A design auto renders with: a registered pipeline, and the megakernel's layout when it is one.
 struct AutoDesign {
     std::string pipeline;  // "mega", "wave", "queue" or "persist" (its schedule chosen: auto)
-    MegaLayout layout = MegaLayout::Weighted;
-    std::string reason;        // one sentence, with the numbers it rests on
-    std::string name() const;  // "mega-weighted", "wave", "queue", "persist"
+    std::string layout = "weighted";  // the megakernel's --layout: "tree" or "weighted"
+    std::string reason;               // one sentence, with the numbers it rests on
+    std::string name() const;         // "mega-weighted", "wave", "queue", "persist"
 };
 
 // What the choice knows besides the lanes: the device kind whose fitted rule applies, and the
@@ -61,7 +61,9 @@ AutoKind chooseKind(const LaneEstimate& estimate, const AutoContext& context);
 
 class AutoPipeline : public Pipeline {
   public:
-    explicit AutoPipeline(ClContext& cl);
+    // Renders with the pipelines `registry` makes (the filled registry, pipelines/registry.h);
+    // auto names none of their types.
+    AutoPipeline(ClContext& cl, const PipelineRegistry& registry);
     ~AutoPipeline() override;
     const char* name() const override { return "auto"; }
     Image render(const Scene& scene, const RenderOptions& options) override;

@@ -43,6 +43,20 @@ cl::Program DevicePipeline::program(const std::string& file,
     return p;
 }
 
+std::string DevicePipeline::launchKey(const RenderOptions& o,
+                                      const std::vector<std::string>& defines,
+                                      const std::vector<std::string>& buildOptions,
+                                      const std::string& extra) {
+    std::string key = std::to_string(o.width) + "x" + std::to_string(o.height);
+    for (const std::string& d : defines) key += " " + d;
+    for (const std::string& b : buildOptions) key += " " + b;
+    key += " b" + std::to_string(o.bounces) + extra;
+    const int first = o.rowBegin, last = o.lastRow();
+    if (first != 0 || last != o.height)
+        key += " rows " + std::to_string(first) + "-" + std::to_string(last);
+    return key;
+}
+
 DeviceScene& DevicePipeline::deviceScene(const Scene& scene, RenderOptions::Accel accel) {
     if (!scene_ || !scene_->matches(scene, accel))
         scene_ = std::make_unique<DeviceScene>(cl_, scene, accel);
@@ -90,14 +104,11 @@ void DevicePipeline::finishRayCount(const RenderOptions& options) {
         stats_.extras["warp_steps"] = double(w.steps);
         stats_.extras["warp_lanes_active"] =
             w.steps ? double(w.lanesActive) / double(w.steps) : 0.0;
-        // The persistent loops' phase clocks, where they were built with them (in millions of
-        // cycles, summed over warps; RT_PHASE_* order).
-        static const char* phases[RT_PHASES] = {"bookkeeping", "trace",      "trace_wait",
-                                                "file",        "shade",      "shade_wait",
-                                                "shadow",      "shadow_wait"};
-        for (int i = 0; i < RT_PHASES; ++i)
-            if (w.phases[i] != 0)
-                stats_.extras[std::string("phase_mcycles_") + phases[i]] = w.phases[i] * 64e-6;
+        // The pipeline's phase clocks, where its kernels were built with them (in millions of
+        // cycles, summed over warps), under the names it gives them.
+        const std::vector<std::string> names = phaseNames();
+        for (size_t i = 0; i < names.size() && i < size_t(RT_PHASES); ++i)
+            if (w.phases[i] != 0) stats_.extras["phase_mcycles_" + names[i]] = w.phases[i] * 64e-6;
     }
 }
 

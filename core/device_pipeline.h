@@ -49,6 +49,14 @@ class DevicePipeline : public Pipeline {
     // and its kernels' resources recorded in the frame's statistics.
     cl::Program program(const std::string& file, const std::vector<std::string>& defines,
                         const std::vector<std::string>& options = {});
+    // The key a frame's launch plan is kept under (LaunchPlanner::begin), built in one place for
+    // every pipeline that plans launches by rows: the frame's size, its program's defines and
+    // build options, the bounce limit (one program may serve several; costs differ), `extra`
+    // (what else the pipeline's costs depend on, e.g. " g<work-items>"), and a row window,
+    // which has a profile of its own (the planner's is by row from the first one rendered).
+    static std::string launchKey(const RenderOptions& o, const std::vector<std::string>& defines,
+                                 const std::vector<std::string>& buildOptions,
+                                 const std::string& extra = "");
     // The scene's device copy with the structure of `accel`, made again only when either
     // changed; its structure's statistics go into the frame's.
     DeviceScene& deviceScene(const Scene& scene, RenderOptions::Accel accel);
@@ -64,6 +72,9 @@ class DevicePipeline : public Pipeline {
     // rayLoopProgram counts them). Both do nothing for other frames.
     void startRayCount(const RenderOptions& options);
     void finishRayCount(const RenderOptions& options);
+    // The names of the phase clocks the pipeline's kernels may keep (core/types.h, RT_PHASES
+    // slots, in slot order), which finishRayCount gives the counts it reads; none by default.
+    virtual std::vector<std::string> phaseNames() const { return {}; }
 
     ClContext& cl_;
     std::unique_ptr<DeviceScene> scene_;

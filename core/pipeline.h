@@ -29,8 +29,8 @@ using RayCounts = std::array<uint64_t, RT_RAY_TYPES>;
 // steps, and the steps; lanesActive / steps is the mean number of busy lanes of a warp.
 struct WarpCounts {
     uint64_t lanesActive = 0, steps = 0;
-    // The regrouped persistent loop's phase clocks (RT_PHASE_*, core/types.h), in units of 64
-    // cycles; zero unless it was built with RT_PERSIST_PHASE_CLOCKS.
+    // A pipeline's phase clocks (RT_PHASES slots, core/types.h), in units of 64 cycles; zero
+    // unless its kernels were built with them.
     uint64_t phases[RT_PHASES] = {};
 };
 const char* rayTypeName(int type);  // "primary", "reflection", "refraction", "shadow"
@@ -70,8 +70,14 @@ struct FrameStats {
     void addBuffer(const std::string& name, size_t bytes);
 };
 
+struct LaneEstimate;  // the predictor's (auto/predict.h)
+
 class Pipeline {
   public:
+    // A chooser that traced the scene's warps hands its estimate (traced in `ms`) to a pipeline
+    // that chooses from one too, so that the warps are traced once; most ignore it.
+    virtual void useLaneEstimate(const Scene&, const RenderOptions&, const LaneEstimate&,
+                                 double /*ms*/) {}
     virtual ~Pipeline() = default;
     // The registered name (PipelineRegistry): "mega".
     virtual const char* name() const = 0;

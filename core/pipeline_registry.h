@@ -44,6 +44,10 @@ struct PipelineInfo {
     // settle a shared option whose command-line default its own options cannot honour.
     // launchCapGiven says whether --max-launch-ms was given (else it holds the CLI default).
     std::function<void(RenderOptions& options, bool launchCapGiven)> settleDefaults;
+    // Whether it renders this frame on this device in one piece (no row tiles); unset: always.
+    // The choosers ask it (auto/) without naming the pipeline's types.
+    std::function<bool(const Scene& scene, const RenderOptions& options, const DeviceInfo& device)>
+        fitsOnePiece;
     // cl is null only for the reference, which needs no device.
     std::function<std::unique_ptr<Pipeline>(ClContext* cl)> make;
 };

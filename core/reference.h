@@ -38,7 +38,7 @@ Image renderReferenceBruteForce(const Scene& scene, const RenderOptions& options
 
 // The closest-hit rays (primary, reflection, refraction; shadow rays not counted) of the ray
 // trees of each pixel, summed over its AA grid samples, in the order of `pixels`: the shape of
-// the work each pixel gives a work-item that traces its whole tree (core/predict.h). No shading
+// the work each pixel gives a work-item that traces its whole tree (auto/predict.h). No shading
 // is done, so this costs a fraction of rendering those pixels.
 std::vector<int> referenceRayTreeSizes(const Scene& scene, const RenderOptions& options,
                                        const std::vector<glm::ivec2>& pixels, int threads = 0);

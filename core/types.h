@@ -54,18 +54,10 @@ RT_DEV_BEGIN
 // the ray loop, and the warp steps.
 #define RT_COUNT_LANES_ACTIVE RT_RAY_TYPES
 #define RT_COUNT_WARP_STEPS (RT_RAY_TYPES + 1)
-// Then the phase clocks of the persistent megakernel's regrouped and bounce loops, a diagnostic
-// built only with RT_PERSIST_PHASE_CLOCKS (a sweep's cl-options, or RTLAB_CL_OPTIONS) on
-// NVIDIA: the cycles their warps spend in each phase, in units of 64, summed over warps.
+// Then RT_PHASES phase clocks, a diagnostic a pipeline's kernels may keep (the persistent
+// schedules', built with RT_PERSIST_PHASE_CLOCKS on NVIDIA: persistent/phases.h names the slots):
+// the cycles their warps spend in each phase, in units of 64, summed over warps.
 #define RT_COUNT_PHASES (RT_RAY_TYPES + 2)
-#define RT_PHASE_BOOKKEEPING 0  // pixels, stacks and results; the bounce loop's batches and sums
-#define RT_PHASE_TRACE 1        // the warp's rays, and their shadow rays but in a shadow pass
-#define RT_PHASE_TRACE_WAIT 2   // at the barrier after the trace, for the group's slowest warp
-#define RT_PHASE_FILE 3         // filing the hits: in key order; the bounce loop's staged hits
-#define RT_PHASE_SHADE 4        // shading the hits
-#define RT_PHASE_SHADE_WAIT 5   // at the barrier after the shading
-#define RT_PHASE_SHADOW 6       // the bounce loop's shadow pass (--persistent-shadows pass)
-#define RT_PHASE_SHADOW_WAIT 7  // at the barrier after it
 #define RT_PHASES 8
 #define RT_COUNTERS (RT_RAY_TYPES + 2 + RT_PHASES)
 
@@ -282,36 +274,6 @@ typedef struct CwbvhPrim {
     float pad2;
 } CwbvhPrim;
 
-// The persistent megakernel's bounce loop (--persistent-loop bounce, persistent/persistent.cl)
-// keeps each work-group's rays of one bounce in global memory, in these records: the weighted
-// megakernel's pending ray (core/cl/pathstate.cl) packed without float3 padding, the pixel (its
-// index among the batch the work-group holds) and the ray's slot in that pixel's tree (children
-// of slot i at i*C + 1 + k, as Node's).
-typedef struct BounceRay {
-    Float3 origin, dir, weight;
-    int32_t depthType;  // depth << 8 | RT_RAY_* type
-    int32_t pixel;
-    int32_t slot;
-} BounceRay;
-
-// The staged bounce loop (--persistent-loop bounce with --persistent-regroup or
-// --persistent-shadows pass) keeps a bounce's traced rays here between the trace and the passes
-// after it: the hit, the ray, and, sorted, its key and its rank among the hits of that key.
-typedef struct BounceHit {
-    Node node;
-    BounceRay ray;
-    int32_t key, rank;
-    int32_t pad[2];
-} BounceHit;
-
-// What a traced ray added to its pixel, and which children it spawned (bit 0 reflection, bit 1
-// refraction): one per slot of every pixel's tree, so that the pixel's terms can be summed in the
-// weighted megakernel's order once the tree is done.
-typedef struct BounceTerm {
-    Float3 term;
-    int32_t children;
-} BounceTerm;
-
 // Bounding volume of 7 slab pairs around a mesh (report 3.6.2, Kay and Kajiya 1986): slab k
 // holds the points p with lo[k] <= dot(RT_SLAB_k, p) <= hi[k], for the unnormalized normals
 // x, y, z, (1,1,1), (-1,1,1), (1,-1,1), (1,1,-1).
@@ -340,7 +302,6 @@ static_assert(sizeof(Camera) == 32);
 static_assert(sizeof(RenderSettings) == 192);
 static_assert(sizeof(Grid) == 64);
 static_assert(sizeof(Kdop) == 64);
-static_assert(sizeof(BounceRay) == 48 && sizeof(BounceTerm) == 16 && sizeof(BounceHit) == 112);
 static_assert(sizeof(Node) == 48);
 static_assert(sizeof(BvhNode) == 32);
 static_assert(sizeof(WideNode) == 64);
@@ -353,14 +314,11 @@ static_assert(offsetof(RenderSettings, camera) == 96);
 static_assert(offsetof(RenderSettings, grid) == 128);
 
 // Occlusion counts a Node keeps in the programs of a scene of `lights` lights (RT_NODE_LIGHTS),
-// and the device's sizes of the records that hold a Node there: sizeof on the host is the
-// 4-light record.
+// and the device's size of a Node there: sizeof on the host is the 4-light record (records that
+// hold a Node size themselves alike: wavefront/bounce/bounce_state.h).
 constexpr int nodeLights(std::size_t lights) { return lights <= 4 ? 4 : int((lights + 3) / 4 * 4); }
 constexpr std::size_t nodeBytes(std::size_t lights) {
     return sizeof(Node) - RT_NODE_LIGHTS + std::size_t(nodeLights(lights));
-}
-constexpr std::size_t bounceHitBytes(std::size_t lights) {
-    return sizeof(BounceHit) - RT_NODE_LIGHTS + std::size_t(nodeLights(lights));
 }
 static_assert(nodeBytes(4) == 48 && nodeBytes(5) == 52 && nodeBytes(RT_MAX_LIGHTS) == 60);
 }  // namespace rt::dev

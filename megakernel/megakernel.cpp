@@ -61,16 +61,11 @@ Image MegakernelPipeline::renderFrame(const Scene& scene, const RenderOptions& o
 
     dev::RenderSettings settings = makeSettings(scene, o);
     Image out(o.width, o.height);
-    std::string key = std::to_string(o.width) + "x" + std::to_string(o.height);
-    for (const std::string& d : defines(scene, o)) key += " " + d;
-    for (const std::string& x : buildOptions(o)) key += " " + x;
-    key += " b" + std::to_string(o.bounces);  // one program may serve several B; costs differ
-    // A row window has a profile of its own: the planner's is by row from the first one rendered.
     const int first = o.rowBegin, last = o.lastRow();
-    if (first != 0 || last != o.height)
-        key += " rows " + std::to_string(first) + "-" + std::to_string(last);
-    planner_.begin(o.maxLaunchMs, key + (o.adaptiveAa ? " adaptive" : ""), o.width,
-                   columnStep(cl_.device()));
+    planner_.begin(
+        o.maxLaunchMs,
+        launchKey(o, defines(scene, o), buildOptions(o)) + (o.adaptiveAa ? " adaptive" : ""),
+        o.width, columnStep(cl_.device()));
     // Progress in rows x passes; the adaptive centres cover one row more on each side.
     const int centreFirst = std::max(0, first - 1), centreLast = std::min(o.height, last + 1);
     const long long total = (last - first) + (adaptive ? centreLast - centreFirst : 0);

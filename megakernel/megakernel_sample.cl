@@ -37,22 +37,18 @@ inline float3 Megakernel_Sample(const SceneData* sc, int x, int y, int sample) {
 // The register-pressure study's smaller stack record (scripts/register-study): 40 bytes a
 // pending ray instead of Pending's 64 (a float3 takes 16), three packed Float3 and the depth and
 // type in one word. The same values, so the same image.
+// clang-format off
 typedef struct PackedPending {
-    Float3 origin, dir, weight;
-    int depthType;  // depth << 8 | type
+    RT_RAY_STATE_MEMBERS  // core/ray_state.h: three packed Float3 and depth << 8 | type
 } PackedPending;
+// clang-format on
+RAY_STATE_CODEC(PackedPending)
 inline PackedPending Megakernel_Pack(Pending p) {
     PackedPending q;
-    q.origin = F3(p.ray.origin);
-    q.dir = F3(p.ray.dir);
-    q.weight = F3(p.weight);
-    q.depthType = p.depth << 8 | p.type;
+    RayState_Pack_PackedPending(&p, &q);
     return q;
 }
-inline Pending Megakernel_Unpack(PackedPending q) {
-    return PathState_Make(makeRay(f3(q.origin), f3(q.dir)), f3(q.weight), q.depthType >> 8,
-                          q.depthType & 0xff);
-}
+inline Pending Megakernel_Unpack(PackedPending q) { return RayState_Unpack_PackedPending(q); }
 #define RT_STACK_RECORD PackedPending
 #define RT_STACK_PUSH(p) Megakernel_Pack(p)
 #define RT_STACK_POP(q) Megakernel_Unpack(q)

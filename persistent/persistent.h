@@ -1,35 +1,19 @@
-// rtlab — host driver of the persistent megakernel (persistent/persistent.cl): a fixed number of
-// work-groups sized to fill the device, each work-item taking pixels from a global counter.
+// rtlab — host driver of the persistent megakernel: a fixed number of work-groups sized to fill
+// the device, each work-item taking pixels from a global counter, in one of the schedules of
+// schedules.h (--persistent-schedule), or the one chosen per scene (auto, persistent_auto.cpp).
 #pragma once
 
 #include <optional>
 #include <string>
 
+#include "auto/persist_choice.h"
+#include "auto/predict.h"
 #include "core/device_pipeline.h"
 #include "core/launch_planner.h"
-#include "core/predict.h"
+#include "persistent/schedules.h"
+#include "wavefront/bounce/bounce.h"
 
 namespace rt {
-
-// --persistent-schedule auto: the schedule a scene's predicted warps call for (core/predict.h).
-// Where neighbouring pixels' trees disagree (fewer busy lanes than the predictor's queue
-// threshold), or where a warp's camera rays hit several objects and so shade several procedural
-// patterns, two regrouped work-groups of 256 lanes a compute unit, capped at 128 registers so that
-// both fit on NVIDIA, sort their hits by pattern each step; elsewhere the nested loop keeps a
-// work-group's lanes on neighbouring pixels. Fitted on the H200's map: the nested loop was the
-// best schedule on every scene at 29.5 predicted lanes or more and at most 1.4 objects a warp, a
-// regrouped one on every wall at 26.5 lanes or fewer and on the two coherent walls of 16 px
-// spheres (1.8 objects a warp).
-inline constexpr double kRegroupBelowLanes = kQueueBelowLanes;
-inline constexpr double kRegroupFromObjects = 1.6;
-
-struct PersistSchedule {
-    bool regroup = false;  // else the nested loop
-    std::string reason;    // one sentence with the lanes or objects it rests on
-    const char* name() const { return regroup ? "regrouped" : "nested"; }
-};
-
-PersistSchedule choosePersistentSchedule(const LaneEstimate& estimate);
 
 // Sets --persistent-schedule auto in `options` (what `--pipeline auto` renders the persistent
 // megakernel with).
@@ -49,22 +33,31 @@ class PersistentPipeline : public DevicePipeline {
     explicit PersistentPipeline(ClContext& cl) : DevicePipeline(cl) {}
     const char* name() const override { return "persist"; }
 
-    // Work-items of one launch: --persistent-groups work-groups of `local` per compute unit.
-    static size_t workItems(const DeviceInfo& device, const RenderOptions& options, size_t local);
-
     // --persistent-schedule auto: chooses from this estimate of the scene's warps (traced in
     // `ms`) instead of tracing them again, while the scene and settings stay the same.
-    void useEstimate(const Scene& scene, const RenderOptions& options, const LaneEstimate& estimate,
-                     double ms) {
+    void useLaneEstimate(const Scene& scene, const RenderOptions& options,
+                         const LaneEstimate& estimate, double ms) override {
         estimates_.put(scene, options, estimate, ms);
     }
 
+    // One frame's schedule and its settings: the options' own, or auto's choice.
+    struct Run {
+        const PersistSchedule* schedule = nullptr;
+        long long lanes = 0;      // 0: the schedule's default, lowered to what the kernel runs
+        long long groups = 4;     // work-groups a compute unit
+        long long registers = 0;  // the asked register cap; 0 the compiler's, or what fits
+    };
+
   private:
     Image renderFrame(const Scene& scene, const RenderOptions& options) override;
-    // The frame in the schedule the options name, --persistent-schedule auto resolved.
-    Image renderScheduled(const Scene& scene, const RenderOptions& options);
-    // The options with --persistent-schedule auto's choice set.
-    RenderOptions chooseSchedule(const Scene& scene, const RenderOptions& options);
+    // The phase clocks' names (phases.h).
+    std::vector<std::string> phaseNames() const override;
+    // The frame in one schedule.
+    Image renderRun(const Scene& scene, const RenderOptions& options, const Run& run);
+
+    // --persistent-schedule auto (persistent_auto.cpp): the schedule the traced warps call for,
+    // and, where they cannot tell, the faster in trial frames.
+    Run chooseSchedule(const Scene& scene, const RenderOptions& options);
     // A choice the traced warps cannot make, made by trial frames once per scene and settings:
     // the candidate chosen, each one's best time (null where the device refused it) and why a
     // refused one was, and the scene and settings it was made for.
@@ -75,7 +68,7 @@ class PersistentPipeline : public DevicePipeline {
     };
     struct TrialCandidate {
         std::string name;
-        RenderOptions options;
+        Run run;
     };
     // Renders two frames of each candidate (the first may pay for building its program) and
     // keeps the fastest in `choice`, unless `choice` was made for `base`'s scene and settings
@@ -84,23 +77,12 @@ class PersistentPipeline : public DevicePipeline {
     // failure is thrown.
     bool decide(TrialChoice& choice, const Scene& scene, const RenderOptions& base,
                 const std::vector<TrialCandidate>& candidates);
-    // Under --persistent-schedule auto, what the traced warps do not tell: the nested loop's
-    // strip order (4x16 or 16x8), and, where the warps disagree, the regrouped flat loop or the
-    // bounce loop at its defaults; each the faster of two trial frames.
-    void chooseOrder(const Scene& scene, RenderOptions& nested);
-    void chooseLoop(const Scene& scene, const RenderOptions& options, RenderOptions& regrouped);
 
-    // --persistent-loop bounce: sizes its scratch for `groups` work-groups, `staged` with the
-    // hits it keeps between passes when it sorts them or casts their shadow rays in a pass of
-    // their own (or refuses, naming the flags, when the device cannot hold it), and sets the
-    // kernel's arguments for it.
-    void setBounceScratch(Kernel& kernel, const Scene& scene, const RenderOptions& options,
-                          size_t groups, bool staged);
-
-    DeviceBuffer image_, next_, bounceRays_, bounceTerms_, bounceHits_, bounceOrder_;
+    DeviceBuffer image_, next_;
+    BounceScratch bounce_;
     LaunchPlanner planner_;
     LaneEstimateCache estimates_;  // --persistent-schedule auto's, one trace per scene
-    TrialChoice order_, loop_;     // chooseOrder's and chooseLoop's
+    TrialChoice order_, loop_;     // the nested loop's strip order; the regrouped or bounce loop
 };
 
 }  // namespace rt

@@ -4,14 +4,16 @@
 namespace rt {
 
 const PipelineRegistry& pipelineRegistry() {
-    static const PipelineRegistry registry = [] {
-        PipelineRegistry r;
-        r.add(referencePipelineInfo());
-        r.add(oraclePipelineInfo());
-        registerPipelineFolders(r);
+    // Filled in place and never freed: an entry may keep a reference to the registry it was
+    // added to (auto makes the pipelines it chooses between through it).
+    static const PipelineRegistry* registry = [] {
+        auto* r = new PipelineRegistry;
+        r->add(referencePipelineInfo());
+        r->add(oraclePipelineInfo());
+        registerPipelineFolders(*r);
         return r;
     }();
-    return registry;
+    return *registry;
 }
 
 std::unique_ptr<Pipeline> makePipeline(const std::string& name, ClContext* cl) {

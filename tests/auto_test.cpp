@@ -9,6 +9,7 @@
 #include <random>
 
 #include "core/error.h"
+#include "megakernel/megakernel_options.h"
 #include "persistent/persistent.h"
 #include "pipelines/registry.h"
 #include "test_device.h"
@@ -133,7 +134,7 @@ TEST(Auto, RendersTheDesignItNamesToTheBit) {
         RenderOptions o = c.scene->defaults;
         o.width = 64, o.height = 32, o.bounces = 4;
         setAuto(o, c.choice, c.rule);
-        AutoPipeline autoPipeline(test::device());
+        AutoPipeline autoPipeline(test::device(), pipelineRegistry());
         const Image first = autoPipeline.render(*c.scene, o);
         const nlohmann::json x = autoPipeline.stats().extras;
         const std::string design = x.value("auto_design", "");
@@ -164,7 +165,7 @@ TEST(Auto, MeasureRendersTheFastestTrial) {
     RenderOptions o = scene.defaults;
     o.width = 48, o.height = 32, o.bounces = 3;
     setAuto(o, "measure", "device");
-    AutoPipeline autoPipeline(test::device());
+    AutoPipeline autoPipeline(test::device(), pipelineRegistry());
     const Image image = autoPipeline.render(scene, o);
     const nlohmann::json& x = autoPipeline.stats().extras;
     const nlohmann::json& trials = x.at("auto_trials_ms");
@@ -184,7 +185,7 @@ TEST(Auto, AdaptiveAntiAliasingGoesToTheMegakernel) {
     RenderOptions o = scene.defaults;
     o.width = 32, o.height = 16, o.aa = 2, o.adaptiveAa = true;
     setAuto(o, "predict", "gpu");
-    AutoPipeline autoPipeline(test::device());
+    AutoPipeline autoPipeline(test::device(), pipelineRegistry());
     const Image image = autoPipeline.render(scene, o);
     EXPECT_EQ(autoPipeline.stats().extras.value("auto_design", ""), "mega-tree");
     EXPECT_TRUE(sameBits(image, renderAs("mega-tree", scene, o)));

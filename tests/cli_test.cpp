@@ -114,17 +114,6 @@ INSTANTIATE_TEST_SUITE_P(
                 "--max-registers 8: must be in 16..255"},
         BadCase{"render scenes/spheres.json --pipeline queue --pool 0 -o /tmp/x.png",
                 "--pool 0: must be in 1..67108864"},
-        BadCase{
-            "render scenes/spheres.json --pipeline persist --persistent-refill 33 -o /tmp/x.png",
-            "--persistent-refill 33: must be in 1..32"},
-        BadCase{"render scenes/spheres.json --pipeline persist --persistent-regroup shader "
-                "-o /tmp/x.png",
-                "--persistent-regroup shader: must be off, pattern or material"},
-        BadCase{"render scenes/spheres.json --pipeline persist --persistent-loop nested "
-                "--persistent-refill 8 -o /tmp/x.png",
-                "--persistent-refill 8 applies to the flat loop only"},
-        BadCase{"render scenes/spheres.json --pipeline persist --persistent-tile 3x3 -o /tmp/x.png",
-                "--persistent-tile 3x3: must be 4x16, 8x4, 4x8, 8x16, 4x32, 8x32 or 16x8"},
         BadCase{"render scenes/spheres.json --pipeline persist --persistent-lanes 8 -o /tmp/x.png",
                 "--persistent-lanes 8: must be in 16..1024"},
         BadCase{"render scenes/spheres.json --pipeline persist --persistent-max-registers 300 "
@@ -132,10 +121,11 @@ INSTANTIATE_TEST_SUITE_P(
                 "--persistent-max-registers 300: must be in 16..255"},
         BadCase{"render scenes/spheres.json --pipeline persist --persistent-schedule often "
                 "-o /tmp/x.png",
-                "--persistent-schedule often: must be flags or auto"},
+                "--persistent-schedule often: must be flat, nested, nested-16x8, regrouped, "
+                "bounce, bounce-staged or auto"},
         BadCase{"render scenes/spheres.json --size 16x8 --pipeline persist --persistent-schedule "
-                "auto --persistent-loop nested -o /tmp/x.png",
-                "--persistent-schedule auto chooses --persistent-loop itself"},
+                "auto --persistent-lanes 64 -o /tmp/x.png",
+                "--persistent-schedule auto chooses --persistent-lanes itself"},
         BadCase{"render scenes/spheres.json --pipeline queue --pool 8 --bounces 6 -o /tmp/x.png",
                 "use --pool 64 or more"},
         BadCase{"render scenes/spheres.json --pipeline queue --queue-launch sideways -o /tmp/x.png",

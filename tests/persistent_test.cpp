@@ -1,22 +1,26 @@
 // Persistent megakernel: the weighted megakernel's image to the bit on every standard scene,
 // whoever renders which pixel (one work-group per compute unit or many, one launch or pieces
 // under --max-launch-ms, a row window, frames whose sides are no multiple of the strips it
-// hands pixels out in, warps that refill at one idle lane or at all 32, a loop over pixels around
-// the loop over rays, work-groups that regroup hits), the same rays counted, and one clear error
-// per option it refuses.
+// hands pixels out in, a loop over pixels around the loop over rays, work-groups that regroup
+// hits, a wavefront inside the launch), the same rays counted, and one clear error per option it
+// refuses.
 #include "persistent/persistent.h"
 
 #include <gtest/gtest.h>
 
+#include <cstddef>
+#include <cstdlib>
 #include <tuple>
 
 #include "core/error.h"
+#include "core/kernel.h"
 #include "megakernel/megakernel.h"
 #include "megakernel/megakernel_options.h"
 #include "pipelines/registry.h"
 #include "test_device.h"
 #include "test_images.h"
 #include "test_scenes.h"
+#include "wavefront/bounce/bounce_state.h"
 
 namespace rt {
 namespace {
@@ -43,6 +47,9 @@ void setOption(RenderOptions& o, const std::string& name, Value value) {
 }
 
 void setGroups(RenderOptions& o, long long groups) { setOption(o, "persistent-groups", groups); }
+void setSchedule(RenderOptions& o, const std::string& schedule) {
+    setOption(o, "persistent-schedule", schedule);
+}
 
 class PersistentVsMega : public ::testing::TestWithParam<const char*> {};
 
@@ -69,8 +76,8 @@ TEST(Persistent, PiecesAndRowWindowsKeepTheBits) {
     PersistentPipeline persist(test::device());
     const Image m = mega.render(scene, o);
     // The nested loop's work-group takes a pixel a lane: a piece of one row leaves lanes without.
-    for (const char* loop : {"flat", "nested", "lockstep", "bounce"}) {
-        setOption(o, "persistent-loop", std::string(loop));
+    for (const char* loop : {"flat", "nested", "regrouped", "bounce", "bounce-staged"}) {
+        setSchedule(o, loop);
         RenderOptions capped = o;
         capped.maxLaunchMs = 1e-6;  // every launch over the cap: a row, or part of one, at a time
         const Image pieces = persist.render(scene, capped);
@@ -87,38 +94,21 @@ TEST(Persistent, PiecesAndRowWindowsKeepTheBits) {
     }
 }
 
-TEST(Persistent, CutTilesAndEveryRefillKeepTheBits) {
+TEST(Persistent, CutTilesKeepTheBits) {
     Scene scene = load("cornell");
     MegakernelPipeline mega(test::device());
     PersistentPipeline persist(test::device());
     RenderOptions o = weighted(scene, 3, 2);
-    o.width = 37;   // strips of 4 columns and one of 1, of 8 and one of 5, of 16 and one of 5
-    o.height = 23;  // bands of 4 rows and one of 3, of 8 and one of 7, one band of 16 and one of 7
+    o.width = 37;   // strips of 4 columns and one of 1, of 16 and one of 5
+    o.height = 23;  // one band of 16 rows and one of 7, bands of 8 and one of 7
     const Image m = mega.render(scene, o);
-    for (long long refill : {1, 7, 32}) {
-        setOption(o, "persistent-refill", refill);
-        EXPECT_TRUE(sameBits(m, persist.render(scene, o))) << "refill " << refill;
+    for (const char* schedule : {"flat", "nested", "nested-16x8"}) {
+        setSchedule(o, schedule);
+        EXPECT_TRUE(sameBits(m, persist.render(scene, o))) << schedule;
+        setGroups(o, 1);
+        EXPECT_TRUE(sameBits(m, persist.render(scene, o))) << schedule << ", 1 group";
+        setGroups(o, 4);
     }
-    setOption(o, "persistent-refill", 1ll);  // the flat loop's option: nested refuses others
-    int tiles = 0;
-    for (const PipelineOption& option : pipelineInfo("persist").options) {
-        if (option.name != "persistent-tile") continue;
-        for (const std::string& tile : option.choices) {
-            RenderOptions t = o;
-            option.set(t.pipelineOptions, tile);
-            EXPECT_TRUE(sameBits(m, persist.render(scene, t))) << "--persistent-tile " << tile;
-            ++tiles;
-        }
-    }
-    EXPECT_GE(tiles, 2) << "persist has no --persistent-tile to vary";
-    setOption(o, "persistent-loop", std::string("nested"));  // a loop over pixels
-    EXPECT_TRUE(sameBits(m, persist.render(scene, o))) << "nested";
-    setGroups(o, 1);
-    EXPECT_TRUE(sameBits(m, persist.render(scene, o))) << "nested, 1 group";
-    setOption(o, "persistent-loop", std::string("lockstep"));  // a warp's lanes step together
-    EXPECT_TRUE(sameBits(m, persist.render(scene, o))) << "lockstep, 1 group";
-    setGroups(o, 4);
-    EXPECT_TRUE(sameBits(m, persist.render(scene, o))) << "lockstep";
 }
 
 // Regrouped, a lane shades other lanes' hits: the divergence scene mixes procedural patterns,
@@ -135,9 +125,9 @@ TEST(Persistent, RegroupedKeepsTheBitsAndTheRays) {
         o.height = 23;
         o.countRays = true;
         const Image m = mega.render(scene, o);
-        for (const char* key : {"pattern", "material"}) {
+        for (const char* key : {"pattern"}) {
             RenderOptions r = o;
-            setOption(r, "persistent-regroup", std::string(key));
+            setSchedule(r, "regrouped");
             EXPECT_TRUE(sameBits(m, persist.render(scene, r))) << name << " " << key;
             ASSERT_TRUE(persist.stats().raysCounted);
             EXPECT_EQ(persist.stats().rays, mega.stats().rays) << name << " " << key;
@@ -150,14 +140,13 @@ TEST(Persistent, RegroupedKeepsTheBitsAndTheRays) {
     }
 }
 
-// The bounce loop traces a work-group's batch of pixels bounce by bounce, each bounce's rays
-// compacted in global memory, so a lane traces other pixels' rays and a pixel's terms are summed
-// after its whole tree is traced. The divergence scene branches at glass and mirrors on most
-// pixels; batches of 16 leave most lanes of 32 without a camera ray, batches of 100 take four
-// passes of 32 lanes (three of 48), the last one cut, and B = 8 at AA 2 widens the lists to 256
-// rays a pixel.
-// Sorted by pattern or material, each bounce's hits are shaded in key order, not the trace's;
-// with a shadow pass, their shadow rays are cast by other lanes than the ones that traced them.
+// The bounce loop traces a work-group's batch of pixels (twice its lanes) bounce by bounce, each
+// bounce's rays compacted in global memory, so a lane traces other pixels' rays and a pixel's
+// terms are summed after its whole tree is traced. The divergence scene branches at glass and
+// mirrors on most pixels; the frame's last batch is cut (851 pixels in batches of 128, 64 and
+// 96), and B = 8 at AA 2 widens the lists to 256 rays a pixel. Staged, each bounce's hits are
+// shaded in pattern order, not the trace's, and their shadow rays are cast by other lanes than the
+// ones that traced them.
 TEST(Persistent, BounceLoopKeepsTheBitsAndTheRays) {
     MegakernelPipeline mega(test::device());
     PersistentPipeline persist(test::device());
@@ -169,53 +158,61 @@ TEST(Persistent, BounceLoopKeepsTheBitsAndTheRays) {
             o.height = 23;
             o.countRays = true;
             const Image m = mega.render(scene, o);
-            RenderOptions r = o;
-            setOption(r, "persistent-loop", std::string("bounce"));
-            // Scratch grows with C^B a pixel: at B = 8, one group a compute unit and batches of
-            // 128 (7 of them in the frame) keep it near 8 MB a unit, which any device holds.
-            if (b == 8) {
-                setGroups(r, 1);
-                setOption(r, "persistent-batch", 128ll);
-            }
-            EXPECT_TRUE(sameBits(m, persist.render(scene, r))) << name << " B=" << b;
-            ASSERT_TRUE(persist.stats().raysCounted);
-            EXPECT_EQ(persist.stats().rays, mega.stats().rays) << name << " B=" << b;
-            // Staged: each bounce's hits sorted, their shadow rays cast in a pass of their own.
-            for (const char* key : {"off", "pattern", "material"})
-                for (const char* shadows : {"inline", "pass"}) {
-                    RenderOptions staged = r;
-                    setOption(staged, "persistent-regroup", std::string(key));
-                    setOption(staged, "persistent-shadows", std::string(shadows));
-                    EXPECT_TRUE(sameBits(m, persist.render(scene, staged)))
-                        << name << " B=" << b << ", sorted by " << key << ", shadows " << shadows;
-                    EXPECT_EQ(persist.stats().rays, mega.stats().rays)
-                        << name << " B=" << b << ", sorted by " << key << ", shadows " << shadows;
+            for (const char* schedule : {"bounce", "bounce-staged"}) {
+                RenderOptions r = o;
+                setSchedule(r, schedule);
+                // Scratch grows with C^B a pixel: at B = 8, one group a compute unit and 64 lanes
+                // (batches of 128) keep it near 8 MB a unit, which any device holds.
+                if (b == 8) {
+                    setGroups(r, 1);
+                    setOption(r, "persistent-lanes", 64ll);
                 }
-            // Groups of one warp, and of a warp and a half (groups need not be a power of two).
-            for (auto [lanes, batch] : {std::pair{32ll, 16ll}, {32ll, 100ll}, {48ll, 100ll}}) {
-                setOption(r, "persistent-lanes", lanes);
-                setOption(r, "persistent-batch", batch);
                 EXPECT_TRUE(sameBits(m, persist.render(scene, r)))
-                    << name << " B=" << b << ", " << lanes << " lanes, batches of " << batch;
+                    << name << " B=" << b << " " << schedule;
+                ASSERT_TRUE(persist.stats().raysCounted);
                 EXPECT_EQ(persist.stats().rays, mega.stats().rays)
-                    << name << " B=" << b << ", " << lanes << " lanes, batches of " << batch;
+                    << name << " B=" << b << " " << schedule;
+                // Groups of one warp, and of a warp and a half (groups need not be a power of
+                // two).
+                for (long long lanes : {32ll, 48ll}) {
+                    setOption(r, "persistent-lanes", lanes);
+                    EXPECT_TRUE(sameBits(m, persist.render(scene, r)))
+                        << name << " B=" << b << ", " << schedule << ", " << lanes << " lanes";
+                    EXPECT_EQ(persist.stats().rays, mega.stats().rays)
+                        << name << " B=" << b << ", " << schedule << ", " << lanes << " lanes";
+                }
             }
         }
     }
 }
 
+// The bounce loop's records have the host's layout on the device (bounce_state.h).
+TEST(Persistent, BounceStateHasTheHostsLayout) {
+    ClContext& cl = test::device();
+    Kernel kernel(cl.program("bounce_probe.cl", {}), "Bounce_Sizes");
+    cl::Buffer out(cl.context(), CL_MEM_WRITE_ONLY, 4 * sizeof(cl_uint));
+    kernel.set("out", out);
+    cl.queue().enqueueNDRangeKernel(kernel.get(), cl::NullRange, cl::NDRange(1));
+    cl_uint got[4] = {};
+    cl.queue().enqueueReadBuffer(out, CL_TRUE, 0, sizeof got, got);
+    EXPECT_EQ(got[0], sizeof(dev::BounceRay));
+    EXPECT_EQ(got[1], sizeof(dev::BounceTerm));
+    EXPECT_EQ(got[2], sizeof(dev::BounceHit));
+    EXPECT_EQ(got[3], offsetof(dev::BounceHit, ray));
+}
+
 // The bounce loop's scratch holds the widest bounce a batch can reach: at B = 16 on a scene
-// with glass, 2^16 rays a pixel; batches of 65536 pixels make that 412 GB of ray lists a
-// work-group. Expected refused wherever it is past the device's largest buffer, as it is on every
-// device rtlab has met.
+// with glass, 2^16 rays a pixel; batches of 2048 pixels (1024 lanes) make that 12.9 GB of ray
+// lists a work-group. Expected refused wherever it is past the device's largest buffer.
 TEST(Persistent, BounceLoopRefusesScratchPastTheDevice) {
     Scene scene = load("divergence");
     ASSERT_EQ(scene.branching(), 2);
     RenderOptions o = weighted(scene, 16, 1);
-    setOption(o, "persistent-loop", std::string("bounce"));
-    setOption(o, "persistent-batch", 65536ll);
+    setSchedule(o, "bounce");
+    setOption(o, "persistent-lanes", 1024ll);
     const DeviceInfo& dev = test::device().device();
-    const double rayBytes = 2.0 * 65536 * 65536 * sizeof(dev::BounceRay);  // one work-group's
+    if (dev.maxWorkGroup < 1024) GTEST_SKIP() << dev.name << " runs fewer than 1024 lanes a group";
+    const double rayBytes = 2.0 * 2048 * 65536 * sizeof(dev::BounceRay);  // one work-group's
     if (rayBytes <= double(dev.maxAlloc))
         GTEST_SKIP() << dev.name << " allocates " << dev.maxAlloc << " bytes a buffer";
     PersistentPipeline persist(test::device());
@@ -225,7 +222,8 @@ TEST(Persistent, BounceLoopRefusesScratchPastTheDevice) {
     } catch (const Error& e) {
         EXPECT_EQ(e.kind(), FailureKind::InvalidOption);
         const std::string what = e.what();
-        EXPECT_EQ(what.rfind("--persistent-batch 65536: ", 0), 0u) << what;
+        EXPECT_EQ(what.rfind("the bounce loop: ", 0), 0u) << what;
+        EXPECT_NE(what.find("batches of 2048 pixels"), std::string::npos) << what;
         EXPECT_NE(what.find("--bounces 16"), std::string::npos) << what;
         EXPECT_NE(what.find("MiB of rays"), std::string::npos) << what;
     }
@@ -241,7 +239,7 @@ TEST(Persistent, RefusesMoreLanesThanTheDeviceRuns) {
         RenderOptions o = weighted(scene, 1, 1);
         o.width = 8;
         o.height = 4;
-        if (regroup) setOption(o, "persistent-regroup", std::string("material"));
+        if (regroup) setSchedule(o, "regrouped");
         const long long lanes = 1024;
         setOption(o, "persistent-lanes", lanes);
         const bool fits =
@@ -257,6 +255,41 @@ TEST(Persistent, RefusesMoreLanesThanTheDeviceRuns) {
             EXPECT_EQ(what.rfind("--persistent-lanes 1024: ", 0), 0u) << what;
         }
     }
+}
+
+// A kernel as built may run fewer work-items a group than the device's limit (NVIDIA's driver
+// ran the bounce loop at 121 registers in groups of at most 256, below its 512-lane default).
+// No default may be one the driver refuses: every variant at its defaults still renders the
+// weighted megakernel's bits in the largest power of two the kernel takes, and a group that was
+// asked is refused by name. RTLAB_KERNEL_GROUP_LIMIT stands in for such a build.
+TEST(Persistent, DefaultLanesFitWhatTheKernelRuns) {
+    Scene scene = load("cornell");
+    RenderOptions base = weighted(scene, 3, 1);
+    MegakernelPipeline mega(test::device());
+    const Image m = mega.render(scene, base);
+    ASSERT_EQ(setenv("RTLAB_KERNEL_GROUP_LIMIT", "24", 1), 0);
+    for (const PipelineVariant& variant : pipelineInfo("persist").variants) {
+        PersistentPipeline persist(test::device());
+        RenderOptions o = base;
+        o.pipelineOptions.setAll(variant.values);
+        const Image image = persist.render(scene, o);
+        EXPECT_TRUE(sameBits(m, image)) << "variant " << variant.name;
+        const auto lanes = persist.stats().extras.find("persist_lanes");
+        ASSERT_NE(lanes, persist.stats().extras.end()) << "variant " << variant.name;
+        EXPECT_EQ(lanes->get<long long>(), 16) << "variant " << variant.name;
+    }
+    RenderOptions asked = base;
+    setOption(asked, "persistent-lanes", 32ll);
+    PersistentPipeline persist(test::device());
+    try {
+        persist.render(scene, asked);
+        ADD_FAILURE() << "32 asked lanes ran where the kernel takes 24";
+    } catch (const Error& e) {
+        EXPECT_EQ(e.kind(), FailureKind::InvalidOption);
+        EXPECT_NE(std::string(e.what()).find("runs at most 24 work-items"), std::string::npos)
+            << e.what();
+    }
+    unsetenv("RTLAB_KERNEL_GROUP_LIMIT");
 }
 
 // A work-group's lanes share the registers of one multiprocessor: 65,536 on NVIDIA's recent
@@ -355,7 +388,7 @@ TEST(Persistent, AutoScheduleUsesAnEstimateHandedIn) {
     agree.lanes = 32;
     agree.busyLanes = 32;
     agree.objectsPerWarp = 1;
-    persist.useEstimate(scene, o, agree, 123.0);
+    persist.useLaneEstimate(scene, o, agree, 123.0);
     persist.render(scene, o);
     EXPECT_EQ(persist.stats().extras.value("persist_schedule", ""), "nested");
     EXPECT_EQ(persist.stats().extras.value("persist_predict_ms", 0.0), 123.0);
@@ -410,8 +443,7 @@ TEST(Persistent, AutoScheduleTimesTheNestedLoopsStripOrders) {
 
 // Where the warps disagree, auto times the regrouped flat loop against the bounce loop once per
 // scene and settings and keeps the faster; the frame is the weighted megakernel's either way. A
-// bounce loop the device cannot hold (batches of 65536 pixels at B = 14: 103 GB of ray lists a
-// work-group) is left out, and the regrouped loop renders.
+// bounce loop the device cannot hold (B = 16) is left out, and the regrouped loop renders.
 TEST(Persistent, AutoScheduleTimesTheRegroupedAndBounceLoops) {
     Scene scene = load("spheres");
     MegakernelPipeline mega(test::device());
@@ -429,30 +461,29 @@ TEST(Persistent, AutoScheduleTimesTheRegroupedAndBounceLoops) {
         << persist.stats().note;
     EXPECT_TRUE(sameBits(mega.render(scene, o), first));
     EXPECT_FALSE(x.contains("persist_loop_refused")) << x.dump();
-    // The next frame keeps the loop without timing again; a batch size that shapes the bounce
-    // loop's trial times again.
+    // The next frame keeps the loop without timing again; other settings time again.
     persist.render(scene, o);
     EXPECT_FALSE(persist.stats().extras.value("persist_loop_decided", true));
     EXPECT_EQ(persist.stats().extras.value("persist_loop", ""), loop);
-    setOption(o, "persistent-batch", 256ll);
+    o.bounces = 3;
     persist.render(scene, o);
     EXPECT_TRUE(persist.stats().extras.value("persist_loop_decided", false));
 
-    o.bounces = 14;
-    setOption(o, "persistent-batch", 65536ll);
-    const double rayBytes = 2.0 * 65536 * 16384 * sizeof(dev::BounceRay);  // one work-group's
-    if (rayBytes <= double(test::device().device().maxAlloc))
+    // At B = 16 the bounce loop's batches of twice its lanes need 2^16 rays a pixel.
+    o.bounces = 16;
+    const DeviceInfo& dev = test::device().device();
+    const double groups = 4.0 * std::max<cl_uint>(dev.computeUnits, 1);
+    const double rayBytes = groups * 2.0 * 128 * 65536 * sizeof(dev::BounceRay);
+    if (rayBytes <= double(dev.maxAlloc) || persistSchedule("bounce").defaultLanes(dev) != 64)
         GTEST_SKIP() << "a buffer of " << rayBytes << " bytes fits this device";
     const Image refused = persist.render(scene, o);
     const nlohmann::json y = persist.stats().extras;
     EXPECT_EQ(y.value("persist_loop", ""), "regrouped") << y.dump();
     EXPECT_TRUE(y.at("persist_loop_trials_ms").at("bounce").is_null()) << y.dump();
     // Why, in its own words: the bounce loop's scratch refusal names the batch.
-    EXPECT_EQ(y.at("persist_loop_refused")
-                  .at("bounce")
-                  .get<std::string>()
-                  .rfind("--persistent-batch 65536: ", 0),
-              0u)
+    EXPECT_EQ(
+        y.at("persist_loop_refused").at("bounce").get<std::string>().rfind("the bounce loop: ", 0),
+        0u)
         << y.dump();
     EXPECT_TRUE(sameBits(mega.render(scene, o), refused));
 }
@@ -462,15 +493,15 @@ TEST(Persistent, AutoScheduleRefusesTheFlagsItSets) {
     PersistentPipeline persist(test::device());
     RenderOptions o = weighted(scene, 2, 1);
     setOption(o, "persistent-schedule", std::string("auto"));
-    setOption(o, "persistent-loop", std::string("nested"));
+    setOption(o, "persistent-groups", 2ll);
     try {
         persist.render(scene, o);
-        ADD_FAILURE() << "no error for --persistent-schedule auto with --persistent-loop";
+        ADD_FAILURE() << "no error for --persistent-schedule auto with --persistent-groups";
     } catch (const Error& e) {
         EXPECT_EQ(e.kind(), FailureKind::InvalidOption);
         EXPECT_STREQ(e.what(),
-                     "--persistent-schedule auto chooses --persistent-loop itself; leave it out "
-                     "or use --persistent-schedule flags");
+                     "--persistent-schedule auto chooses --persistent-groups itself; leave it "
+                     "out or use another --persistent-schedule");
     }
 }
 
@@ -494,71 +525,11 @@ TEST(Persistent, RefusesAdaptiveAntiAliasingAndOptionsOutOfRange) {
         EXPECT_STREQ(e.what(), "--persistent-groups 0: must be in 1..64");
     }
     try {
-        setOption(g, "persistent-refill", 33);
-        ADD_FAILURE() << "no error for --persistent-refill 33";
+        setSchedule(g, "lockstep");  // deleted: tied the flat loop everywhere measured
+        ADD_FAILURE() << "no error for --persistent-schedule lockstep";
     } catch (const Error& e) {
-        EXPECT_STREQ(e.what(), "--persistent-refill 33: must be in 1..32");
-    }
-    try {
-        RenderOptions both = weighted(scene, 2, 1);
-        setOption(both, "persistent-loop", std::string("nested"));
-        setOption(both, "persistent-regroup", std::string("pattern"));
-        persist.render(scene, both);
-        ADD_FAILURE() << "no error for --persistent-loop nested with --persistent-regroup";
-    } catch (const Error& e) {
-        EXPECT_EQ(e.kind(), FailureKind::InvalidOption);
-        EXPECT_EQ(std::string(e.what()).rfind("--persistent-loop nested does not go with "
-                                              "--persistent-regroup pattern",
-                                              0),
-                  0u)
+        EXPECT_EQ(std::string(e.what()).rfind("--persistent-schedule lockstep: must be ", 0), 0u)
             << e.what();
-    }
-    try {
-        RenderOptions both = weighted(scene, 2, 1);
-        setOption(both, "persistent-loop", std::string("lockstep"));
-        setOption(both, "persistent-regroup", std::string("material"));
-        persist.render(scene, both);
-        ADD_FAILURE() << "no error for --persistent-loop lockstep with --persistent-regroup";
-    } catch (const Error& e) {
-        EXPECT_EQ(e.kind(), FailureKind::InvalidOption);
-        EXPECT_EQ(std::string(e.what()).rfind("--persistent-loop lockstep does not go with "
-                                              "--persistent-regroup material",
-                                              0),
-                  0u)
-            << e.what();
-    }
-    for (const char* flag : {"persistent-batch", "persistent-shadows"}) {
-        RenderOptions o = weighted(scene, 2, 1);
-        if (std::string(flag) == "persistent-batch")
-            setOption(o, flag, 256ll);
-        else
-            setOption(o, flag, std::string("pass"));
-        try {
-            persist.render(scene, o);
-            ADD_FAILURE() << "no error for --" << flag << " in the flat loop";
-        } catch (const Error& e) {
-            EXPECT_EQ(e.kind(), FailureKind::InvalidOption);
-            EXPECT_EQ(std::string(e.what()),
-                      "--" + std::string(flag) + " applies to --persistent-loop bounce only");
-        }
-    }
-    for (const char* loop : {"nested", "lockstep", "bounce"}) {
-        RenderOptions refill = weighted(scene, 2, 1);
-        setOption(refill, "persistent-loop", std::string(loop));
-        setOption(refill, "persistent-refill", 8ll);
-        try {
-            persist.render(scene, refill);
-            ADD_FAILURE() << "no error for --persistent-loop " << loop << " with a refill";
-        } catch (const Error& e) {
-            EXPECT_EQ(e.kind(), FailureKind::InvalidOption);
-            EXPECT_EQ(
-                std::string(e.what()).rfind(
-                    "--persistent-refill 8 applies to the flat loop only (--persistent-loop " +
-                        std::string(loop),
-                    0),
-                0u)
-                << e.what();
-        }
     }
     try {
         setOption(g, "persistent-lanes", 8);

@@ -1,6 +1,6 @@
-// The warp estimate of core/predict.h: the busy-lane arithmetic, the CPU's tree sizes against the
+// The warp estimate of auto/predict.h: the busy-lane arithmetic, the CPU's tree sizes against the
 // rays a device pipeline counts, and the rule.
-#include "core/predict.h"
+#include "auto/predict.h"
 
 #include <gtest/gtest.h>
 

@@ -275,12 +275,12 @@ TEST(Registry, RowsNameTheOptionsACellSet) {
     const std::vector<nlohmann::json> rows = test::sweepRows(
         "repeats = 1\nwarmup = 0\n[a]\nscenes = spheres\npipelines = persist\nsizes = 8x6\n"
         "bounces = 1\n[b]\nscenes = spheres\npipelines = persist\nsizes = 8x6\nbounces = 1\n"
-        "persistent-loop = nested\npersistent-groups = 2\n",
+        "persistent-schedule = nested\npersistent-groups = 2\n",
         "labels-test");
     ASSERT_EQ(rows.size(), 2u);
     EXPECT_EQ(rows[0]["option_labels"], nlohmann::json::object());
     const nlohmann::json set = {{"persistent-groups", "2 groups per unit"},
-                                {"persistent-loop", "nested loop"}};
+                                {"persistent-schedule", "nested schedule"}};
     EXPECT_EQ(rows[1]["option_labels"], set);
 }
 
@@ -337,9 +337,8 @@ TEST(Registry, RecordedRowsKeepTheirCellKeys) {
 }
 
 // Tests and the smoke check run every pipeline in each of its variants: the megakernel in both
-// layouts, the persistent megakernel flat, regrouped, nested, in lockstep and in the schedule auto
-// chooses, the queue at its defaults and in small padded groups, the others once at their
-// defaults.
+// layouts, the persistent megakernel in each of its schedules and in the one auto chooses, the
+// queue at its defaults and in small padded groups, the others once at their defaults.
 TEST(Registry, VariantsCoverTheMegakernelsLayoutsAndSchedules) {
     std::vector<std::string> names;
     for (const PipelineVariantRun& v : pipelineRegistry().variants(true)) {
@@ -360,8 +359,8 @@ TEST(Registry, VariantsCoverTheMegakernelsLayoutsAndSchedules) {
     EXPECT_EQ(std::count(names.begin(), names.end(), "wave"), 1) << names.size();
     EXPECT_EQ(std::count(names.begin(), names.end(), "queue"), 1) << names.size();
     EXPECT_EQ(std::count(names.begin(), names.end(), "queue-padded"), 1) << names.size();
-    for (const char* persist :
-         {"persist", "persist-regrouped", "persist-nested", "persist-lockstep", "persist-auto"})
+    for (const char* persist : {"persist", "persist-regrouped", "persist-nested", "persist-bounce",
+                                "persist-bounce-staged", "persist-auto"})
         EXPECT_EQ(std::count(names.begin(), names.end(), persist), 1) << persist;
     EXPECT_EQ(std::count(names.begin(), names.end(), "cpu"), 0) << "devices only";
 }

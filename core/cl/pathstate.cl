@@ -5,6 +5,7 @@
 // only, so both compute bit-identical weights and contributions.
 #ifndef RTLAB_CL_PATHSTATE
 #define RTLAB_CL_PATHSTATE
+#include "ray_state.h"
 #include "raytree.cl"
 
 // One pending ray: the ray, its weight, its depth in the tree and its RT_RAY_* type.
@@ -53,6 +54,64 @@ RT_STEP_LINKAGE float3 PathState_Step(const SceneData* sc, const Node* node, con
         *refr = PathState_Make(r1, p->weight * ((1.0f - F) * (1.0f - o)), p->depth + 1,
                                RT_RAY_REFRACTION);
     return p->weight * ((1.0f - F) * o) * Shade_BaseOf(sc, node, pattern);
+}
+
+// A record of the stored fields (RT_RAY_STATE_MEMBERS) from Pending `p`, and back, field by field
+// from ray_state.h's list: RAY_STATE_CODEC(Record) defines void RayState_Pack_Record(const
+// Pending*, Record*), which sets the record's state fields (not its others), and Pending
+// RayState_Unpack_Record(Record).
+#define RAY_STATE_PACK_F3(X, field, Field, member) q->field = F3(p->member);
+#define RAY_STATE_PACK_META(X, field, Field) q->field = p->depth << 8 | p->type;
+#define RAY_STATE_UNPACK_F3(X, field, Field, member) p.member = f3(q.field);
+#define RAY_STATE_UNPACK_META(X, field, Field) \
+    p.depth = q.field >> 8;                    \
+    p.type = q.field & 0xff;
+#define RAY_STATE_CODEC(Record)                                       \
+    inline void RayState_Pack_##Record(const Pending* p, Record* q) { \
+        RT_RAY_STATE(RAY_STATE_PACK_F3, RAY_STATE_PACK_META, _)       \
+    }                                                                 \
+    inline Pending RayState_Unpack_##Record(Record q) {               \
+        Pending p;                                                    \
+        RT_RAY_STATE(RAY_STATE_UNPACK_F3, RAY_STATE_UNPACK_META, _)   \
+        return p;                                                     \
+    }
+
+// The same fields as a structure of arrays in global memory (the queue wavefront's pool): a
+// struct of pointers, the kernel parameters that pass them (RAY_STATE_PARAMS(prefix): prefix ##
+// Field, each with a trailing comma), and a ray's load, store and copy at index i.
+#define RAY_STATE_SOA_F3(X, field, Field, member) global float* field;
+#define RAY_STATE_SOA_META(X, field, Field) global int* field;
+typedef struct RayStateArrays {
+    RT_RAY_STATE(RAY_STATE_SOA_F3, RAY_STATE_SOA_META, _)
+} RayStateArrays;
+#define RAY_STATE_PARAM_F3(prefix, field, Field, member) global float *prefix##Field,
+#define RAY_STATE_PARAM_META(prefix, field, Field) global int *prefix##Field,
+#define RAY_STATE_PARAMS(prefix) RT_RAY_STATE(RAY_STATE_PARAM_F3, RAY_STATE_PARAM_META, prefix)
+#define RAY_STATE_LOAD_F3(X, field, Field, member) p.member = vload3(i, r->field);
+#define RAY_STATE_LOAD_META(X, field, Field) \
+    {                                        \
+        const int word = r->field[i];        \
+        p.depth = word >> 8;                 \
+        p.type = word & 0xff;                \
+    }
+#define RAY_STATE_STORE_F3(X, field, Field, member) vstore3(p->member, i, r->field);
+#define RAY_STATE_STORE_META(X, field, Field) r->field[i] = p->depth << 8 | p->type;
+#define RAY_STATE_COPY_F3(X, field, Field, member) vstore3(vload3(s, from->field), o, to->field);
+#define RAY_STATE_COPY_META(X, field, Field) to->field[o] = from->field[s];
+
+inline Pending RayState_Load(const RayStateArrays* r, int i) {
+    Pending p;
+    RT_RAY_STATE(RAY_STATE_LOAD_F3, RAY_STATE_LOAD_META, _)
+    return p;
+}
+
+inline void RayState_Store(const RayStateArrays* r, int i, const Pending* p) {
+    RT_RAY_STATE(RAY_STATE_STORE_F3, RAY_STATE_STORE_META, _)
+}
+
+// Ray s of `from` to slot o of `to`, as stored.
+inline void RayState_Copy(const RayStateArrays* from, int s, const RayStateArrays* to, int o) {
+    RT_RAY_STATE(RAY_STATE_COPY_F3, RAY_STATE_COPY_META, _)
 }
 
 #endif

@@ -20,9 +20,6 @@ kernel void Probe_Sizes(global uint* out) {
     out[14] = sizeof(Grid);
     out[15] = sizeof(Kdop);
     out[16] = __builtin_offsetof(RenderSettings, grid);
-    out[17] = sizeof(BounceRay);
-    out[18] = sizeof(BounceTerm);
-    out[19] = sizeof(BounceHit);
 }
 
 // One ray per work-item against one sphere: in = origin, dir, centre, radius (10 floats).

@@ -712,6 +712,26 @@ class PersistTest(unittest.TestCase):
     def run_script(self, rows):
         return run_chart("persist-charts", rows, "persist")
 
+    def test_rows_that_name_a_schedule_read_as_the_older_fields(self):
+        """Rows since the schedules became units say persistent_schedule; the labels are those of
+        the older rows that set the same schedule by its parts."""
+        spec = importlib.util.spec_from_file_location(
+            "charts_persist", os.path.join(SCRIPTS, "charts_persist.py"))
+        cp = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(cp)
+        c = self.cell
+        for new, old in [
+                (c("persist", "w", 1.0, persistent_schedule="flat"), c("persist", "w", 1.0)),
+                (c("persist", "w", 1.0, persistent_schedule="nested"),
+                 c("persist", "w", 1.0, persistent_loop="nested")),
+                (c("persist", "w", 1.0, persistent_schedule="regrouped", persistent_lanes=256),
+                 c("persist", "w", 1.0, persistent_regroup="pattern", persistent_lanes=256)),
+                (c("persist", "w", 1.0, persistent_schedule="bounce", persistent_lanes=512),
+                 c("persist", "w", 1.0, persistent_loop="bounce", persistent_batch=1024,
+                   persistent_lanes=512))]:
+            self.assertEqual(cp.series_of(new), cp.series_of(old))
+            self.assertIsNotNone(cp.series_of(new))
+
     def test_best_schedule_speed_up_and_tie(self):
         d, p = self.run_script(self.rows())
         self.assertEqual(p.returncode, 0, p.stderr)

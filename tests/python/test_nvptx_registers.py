@@ -92,7 +92,7 @@ class Root(unittest.TestCase):
         p = subprocess.run([sys.executable, PATH, "--root", d], capture_output=True, text=True)
         self.assertNotEqual(p.returncode, 0)
         self.assertEqual(p.stderr.strip(), "scripts/nvptx-registers: " + d +
-                         ": not an rtlab checkout (no persistent/persistent.cl)")
+                         ": not an rtlab checkout (no persistent/handout.cl)")
 
 
 if __name__ == "__main__":

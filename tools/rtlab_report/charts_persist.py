@@ -31,6 +31,32 @@ BASE = "weighted megakernel"
 TARGET = 2.0  # the issue's bar on divergent scenes
 
 
+
+# Rows written since the schedules became units (persistent/schedules.h) name them in
+# persistent_schedule; older rows set the loop, regrouping, order, batch and shadows apart. Both
+# read the same here: a new row gets the older fields its schedule stands for.
+SCHEDULE_FIELDS = {
+    "flat": {},
+    "nested": {"persistent_loop": "nested"},
+    "nested-16x8": {"persistent_loop": "nested", "persistent_tile": "16x8"},
+    "regrouped": {"persistent_regroup": "pattern"},
+    "bounce": {"persistent_loop": "bounce"},
+    "bounce-staged": {"persistent_loop": "bounce", "persistent_regroup": "pattern",
+                      "persistent_shadows": "pass"},
+}
+
+
+def as_old_fields(row):
+    """`row` with the fields of older rows that its persistent_schedule stands for."""
+    fields = SCHEDULE_FIELDS.get(row.get("persistent_schedule"))
+    if fields is None:
+        return row
+    out = dict(row)
+    out.update(fields)
+    if out.get("persistent_loop") == "bounce":  # batches of twice its lanes
+        out.setdefault("persistent_batch", 2 * (row.get("persistent_lanes") or 512))
+    return out
+
 def series_of(r, strips=True):
     """The series a row belongs to (None: a refill scan the chart and table leave out; names not
     in ORDER, the other work-group counts, are left out too). With `strips`, an order other than
@@ -49,6 +75,7 @@ def series_of(r, strips=True):
         return None
     if r.get("persistent_schedule", "flags") == "auto":
         return AUTO  # the schedule it chose is in the row's extras, not its flags
+    r = as_old_fields(r)
     regroup = r.get("persistent_regroup", "off")
     lanes = r.get("persistent_lanes") or 128
     groups, refill = r.get("persistent_groups", 4), r.get("persistent_refill", 1)

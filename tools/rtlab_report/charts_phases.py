@@ -28,7 +28,7 @@ import sys
 from .charts_map import load
 
 # The phases of the regrouped loop's step and of the bounce loop's passes (RT_PHASE_*,
-# core/types.h), as the rows' extras name them.
+# persistent/phases.h), as the rows' extras name them.
 PHASES = ["bookkeeping", "trace", "trace_wait", "file", "shade", "shade_wait", "shadow",
           "shadow_wait"]
 WAITS = ["trace_wait", "shadow_wait", "shade_wait"]
@@ -43,8 +43,35 @@ COLORS = {TRACE: "#0072B2", TRACE_WITH_SHADOWS: "#3F4F9F", SHADOWS: "#56B4E9",
           "filing the hits": "#CC79A7", "bookkeeping": "#999999"}
 
 
+# Rows written since the schedules became units (persistent/schedules.h) name them in
+# persistent_schedule; older rows set the loop, regrouping, order, batch and shadows apart. Both
+# read the same here: a new row gets the older fields its schedule stands for.
+SCHEDULE_FIELDS = {
+    "flat": {},
+    "nested": {"persistent_loop": "nested"},
+    "nested-16x8": {"persistent_loop": "nested", "persistent_tile": "16x8"},
+    "regrouped": {"persistent_regroup": "pattern"},
+    "bounce": {"persistent_loop": "bounce"},
+    "bounce-staged": {"persistent_loop": "bounce", "persistent_regroup": "pattern",
+                      "persistent_shadows": "pass"},
+}
+
+
+def as_old_fields(row):
+    """`row` with the fields of older rows that its persistent_schedule stands for."""
+    fields = SCHEDULE_FIELDS.get(row.get("persistent_schedule"))
+    if fields is None:
+        return row
+    out = dict(row)
+    out.update(fields)
+    if out.get("persistent_loop") == "bounce":  # batches of twice its lanes
+        out.setdefault("persistent_batch", 2 * (row.get("persistent_lanes") or 512))
+    return out
+
+
 def persist_label(row):
     """The persistent row's schedule in words: the bar's name."""
+    row = as_old_fields(row)
     regroup = row.get("persistent_regroup") or "off"
     if row.get("persistent_loop") == "bounce":
         words = ["bounce loop"]

@@ -38,25 +38,19 @@
 #define QUEUE_LOCAL_PAD() (void)0
 #endif
 
-// The pool's fields, one array each (float3 fields as 3 floats, vload3/vstore3).
+// The pool's fields, one array each: the per-ray state (core/ray_state.h, float3 fields as 3
+// floats, vload3/vstore3) and the ray's pixel.
 typedef struct QueueRays {
-    global float* origin;
-    global float* dir;
-    global float* weight;
+    RayStateArrays state;
     global int* pixel;  // y * width + x
-    global int* meta;   // depth << 8 | RT_RAY_* type
 } QueueRays;
 
-#define QUEUE_RAYS_PARAMS(p)                                                                      \
-    global float *p##Origin, global float *p##Dir, global float *p##Weight, global int *p##Pixel, \
-        global int *p##Meta
+#define QUEUE_RAYS_PARAMS(p) RAY_STATE_PARAMS(p) global int* p##Pixel
+#define QUEUE_RAYS_INIT_F3(p, field, Field, member) p.state.field = p##Field;
+#define QUEUE_RAYS_INIT_META(p, field, Field) p.state.field = p##Field;
 #define QUEUE_RAYS_INIT(p) \
     QueueRays p;           \
-    p.origin = p##Origin;  \
-    p.dir = p##Dir;        \
-    p.weight = p##Weight;  \
-    p.pixel = p##Pixel;    \
-    p.meta = p##Meta
+    RT_RAY_STATE(QUEUE_RAYS_INIT_F3, QUEUE_RAYS_INIT_META, p) p.pixel = p##Pixel
 
 // A launch's real length: the host's `n` (readback mode, word < 0), or, when launches are sized
 // on the device, the count in counters[word], never past the bound `n` the launch covers.
@@ -64,18 +58,11 @@ inline int Queue_Length(int n, int word, global const int* counters) {
     return word < 0 ? n : min(n, counters[word]);
 }
 
-inline Pending Queue_Load(const QueueRays* r, int i) {
-    int meta = r->meta[i];
-    return PathState_Make(makeRay(vload3(i, r->origin), vload3(i, r->dir)), vload3(i, r->weight),
-                          meta >> 8, meta & 0xff);
-}
+inline Pending Queue_Load(const QueueRays* r, int i) { return RayState_Load(&r->state, i); }
 
 inline void Queue_Store(const QueueRays* r, int i, const Pending* p, int pixel) {
-    vstore3(p->ray.origin, i, r->origin);
-    vstore3(p->ray.dir, i, r->dir);
-    vstore3(p->weight, i, r->weight);
+    RayState_Store(&r->state, i, p);
     r->pixel[i] = pixel;
-    r->meta[i] = p->depth << 8 | p->type;
 }
 
 // Ray counts (RT_COUNT_RAYS): a pixel's rays are counted in its own tally of RT_RAY_TYPES words

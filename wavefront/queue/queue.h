@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "core/device_pipeline.h"
+#include "core/ray_state.h"
 #include "wavefront/queue/queue_options.h"
 #include "wavefront/queue/queue_split.h"
 
@@ -21,8 +22,12 @@ namespace rt {
 // The pool's device buffers. `rays` is the queue of live rays, `staging` holds the children of
 // the bounce (C slots per ray) until they are compacted back into `rays`.
 struct QueueBuffers {
+    // The per-ray state's fields (core/ray_state.h), one buffer each, and the rays' pixels.
     struct Rays {
-        cl::Buffer origin, dir, weight, pixel, meta;
+#define QUEUE_RAYS_BUFFER(X, field, ...) cl::Buffer field;
+        RT_RAY_STATE(QUEUE_RAYS_BUFFER, QUEUE_RAYS_BUFFER, _)
+#undef QUEUE_RAYS_BUFFER
+        cl::Buffer pixel;
     };
     Rays rays, staging;
     cl::Buffer nodes, contrib, children, offsets, blockSums, shadeQueues, shadowQueue, retry,

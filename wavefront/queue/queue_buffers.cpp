@@ -105,11 +105,12 @@ void QueuePipeline::prepareBuffers(size_t pool, int branching, size_t pixels, in
         return buffer;
     };
     auto rays = [&](QueueBuffers::Rays& r, size_t n, const char* what) {
-        r.origin = make(n * 12, what);
-        r.dir = make(n * 12, what);
-        r.weight = make(n * 12, what);
+#define QUEUE_RAYS_F3(X, field, Field, member) r.field = make(n * RT_RAY_STATE_F3_BYTES, what);
+#define QUEUE_RAYS_META(X, field, Field) r.field = make(n * RT_RAY_STATE_META_BYTES, what);
+        RT_RAY_STATE(QUEUE_RAYS_F3, QUEUE_RAYS_META, _)
+#undef QUEUE_RAYS_F3
+#undef QUEUE_RAYS_META
         r.pixel = make(n * 4, what);
-        r.meta = make(n * 4, what);
     };
     try {
         rays(b.rays, pool, "the queue pipeline's ray pool");

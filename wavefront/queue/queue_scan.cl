@@ -137,11 +137,8 @@ kernel void Queue_Compact(QUEUE_RAYS_PARAMS(staging), global const int* children
     int o = Queue_Offset(offsets, blockSums, i);
     for (int k = 0; k < children[i]; ++k) {
         int s = RT_BRANCH * i + k;
-        vstore3(vload3(s, staging.origin), o + k, rays.origin);
-        vstore3(vload3(s, staging.dir), o + k, rays.dir);
-        vstore3(vload3(s, staging.weight), o + k, rays.weight);
+        RayState_Copy(&staging.state, s, &rays.state, o + k);
         rays.pixel[o + k] = staging.pixel[s];
-        rays.meta[o + k] = staging.meta[s];
     }
 }
 

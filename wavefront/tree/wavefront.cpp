@@ -145,16 +145,11 @@ Image WavefrontPipeline::renderFrame(const Scene& scene, const RenderOptions& o)
         startRayCount(o);
         cl::Event last;
         bool haveLast = false;
-        std::string key = std::to_string(o.width) + "x" + std::to_string(o.height);
-        for (const std::string& d : featureDefines(scene, o)) key += " " + d;
-        key += " b" + std::to_string(o.bounces) + " aa" + std::to_string(o.aa);
-        // A row window has a profile of its own: the planner's is by row from the first one
-        // rendered.
-        if (first != 0 || end != o.height)
-            key += " rows " + std::to_string(first) + "-" + std::to_string(end);
         // A row costlier than --max-launch-ms alone is launched in pieces of columns, in steps
         // of the work-group width (one work-group row high), as the megakernel does.
-        planner_.begin(o.maxLaunchMs, key, o.width, columnStep(dev));
+        planner_.begin(o.maxLaunchMs,
+                       launchKey(o, featureDefines(scene, o), {}, " aa" + std::to_string(o.aa)),
+                       o.width, columnStep(dev));
         stats_.tiles = 0;
         // Progress in rows x AA passes, reported after each pass of each tile (a piece of a row
         // counts once the row is done).
@@ -271,6 +266,17 @@ void registerWavefrontTree(PipelineRegistry& registry) {
     p.family = "wavefront";
     p.description = "trace, image and reset kernels around a global ray tree of W x rows x N slots";
     p.supports = {.adaptiveAa = false, .tiling = true, .rowWindow = true};
+    p.fitsOnePiece = [](const Scene& scene, const RenderOptions& o, const DeviceInfo& dev) {
+        size_t budget = dev.maxAlloc;
+        if (o.memoryBudget && o.memoryBudget < budget) budget = o.memoryBudget;
+        try {
+            return WavefrontPipeline::tileRows(o.width, o.height, scene.branching(), o.bounces,
+                                               budget, "", dev::nodeBytes(scene.lights.size())) >=
+                   o.height;
+        } catch (const Error&) {
+            return false;  // not even one row fits
+        }
+    };
     p.make = [](ClContext* cl) { return std::make_unique<WavefrontPipeline>(*cl); };
     registry.add(std::move(p));
 }

@@ -1,5 +1,5 @@
-// rtlab — the warp estimate and the rule of core/predict.h.
-#include "core/predict.h"
+// rtlab — the warp estimate and the rule of auto/predict.h.
+#include "auto/predict.h"
 
 #include <algorithm>
 #include <chrono>
@@ -7,6 +7,7 @@
 #include <numeric>
 #include <random>
 
+#include "auto/handout_order.h"
 #include "core/error.h"
 #include "core/reference.h"
 
@@ -57,12 +58,9 @@ void warpPixels(const std::vector<long long>& tiles, WarpShape shape, const Rend
 }  // namespace
 
 glm::ivec2 stripPixel(long long k, int width, int height, int tw, int th) {
-    const long long band = k / ((long long)width * th);
-    const int bandRows = std::min(th, height - int(band) * th);
-    const long long i = k - band * width * th;
-    const int strip = int(i / (tw * bandRows)), j = int(i - (long long)strip * tw * bandRows);
-    const int stripWidth = std::min(tw, width - strip * tw);
-    return {strip * tw + j % stripWidth, int(band) * th + j / stripWidth};
+    int x = 0, y = 0;
+    RT_STRIP_PIXEL(k, width, height, tw, th, x, y);  // handout_order.h, as the kernels take them
+    return {x, y};
 }
 
 double busyLanes(const std::vector<int>& sizes, int lanes) {
@@ -113,10 +111,7 @@ LaneEstimate estimateBusyLanes(const Scene& scene, const RenderOptions& options,
 
 int shadingKey(const Scene& scene, int material) {
     if (material < 0) return kShadeMiss;
-    const dev::Material& m = scene.materials[std::size_t(material)];
-    if (m.pattern != RT_PATTERN_NONE) return m.pattern;
-    if (m.opacity < 1.0f) return kShadeGlass;
-    return m.reflectance > 0.0f ? kShadeMirror : kShadePlain;
+    return RT_SHADING_CODE(scene.materials[std::size_t(material)]);  // handout_order.h
 }
 
 namespace {

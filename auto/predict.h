@@ -15,6 +15,8 @@
 #include <string>
 #include <vector>
 
+#include "auto/handout_order.h"
+#include "auto/thresholds.h"
 #include "core/scene.h"
 
 namespace rt {
@@ -47,27 +49,33 @@ LaneEstimate estimateBusyLanes(const Scene& scene, const RenderOptions& options,
                                WarpShape shape = {}, std::uint64_t seed = 1, int threads = 0);
 
 // The code a lane runs to shade a hit: its procedural pattern (RT_PATTERN_CHECKER..BUMP), or for a
-// material without one plain, mirror or glass, or a miss. The keys the persistent megakernel's
-// regrouping sorts hits by, keyed by material class (persistent.cl, Regroup_KeyOf).
-enum ShadingKey : int { kShadePlain = 0, kShadeMirror = 6, kShadeGlass = 7, kShadeMiss = 8 };
+// material without one plain, mirror or glass, or a miss: auto/handout_order.h's numbering and
+// RT_SHADING_CODE, which the persistent schedules' sort keys share (persistent/handout.cl).
+enum ShadingKey : int {
+    kShadePlain = RT_PATTERN_NONE,
+    kShadeMirror = RT_KEY_MIRROR,
+    kShadeGlass = RT_KEY_GLASS,
+    kShadeMiss = RT_KEY_MISS
+};
 int shadingKey(const Scene& scene, int material);
 
 // Pixel k of a whole frame in the order the persistent megakernel hands pixels out
-// (persistent.cl, Persistent_PixelOf): bands of th rows, strips of tw columns in a band (the last
-// band and strip cut to fit), row by row inside a strip.
+// (auto/handout_order.h, RT_STRIP_PIXEL, which persistent/handout.cl's Persistent_PixelOf uses):
+// bands of th rows, strips of tw columns in a band (the last band and strip cut to fit), row by
+// row inside a strip.
 glm::ivec2 stripPixel(long long k, int width, int height, int tw = 4, int th = 16);
 
 // How many shading keys the lanes of one warp step meet, the mean over steps, in three orders
 // of the same rays: the megakernel's (a warp of 16x2 pixels, each lane tracing its own tree depth
 // first), the bounce loop's (32 consecutive rays of one bounce's list, a batch of pixels in 4x16
 // strips, each ray's children appended after its list's earlier rays' children), and those lists
-// sorted by key before shading (--persistent-regroup with the bounce loop). 1 when a warp's lanes
+// sorted by key before shading (--persistent-schedule bounce-staged). 1 when a warp's lanes
 // run one key's code; more when it runs several in turn.
 //
 // And the lanes of 32 that cast shadow rays (those whose ray hit something) in a warp step that
 // casts any: the megakernel's step, the bounce loop's trace (each lane right after its own
-// trace, --persistent-shadows inline), and its shadow pass (each list's hits compacted, 32 a
-// step, --persistent-shadows pass).
+// trace, --persistent-schedule bounce), and its shadow pass (each list's hits compacted, 32 a
+// step, --persistent-schedule bounce-staged).
 struct ShadingEstimate {
     double megakernel = 0, bounce = 0, sorted = 0;                  // keys a warp step
     double shadowMegakernel = 0, shadowInline = 0, shadowPass = 0;  // lanes casting shadow rays
@@ -106,10 +114,8 @@ class LaneEstimateCache {
 
 // The rule: below `queueBelowLanes` busy lanes of 32, the queue wavefront wins; at or above it a
 // design that gives each work-item a whole tree (the megakernel or the report's tree wavefront)
-// does. The default is fitted to the crossover map measured on an NVIDIA H200
-// (results/nvidia-h200/predictor-*/). A CPU device runs work-items without lock-step lanes: there
-// the map's queue never won, a threshold of 0.
-inline constexpr double kQueueBelowLanes = 27.8;
+// does. The default is the GPU's fitted threshold (auto/thresholds.h); a CPU's is 0.
+inline constexpr double kQueueBelowLanes = kGpuThresholds.queueBelowLanes;
 
 struct Prediction {
     std::string design;  // "queue" or "tree-per-work-item"
