@@ -41,7 +41,7 @@ def main():
     if not ra or not rb:
         sys.exit(f"kernel-ab-report: no rounds of both kernel trees in {a.dir}")
     print(f"device {ctx.get('device')}, driver {ctx.get('driver')}, rtlab-bench built at "
-          f"{ctx.get('rtlab_commit')}; {la} and {lb} are kernel trees (--kernel-dir), timed in "
+          f"{ctx.get('rtlab_commit')}; {la} and {lb} are kernel trees or binaries, timed in "
           "alternating rounds; ms per frame by OpenCL profiling events, median over every "
           "repetition of every round; spread = min..max of those repetitions\n")
     print(f"| benchmark | {la} ms | {la} spread | {lb} ms | {lb} spread | {lb}/{la} | verdict |")

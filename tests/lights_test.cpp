@@ -16,6 +16,7 @@
 #include "image/compare.h"
 #include "pipelines/registry.h"
 #include "test_device.h"
+#include "wavefront/bounce/bounce_state.h"
 
 namespace rt {
 namespace {

@@ -271,8 +271,8 @@ void registerWavefrontTree(PipelineRegistry& registry) {
         if (o.memoryBudget && o.memoryBudget < budget) budget = o.memoryBudget;
         try {
             return WavefrontPipeline::tileRows(o.width, o.height, scene.branching(), o.bounces,
-                                               budget, "", dev::nodeBytes(scene.lights.size())) >=
-                   o.height;
+                                               budget, "",
+                                               dev::nodeBytes(scene.lights.size())) >= o.height;
         } catch (const Error&) {
             return false;  // not even one row fits
         }
