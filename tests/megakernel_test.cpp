@@ -304,7 +304,7 @@ TEST(FeatureDefines, SpheresOnlyProgramHasNoTriangleCode) {
     std::string probe =
         "\nkernel void Probe_Triangle(global float* out) { float2 uv; Ray r = makeRay((float3)(0),"
         " (float3)(0, 0, 1)); out[0] = Triangle_Intersect(r, (float3)(0), (float3)(1, 0, 0),"
-        " (float3)(0, 1, 0), &uv); }\n";
+        " (float3)(0, 1, 0), INFINITY, &uv); }\n";
     std::string source = KernelSources().resolve("megakernel.cl") + probe;
     auto build = [&](const Scene& scene) {
         std::string options = "-cl-std=CL1.2";

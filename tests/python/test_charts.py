@@ -715,10 +715,8 @@ class PersistTest(unittest.TestCase):
     def test_rows_that_name_a_schedule_read_as_the_older_fields(self):
         """Rows since the schedules became units say persistent_schedule; the labels are those of
         the older rows that set the same schedule by its parts."""
-        spec = importlib.util.spec_from_file_location(
-            "charts_persist", os.path.join(SCRIPTS, "charts_persist.py"))
-        cp = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(cp)
+        sys.path.insert(0, os.path.dirname(TOOL))
+        from rtlab_report import charts_persist as cp
         c = self.cell
         for new, old in [
                 (c("persist", "w", 1.0, persistent_schedule="flat"), c("persist", "w", 1.0)),

@@ -106,9 +106,9 @@ class ExperimentArchiveTest(unittest.TestCase):
 
 
 class ShippedThresholdTest(unittest.TestCase):
-    def test_the_rule_scored_is_the_one_core_predict_h_ships(self):
-        with open(os.path.join(ROOT, "core", "predict.h")) as f:
-            self.assertIn(f"kQueueBelowLanes = {predict_eval.shipped_threshold()}", f.read())
+    def test_the_rule_scored_is_the_one_auto_thresholds_h_ships(self):
+        with open(os.path.join(ROOT, "auto", "thresholds.h")) as f:
+            self.assertIn(f"kGpuThresholds{{{predict_eval.shipped_threshold()}", f.read())
 
 
 if __name__ == "__main__":

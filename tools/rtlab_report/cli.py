@@ -22,6 +22,12 @@ COMMANDS = {
     "experiment": ("experiments", "archive an experiment's folders into results/archive/ and "
                    "draft its page in results/experiments/"),
     "check-results": ("results_check", "results/ against its index and README.md's commits"),
+    "acne-study": ("acne_study", "issue 51: acne rates of each --offset rule against the oracle, "
+                   "before and after a change, at three scales"),
+    "acne-pairs": ("acne_pairs", "issue 51 on a GPU run of bench/sweeps/acne: each floor as "
+                   "triangles against the same floor as a plane"),
+    "kernel-ab": ("kernel_ab", "scripts/gpu-kernel-ab's rounds: A against B, ties inside the "
+                  "spread"),
 }
 
 

@@ -9,7 +9,7 @@ counted apart; a tie between two designs of one kind still answers the question.
 
 Usage: python3 -m rtlab_report predict --predictions P.jsonl --fit ROWS.jsonl... --test ROWS.jsonl...
                                [--threshold T] [--out FILE.md] [--chart FILE.png]
-The rule is scored at the threshold rtlab ships (core/predict.h's kQueueBelowLanes, or
+The rule is scored at the threshold rtlab ships (auto/thresholds.h, or
 --threshold): that is the rule `auto` and `rtlab predict` apply. The threshold that would fit
 these FIT rows best is found too and stated beside it, never silently put in its place; the
 FIT rows are called the fit set, the TEST rows the test set.
@@ -26,15 +26,16 @@ from .charts_map import load, verdict
 from .sweep_rows import Series, family, own_options
 
 
-SHIPPED_SOURCE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "core",
-                              "predict.h")
+SHIPPED_SOURCE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "auto",
+                              "thresholds.h")
 
 
 def shipped_threshold(path=SHIPPED_SOURCE):
-    """kQueueBelowLanes as core/predict.h defines it, or None without the source."""
+    """The GPU rule's queue threshold as auto/thresholds.h defines it (kGpuThresholds), or None
+    without the source."""
     try:
         with open(path) as f:
-            m = re.search(r"kQueueBelowLanes\s*=\s*([0-9.]+)", f.read())
+            m = re.search(r"kGpuThresholds\{\s*([0-9.]+)", f.read())
     except OSError:
         return None
     return float(m.group(1)) if m else None
@@ -186,7 +187,7 @@ def main(argv=None):
     ap.add_argument("--fit", nargs="+", required=True)
     ap.add_argument("--test", nargs="*", default=[])
     ap.add_argument("--threshold", type=float,
-                    help="busy lanes below which the queue is named [core/predict.h's]")
+                    help="busy lanes below which the queue is named [auto/thresholds.h]")
     ap.add_argument("--out")
     ap.add_argument("--chart")
     a = ap.parse_args(argv)
@@ -206,7 +207,7 @@ def main(argv=None):
     fitted = fit_threshold(points)
     t = a.threshold if a.threshold is not None else shipped_threshold()
     if t is None:
-        sys.exit("predict_eval: no core/predict.h to read the shipped threshold from; "
+        sys.exit("predict_eval: no auto/thresholds.h to read the shipped threshold from; "
                  "give --threshold")
     _, fit_hits, fit_scored, *_ = score(fit, predictions, fitted)
     head = ["| scene | predicted busy lanes | measured (weighted) | predicted | fastest | margin | right |",

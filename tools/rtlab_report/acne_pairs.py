@@ -5,7 +5,7 @@ same floor as a plane, from the run's rows.jsonl and images/*.pfm (a copied-back
 folder). Prints a Markdown table of pixels more than 2/255 apart (values clamped to [0, 1]); exit
 status 1 when any pair has one.
 
-    scripts/acne-pairs.py DIR
+    python3 tools/rtlab_report acne-pairs DIR
 """
 import json
 import os
@@ -23,10 +23,11 @@ def read_pfm(path):
     return data.reshape(h, w, 3 if kind == b"PF" else 1)
 
 
-def main():
-    if len(sys.argv) != 2:
+def main(argv=None):
+    argv = sys.argv[1:] if argv is None else argv
+    if len(argv) != 1:
         sys.exit(__doc__)
-    d = sys.argv[1]
+    d = argv[0]
     rows = [json.loads(line) for line in open(os.path.join(d, "rows.jsonl"))]
     frames = {}
     for r in rows:

@@ -5,7 +5,7 @@ over every repetition of every round, the spread of each (min..max of the repeti
 verdict: B slower or faster only where its median lies outside A's spread and A's outside B's;
 otherwise a tie (the difference is inside the spread).
 
-    scripts/kernel-ab-report.py DIR [--labels before,after] > table.md
+    python3 tools/rtlab_report kernel-ab DIR [--labels before,after] > table.md
 """
 import argparse
 import glob
@@ -30,11 +30,11 @@ def reps(paths):
     return out, ctx
 
 
-def main():
+def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("dir")
     ap.add_argument("--labels", default="A,B")
-    a = ap.parse_args()
+    a = ap.parse_args(argv)
     la, lb = a.labels.split(",")
     ra, ctx = reps(sorted(glob.glob(os.path.join(a.dir, "ab-A-*.json"))))
     rb, _ = reps(sorted(glob.glob(os.path.join(a.dir, "ab-B-*.json"))))

@@ -5,7 +5,7 @@ change), each image scored against the independent oracle (`--pipeline oracle` o
 binary). Writes a Markdown table of acne rates (pixels more than 2/255 off the oracle, values
 clamped to [0, 1]) per pipeline to standard output.
 
-    scripts/acne-study.py [--before BIN] [--after BIN] [--pipelines mega,cpu] [--size 320x180]
+    python3 tools/rtlab_report acne-study [--before BIN] [--after BIN] [--pipelines mega,cpu] [--size 320x180]
 """
 import argparse
 import json
@@ -83,13 +83,13 @@ def acne_rate(image, oracle):
     return over / total
 
 
-def main():
+def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--before", help="rtlab binary before the change")
     ap.add_argument("--after", default="build/bin/rtlab", help="rtlab binary after it")
     ap.add_argument("--pipelines", default="cpu,mega,queue")
     ap.add_argument("--size", default="320x180")
-    a = ap.parse_args()
+    a = ap.parse_args(argv)
     pipes = a.pipelines.split(",")
     runs = [("before", a.before), ("after", a.after)] if a.before else [("after", a.after)]
     print("| scale | offset | " + " | ".join(f"{w} {p}" for w, _ in runs for p in pipes) + " |")
