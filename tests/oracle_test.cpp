@@ -18,24 +18,12 @@
 #include "core/scene.h"
 #include "pipelines/registry.h"
 #include "test_device.h"
+#include "test_images.h"
 
 namespace rt {
 namespace {
 
-// Pixels whose clamped linear value differs by more than 2/255 in some channel.
-int pixelsOff(const Image& a, const Image& b) {
-    int n = 0;
-    for (size_t p = 0; p < a.rgb.size() / 3; ++p) {
-        bool off = false;
-        for (int c = 0; c < 3; ++c) {
-            const float x = std::clamp(a.rgb[p * 3 + c], 0.f, 1.f),
-                        y = std::clamp(b.rgb[p * 3 + c], 0.f, 1.f);
-            off = off || !(std::abs(x - y) <= 2.f / 255.f);
-        }
-        n += off;
-    }
-    return n;
-}
+using test::pixelsOff;
 
 struct Floor {
     double size;    // units across

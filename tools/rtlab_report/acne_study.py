@@ -15,21 +15,9 @@ import subprocess
 import sys
 import tempfile
 
-FLOOR_SPHERE = {
-    "description": "A sphere over a reflective floor of two triangles, 24 x 24 units (issue 51).",
-    "camera": {"position": [0, 3, -6], "pitch": -20, "fov": 60},
-    "materials": {
-        "floor": {"ambient": [0.05, 0.05, 0.05], "diffuse": [0.6, 0.6, 0.6],
-                  "specular": [0.3, 0.3, 0.3], "exponent": 20, "reflectance": 0.5},
-        "ball": {"ambient": [0.05, 0.02, 0.02], "diffuse": [0.8, 0.2, 0.2],
-                 "specular": [0.5, 0.5, 0.5], "exponent": 50}},
-    "spheres": [{"center": [0, 1, 2], "radius": 1, "material": "ball"}],
-    "triangles": [
-        {"vertices": [[-12, 0, -12], [12, 0, -12], [12, 0, 12]], "material": "floor"},
-        {"vertices": [[-12, 0, -12], [12, 0, 12], [-12, 0, 12]], "material": "floor"}],
-    "lights": [{"position": [-4, 8, -2], "color": [0.9, 0.9, 0.9], "radius": 0}],
-    "render": {"width": 320, "height": 180, "bounces": 2},
-}
+# The acceptance scene of issue 51, as scripts/make-acne.py writes it.
+FLOOR_SPHERE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "scenes",
+                            "acne", "floor-sphere.json")
 
 
 def scaled(scene, k):
@@ -76,11 +64,13 @@ def main(argv=None):
     runs = [("before", a.before), ("after", a.after)] if a.before else [("after", a.after)]
     print("| scale | offset | " + " | ".join(f"{w} {p}" for w, _ in runs for p in pipes) + " |")
     print("|---|---|" + "---|" * (len(runs) * len(pipes)))
+    with open(FLOOR_SPHERE) as f:
+        scene = json.load(f)
     with tempfile.TemporaryDirectory() as tmp:
         for k in (1e-4, 1.0, 1e5):
             path = os.path.join(tmp, f"floor-sphere-{k:g}.json")
             with open(path, "w") as f:
-                json.dump(scaled(FLOOR_SPHERE, k), f)
+                json.dump(scaled(scene, k), f)
             oracle = os.path.join(tmp, "oracle.exr")
             err = render(a.after, path, "oracle", "bound", a.size, oracle)
             if err:

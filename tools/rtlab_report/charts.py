@@ -353,10 +353,15 @@ def speed_vs_accuracy(meta, rows):
         note = (f"\nerrors of the designs exactly equal at {a['equal']} of {a['settings']} "
                 f"settings, equal once rounded to {ERROR_DECIMALS} decimals at {a['rounded']} "
                 f"more, apart at {a['differ']} (largest gap {a['worst']:.1g} relative)")
+    # Rows since issue 51 are scored against the independent oracle and carry the acne rate.
+    oracle = ref.get("pipeline") == "oracle"
+    who = ("the independent oracle (core/SHADING.md 3)" if oracle
+           else "the converged CPU reference, which shares the renderers' method")
     fig, panels, legend_ax = figure(
-        meta, "Speed against accuracy (error from the converged CPU reference, log-log)\n"
-        f"reference: CPU double, B={ref.get('bounces')}, {ref.get('shadow_samples')} shadow "
-        f"samples, aa={ref.get('aa')}" + note, len(scenes), legend_rows=2.2)
+        meta, f"Speed against accuracy (error from {who}, log-log)\n"
+        f"reference: {'oracle' if oracle else 'CPU'} double, B={ref.get('bounces')}, "
+        f"{ref.get('shadow_samples')} shadow samples, aa={ref.get('aa')}" + note, len(scenes),
+        legend_rows=2.2)
     labelled, shown = [], set()
     for ax, scene in zip(panels, scenes):
         srows = [r for r in rows if r["scene"] == scene]
@@ -376,7 +381,10 @@ def speed_vs_accuracy(meta, rows):
                 linewidth=1.1)
         ax.scatter([p[0] for p in front], [p[1] for p in front], s=70, facecolors="none",
                    edgecolors="black", linewidths=1.0)
-        ax.set_title(f"{scene} ({srows[0]['width']}×{srows[0]['height']})", fontsize=9)
+        acne = [r["acne_2_255"] for r in srows if r.get("acne_2_255") is not None]
+        acne_text = f"; acne up to {100 * max(acne):.2f}% of pixels" if acne else ""
+        ax.set_title(f"{scene} ({srows[0]['width']}×{srows[0]['height']}){acne_text}",
+                     fontsize=9)
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.set_xlabel("device ms per frame")
