@@ -39,7 +39,7 @@ def main(argv=None):
     ra, ctx = reps(sorted(glob.glob(os.path.join(a.dir, "ab-A-*.json"))))
     rb, _ = reps(sorted(glob.glob(os.path.join(a.dir, "ab-B-*.json"))))
     if not ra or not rb:
-        sys.exit(f"kernel-ab-report: no rounds of both kernel trees in {a.dir}")
+        sys.exit(f"kernel-ab: no rounds of both A and B in {a.dir}")
     print(f"device {ctx.get('device')}, driver {ctx.get('driver')}, rtlab-bench built at "
           f"{ctx.get('rtlab_commit')}; {la} and {lb} are kernel trees or binaries, timed in "
           "alternating rounds; ms per frame by OpenCL profiling events, median over every "
