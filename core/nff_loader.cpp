@@ -42,24 +42,6 @@ std::string num(double v) {
     return buf;
 }
 
-std::string readNffFile(const fs::path& path) {
-    std::error_code ec;
-    if (fs::is_directory(path, ec)) throw Error(path.string() + ": cannot open: Is a directory");
-    std::FILE* f = std::fopen(path.c_str(), "rb");
-    if (!f) throw Error(path.string() + ": cannot open: " + std::strerror(errno));
-    std::string text;
-    char buffer[1 << 16];
-    std::size_t n;
-    while ((n = std::fread(buffer, 1, sizeof buffer, f)) > 0 && text.size() < (256u << 20))
-        text.append(buffer, n);
-    const bool bad = std::ferror(f);
-    const int err = errno;
-    std::fclose(f);
-    if (bad) throw Error(path.string() + ": cannot read: " + std::strerror(err));
-    if (text.size() >= (256u << 20)) throw Error(path.string() + ": file too large (> 256 MiB)");
-    return text;
-}
-
 // A word of the file and the line it is on.
 struct Token {
     std::string_view text;
@@ -506,7 +488,7 @@ Scene parseNff(const std::string& text, const fs::path& file, const NffOptions& 
 }
 
 Scene loadNff(const fs::path& path, const NffOptions& options) {
-    return parseNff(readNffFile(path), path, options);
+    return parseNff(readTextFile(path), path, options);
 }
 
 }  // namespace rt

@@ -96,24 +96,6 @@ std::string suggestion(const std::string& name, const Names& candidates) {
     return "";
 }
 
-std::string readFile(const fs::path& path) {
-    std::error_code ec;
-    if (fs::is_directory(path, ec)) throw Error(path.string() + ": cannot open: Is a directory");
-    std::FILE* f = std::fopen(path.c_str(), "rb");
-    if (!f) throw Error(path.string() + ": cannot open: " + std::strerror(errno));
-    std::string text;
-    char buffer[1 << 16];
-    std::size_t n;
-    while ((n = std::fread(buffer, 1, sizeof buffer, f)) > 0 && text.size() < (256u << 20))
-        text.append(buffer, n);
-    const bool bad = std::ferror(f);
-    const int err = errno;
-    std::fclose(f);
-    if (bad) throw Error(path.string() + ": cannot read: " + std::strerror(err));
-    if (text.size() >= (256u << 20)) throw Error(path.string() + ": file too large (> 256 MiB)");
-    return text;
-}
-
 // "line L, column C" of byte offset `at` (0-based), as nlohmann counts them.
 std::string lineColumn(const std::string& text, std::size_t at) {
     at = std::min(at, text.size());
@@ -339,7 +321,7 @@ class Loader {
         : path_(path), file_(path.string()), dir_(path.parent_path()), readImage_(readImage) {}
 
     Scene load() {
-        const std::string text = readFile(path_);
+        const std::string text = readTextFile(path_);
         const Json json = parseJson(file_, text, &materialOrder_);
         Node root(json, "", file_);
         root.object({"description", "camera", "materials", "spheres", "planes", "triangles",
@@ -832,6 +814,25 @@ void rejectNonJson(const fs::path& path) {
 }
 
 }  // namespace
+
+std::string readTextFile(const std::filesystem::path& path) {
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    if (fs::is_directory(path, ec)) throw Error(path.string() + ": cannot open: Is a directory");
+    std::FILE* f = std::fopen(path.c_str(), "rb");
+    if (!f) throw Error(path.string() + ": cannot open: " + std::strerror(errno));
+    std::string text;
+    char buffer[1 << 16];
+    std::size_t n;
+    while ((n = std::fread(buffer, 1, sizeof buffer, f)) > 0 && text.size() < (256u << 20))
+        text.append(buffer, n);
+    const bool bad = std::ferror(f);
+    const int err = errno;
+    std::fclose(f);
+    if (bad) throw Error(path.string() + ": cannot read: " + std::strerror(err));
+    if (text.size() >= (256u << 20)) throw Error(path.string() + ": file too large (> 256 MiB)");
+    return text;
+}
 
 Scene loadScene(const std::filesystem::path& path, const ImageReader& readImage) {
     try {

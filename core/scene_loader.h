@@ -6,6 +6,7 @@
 
 #include <filesystem>
 #include <functional>
+#include <string>
 
 #include "core/image.h"
 #include "core/scene.h"
@@ -20,6 +21,10 @@ using ImageReader = std::function<Image(const std::filesystem::path&)>;
 // (camera framing its bounds, one light, a ground plane; a glTF's own camera and lights where it
 // has them). Relative paths inside a scene resolve against the scene's directory.
 Scene loadScene(const std::filesystem::path& path, const ImageReader& readImage = {});
+
+// A scene file's whole text (at most 256 MiB); a folder, an unreadable or a larger file throws
+// one line naming it (the JSON and NFF readers share it).
+std::string readTextFile(const std::filesystem::path& path);
 
 // Fills mesh bounds (box and sphere) and checks limits; the loader calls it, tests may too.
 void finalizeScene(Scene& scene);

@@ -26,6 +26,7 @@ import os
 import sys
 
 from .charts_map import load
+from .charts_persist import as_old_fields
 
 # The phases of the regrouped loop's step and of the bounce loop's passes (RT_PHASE_*,
 # persistent/phases.h), as the rows' extras name them.
@@ -46,27 +47,6 @@ COLORS = {TRACE: "#0072B2", TRACE_WITH_SHADOWS: "#3F4F9F", SHADOWS: "#56B4E9",
 # Rows written since the schedules became units (persistent/schedules.h) name them in
 # persistent_schedule; older rows set the loop, regrouping, order, batch and shadows apart. Both
 # read the same here: a new row gets the older fields its schedule stands for.
-SCHEDULE_FIELDS = {
-    "flat": {},
-    "nested": {"persistent_loop": "nested"},
-    "nested-16x8": {"persistent_loop": "nested", "persistent_tile": "16x8"},
-    "regrouped": {"persistent_regroup": "pattern"},
-    "bounce": {"persistent_loop": "bounce"},
-    "bounce-staged": {"persistent_loop": "bounce", "persistent_regroup": "pattern",
-                      "persistent_shadows": "pass"},
-}
-
-
-def as_old_fields(row):
-    """`row` with the fields of older rows that its persistent_schedule stands for."""
-    fields = SCHEDULE_FIELDS.get(row.get("persistent_schedule"))
-    if fields is None:
-        return row
-    out = dict(row)
-    out.update(fields)
-    if out.get("persistent_loop") == "bounce":  # batches of twice its lanes
-        out.setdefault("persistent_batch", 2 * (row.get("persistent_lanes") or 512))
-    return out
 
 
 def persist_label(row):
